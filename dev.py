@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""Set up a local virtual environment and run blinkcan's main jobs.
+
+    python3 dev.py demo    # the demo: twins on a virtual CAN bus, driven by a host
+    python3 dev.py test    # the whole test suite
+    python3 dev.py lint    # ruff and mypy
+    python3 dev.py bench   # the benchmarks (anchor beside ours)
+
+Needs only python3. The environment lives in .venv and is refreshed whenever pyproject.toml changes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+STAMP = VENV / ".blinkcan-installed"
+
+
+def _venv_python() -> Path:
+    return VENV / ("Scripts/python.exe" if os.name == "nt" else "bin/python")
+
+
+def _ensure_venv() -> Path:
+    wanted = hashlib.sha256((ROOT / "pyproject.toml").read_bytes()).hexdigest()
+    python = _venv_python()
+    if python.exists() and STAMP.exists() and STAMP.read_text() == wanted:
+        return python
+    if not python.exists():
+        print("dev.py: creating .venv", file=sys.stderr)
+        venv.EnvBuilder(with_pip=True, clear=True).create(VENV)
+    print("dev.py: installing blinkcan and its test tools into .venv", file=sys.stderr)
+    pip = [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
+    subprocess.run([*pip, "--upgrade", "pip"], check=True)
+    subprocess.run([*pip, "-e", f"{ROOT}[dev]"], check=True)
+    STAMP.write_text(wanted)
+    return python
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] not in {"demo", "test", "lint", "bench"}:
+        print(__doc__, file=sys.stderr)
+        return 2
+    job, rest = argv[0], argv[1:]
+    python = str(_ensure_venv())
+    if job == "demo":
+        return subprocess.call([python, "-m", "blinkcan", "demo", *rest], cwd=ROOT)
+    if job == "test":
+        return subprocess.call([python, "-m", "pytest", *rest], cwd=ROOT)
+    if job == "lint":
+        ruff = subprocess.call([python, "-m", "ruff", "check", "."], cwd=ROOT)
+        mypy = subprocess.call([python, "-m", "mypy"], cwd=ROOT)
+        return ruff or mypy
+    return subprocess.call([python, "-m", "benchmarks", *rest], cwd=ROOT)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,3 @@
+from blinkcan.cli.main import main
+
+main()

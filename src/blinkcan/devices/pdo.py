@@ -1,0 +1,82 @@
+"""PDO layouts as data: which bits of which COB-ID carry which object entry.
+
+The keypad's mapping objects do not describe its real PDOs (errata P7, P8), so layouts are their
+own data, taken from the manuals' bit tables. Twins apply RPDOs and build TPDOs from them; the
+decoder and the DBC writer read the same layouts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from enum import Enum
+
+
+class Direction(str, Enum):
+    RX = "rx"  # to the device
+    TX = "tx"  # from the device
+
+
+@dataclass(frozen=True)
+class PdoSignal:
+    """``length`` bits at bit ``start`` (bit 0 = byte 0 bit 0, little-endian across the frame).
+
+    ``entry`` names the object entry the bits carry, or None for bits that are not an object
+    (the keypad's tick timer, PKP §10).
+    """
+
+    name: str
+    label: str
+    start: int
+    length: int
+    entry: str | None
+
+    @property
+    def mask(self) -> int:
+        return (1 << self.length) - 1
+
+
+@dataclass(frozen=True)
+class PdoLayout:
+    """One PDO: its COB-ID base (node id added), length and signals.
+
+    ``min_length`` is the shortest frame the device acts on (errata P14: the brightness PDOs
+    accept DLC 1..8); a shorter frame is ignored.
+    """
+
+    name: str
+    label: str
+    cob_base: int
+    direction: Direction
+    length: int
+    signals: tuple[PdoSignal, ...]
+    min_length: int = 0
+    doc: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.min_length:
+            object.__setattr__(self, "min_length", self.length)
+
+    def cob_id(self, node_id: int) -> int:
+        return self.cob_base + node_id
+
+    def decode(self, data: bytes) -> dict[str, int]:
+        """Signal values of a frame (missing bytes read as zero)."""
+        word = int.from_bytes(data, "little")
+        return {s.name: (word >> s.start) & s.mask for s in self.signals}
+
+    def encode(self, signal_values: Mapping[str, int]) -> bytes:
+        """Frame bytes from signal values; unnamed signals are zero."""
+        word = 0
+        for s in self.signals:
+            value = signal_values.get(s.name, 0)
+            if not 0 <= value <= s.mask:
+                raise ValueError(f"{self.name}.{s.name}: {value} outside 0..{s.mask}")
+            word |= value << s.start
+        return word.to_bytes(self.length, "little")
+
+    def signal(self, name: str) -> PdoSignal:
+        for s in self.signals:
+            if s.name == name:
+                return s
+        raise KeyError(f"{self.name} has no signal {name!r}")

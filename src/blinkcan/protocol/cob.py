@@ -1,0 +1,38 @@
+"""CiA 301 predefined connection set: the function code part of each COB-ID.
+
+A COB-ID is function code + node id, e.g. the keypad's SDO replies on 580h + 15h = 595h.
+"""
+
+from __future__ import annotations
+
+NMT = 0x000
+SYNC = 0x080
+EMCY = 0x080
+TPDO1 = 0x180
+RPDO1 = 0x200
+TPDO2 = 0x280
+RPDO2 = 0x300
+TPDO3 = 0x380
+RPDO3 = 0x400
+TPDO4 = 0x480
+RPDO4 = 0x500
+SDO_TX = 0x580  # server -> client (the device's replies)
+SDO_RX = 0x600  # client -> server (requests to the device)
+HEARTBEAT = 0x700  # boot-up and heartbeat (NMT error control)
+
+NODE_ID_MIN = 1
+NODE_ID_MAX = 0x7F
+
+
+def check_node_id(node_id: int) -> int:
+    """Return ``node_id`` if it is a valid CANopen node id (1..127), else raise."""
+    if isinstance(node_id, bool) or not isinstance(node_id, int):
+        raise TypeError(f"node id must be an int, not {type(node_id).__name__}")
+    if not NODE_ID_MIN <= node_id <= NODE_ID_MAX:
+        raise ValueError(f"node id {node_id:#x} outside {NODE_ID_MIN:#04x}..{NODE_ID_MAX:#04x}")
+    return node_id
+
+
+def split_cob_id(can_id: int) -> tuple[int, int]:
+    """Split a standard COB-ID into (function code, node id)."""
+    return can_id & 0x780, can_id & 0x7F

@@ -1,0 +1,312 @@
+"""What every Blink CANopen twin does the same way: NMT slave, boot-up, heartbeat producer, SDO
+server on its object store, RPDOs written into the dictionary, non-volatile settings.
+
+Rule: a twin is a pure state machine. Frames and time (``now``, seconds, monotonic) come in as
+arguments; the frames the device would send come back as return values. Nothing here sleeps,
+reads a clock or touches a bus. A twin that is powered off, or not addressed, returns ``[]``.
+
+Device twins subclass :class:`CanopenTwin` and add their application behaviour through the
+``_on_*`` hooks; they never reimplement NMT, SDO or heartbeat.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.objects import Value
+from blinkcan.devices.pdo import PdoLayout
+from blinkcan.protocol.abort import AbortCode
+from blinkcan.protocol.cob import NMT, SDO_RX, SDO_TX, check_node_id
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.nmt import (
+    PDO_ALLOWED,
+    SDO_ALLOWED,
+    TRANSITIONS,
+    NmtAction,
+    NmtState,
+    heartbeat_frame,
+    parse_nmt,
+)
+from blinkcan.protocol.sdo_server import SdoServer
+from blinkcan.twin.dictionary import ObjectStore
+from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
+
+_Route = Callable[[Frame, float], list[Frame]]
+
+NMT_STATE_NAMES = {
+    NmtState.BOOT_UP: "initialising",
+    NmtState.STOPPED: "stopped",
+    NmtState.OPERATIONAL: "operational",
+    NmtState.PRE_OPERATIONAL: "pre-operational",
+}
+
+
+def open_nvm(nvm: str | os.PathLike[str] | Nvm | None, description: DeviceDescription) -> Nvm:
+    if nvm is None:
+        return MemoryNvm()
+    if isinstance(nvm, (str, os.PathLike)):
+        return JsonFileNvm(nvm, description.model, description.generation, description.table)
+    return nvm
+
+
+class CanopenTwin:
+    """The CANopen side of a Blink device; see the module docstring."""
+
+    def __init__(self, description: DeviceDescription, node_id: int,
+                 nvm: str | os.PathLike[str] | Nvm | None = None) -> None:
+        check_node_id(node_id)
+        self.description = description
+        self.factory_node_id = node_id
+        self._store = ObjectStore(description.table, node_id)
+        self._nvm = open_nvm(nvm, description)
+        stored = self._nvm.load()  # a corrupt or foreign file fails here, before anything runs
+        if stored is None:
+            self._nvm.save(self._factory_settings())
+        self._store.load(node_id, stored)
+        self._store.on_stored_change = self._persist
+        self._sdo = SdoServer(self._store)
+        self._powered = False
+        self._nmt = NmtState.BOOT_UP
+        self._node_id = node_id
+        self._sdo_tx = SDO_TX + node_id
+        self._routes: dict[int, _Route] = {}
+        self._outbox: list[Frame] = []
+        self._after_reply: list[Callable[[float], list[Frame]]] = []
+        self._now = 0.0
+        self._boot_time = 0.0
+        self._heartbeat_next: float | None = None
+        self._store.set_hook("producer_heartbeat_time", self._on_heartbeat_time)
+
+    # -- public contract --------------------------------------------------------------------
+
+    @property
+    def node_id(self) -> int:
+        """The node id in use (a written 2013h/2011h applies at the next reset)."""
+        return self._node_id
+
+    @property
+    def nmt_state(self) -> NmtState:
+        return self._nmt
+
+    @property
+    def powered(self) -> bool:
+        return self._powered
+
+    @property
+    def objects(self) -> ObjectStore:
+        """The live object dictionary (read it in tests; write through SDO)."""
+        return self._store
+
+    @property
+    def bitrate(self) -> int:
+        """The bit rate in use, from the baud-rate code applied at the last reset."""
+        return self.description.bitrates[self._bitrate_code]
+
+    def power_on(self, now: float) -> list[Frame]:
+        """Apply power: boot, send the boot-up frame, enter the startup state."""
+        if self._powered:
+            return []
+        self._powered = True
+        return self._boot(now, application=True)
+
+    def power_off(self) -> None:
+        """Remove power: live state is lost, stored settings are kept."""
+        self._powered = False
+        self._nmt = NmtState.BOOT_UP
+        self._routes = {}
+        self._heartbeat_next = None
+        self._sdo.reset()
+        self._on_power_off()
+
+    def receive(self, frame: Frame, now: float) -> list[Frame]:
+        """The frames the device sends in reaction to ``frame`` (often none)."""
+        if not self._powered:
+            return []
+        if frame.extended:
+            return self._on_extended(frame, now)
+        route = self._routes.get(frame.can_id)
+        if route is None:
+            return []
+        self._now = now
+        return route(frame, now)
+
+    def advance(self, now: float) -> list[Frame]:
+        """Frames due by ``now``: heartbeat, periodic PDOs, timeouts."""
+        if not self._powered:
+            return []
+        self._now = now
+        frames: list[Frame] = []
+        due = self._heartbeat_next
+        if due is not None and now >= due:
+            frames.append(heartbeat_frame(self._node_id, self._nmt))
+            period = self._store.get_int("producer_heartbeat_time") / 1000
+            due += period
+            self._heartbeat_next = due if due > now else now + period
+        frames += self._on_advance(now)
+        return frames
+
+    def next_deadline(self) -> float | None:
+        """When :meth:`advance` next has work, or None."""
+        if not self._powered:
+            return None
+        deadlines = [d for d in self._deadlines() if d is not None]
+        if self._heartbeat_next is not None:
+            deadlines.append(self._heartbeat_next)
+        return min(deadlines) if deadlines else None
+
+    def is_sdo_request(self, frame: Frame) -> bool:
+        """Whether ``frame`` is an SDO request to this device (the emulator's busy rule)."""
+        return not frame.extended and frame.can_id == SDO_RX + self._node_id and self._powered
+
+    def snapshot(self) -> dict[str, Any]:
+        """JSON-serialisable state for tests, the CLI and the front panel."""
+        return {
+            "model": self.description.model,
+            "kind": self.description.kind,
+            "generation": self.description.generation,
+            "quirks": self.description.quirks,
+            "powered": self._powered,
+            "node_id": self._node_id,
+            "nmt_state": NMT_STATE_NAMES[self._nmt] if self._powered else "off",
+            "bitrate": self.bitrate,
+            "heartbeat_ms": self._store.get_int("producer_heartbeat_time"),
+            "settings": self._store.stored_values(),
+            **self._snapshot(),
+        }
+
+    # -- boot and NMT -----------------------------------------------------------------------
+
+    def _factory_settings(self) -> dict[str, Value]:
+        return {
+            entry.name: entry.default_for(self.factory_node_id)
+            for entry in self.description.table
+            if entry.stored
+        }
+
+    def _persist(self) -> None:
+        self._nvm.save(self._store.stored_values())
+
+    def _restore_factory_settings(self) -> None:
+        """Stored settings back to factory values; they take effect at the next reset, and
+        reads return them already (errata: "a read returns the stored value")."""
+        for name, value in self._factory_settings().items():
+            self._store.set(name, value)
+        self._persist()
+
+    def _boot(self, now: float, application: bool) -> list[Frame]:
+        """Power-on or reset: CiA 301 initialisation, then the boot-up frame and pre-operational."""
+        if application:  # reset node / power-on: node id, bit rate and live values re-applied
+            self._store.load(self.factory_node_id, self._nvm.load())
+            self._node_id = self._store.get_int("node_id")
+            self._bitrate_code = self._store.get_int("baud_rate")
+        self._sdo.reset()
+        self._sdo_tx = SDO_TX + self._node_id
+        self._routes = self._build_routes()
+        self._nmt = NmtState.PRE_OPERATIONAL
+        self._boot_time = now
+        self._now = now
+        frames: list[Frame] = []
+        if self._store.get_int("boot_up_service"):  # PKP §8/§20, KBX §15/§27
+            frames.append(heartbeat_frame(self._node_id, NmtState.BOOT_UP))
+        period = self._store.get_int("producer_heartbeat_time")
+        # PKP §25: "the boot-up message is regarded as first heartbeat message"
+        self._heartbeat_next = now + period / 1000 if period else None
+        frames += self._on_boot(now, application)
+        if self._store.get_int("active_on_startup"):  # PKP §21, KBX §26
+            frames += self._enter(NmtState.OPERATIONAL, now)
+        return frames
+
+    def _build_routes(self) -> dict[int, _Route]:
+        routes: dict[int, _Route] = {NMT: self._on_nmt, SDO_RX + self._node_id: self._on_sdo}
+        for layout in self.description.rx_pdos:
+            routes[layout.cob_id(self._node_id)] = self._rpdo_route(layout)
+        return routes
+
+    def _on_nmt(self, frame: Frame, now: float) -> list[Frame]:
+        request = parse_nmt(frame, self.description.nmt_aliases)
+        if request is None or request.node_id not in (0, self._node_id):
+            return []
+        next_state, action = TRANSITIONS[self._nmt, request.command]
+        if action is NmtAction.RESET_NODE:
+            self._on_power_off()
+            return self._boot(now, application=True)
+        if action is NmtAction.RESET_COMMUNICATION:
+            return self._boot(now, application=False)
+        return self._enter(next_state, now)
+
+    def _enter(self, state: NmtState, now: float) -> list[Frame]:
+        previous, self._nmt = self._nmt, state
+        if previous is state:
+            return []
+        return self._on_state_change(previous, state, now)
+
+    # -- SDO ----------------------------------------------------------------------------------
+
+    def _on_sdo(self, frame: Frame, now: float) -> list[Frame]:
+        if self._nmt not in SDO_ALLOWED:  # no SDO while stopped (CiA 301 table 84)
+            return []
+        reply = self._sdo.on_request(frame.data)
+        if reply is None:
+            return []
+        frames = [Frame(self._sdo_tx, reply)]
+        if self._outbox:
+            frames += self._outbox
+            self._outbox = []
+        if self._after_reply:
+            actions, self._after_reply = self._after_reply, []
+            for action in actions:
+                frames += action(now)
+        return frames
+
+    def _on_heartbeat_time(self, value: int) -> AbortCode | None:
+        self._heartbeat_next = self._now + value / 1000 if value else None
+        return None
+
+    # -- PDO ----------------------------------------------------------------------------------
+
+    def _rpdo_route(self, layout: PdoLayout) -> _Route:
+        def route(frame: Frame, now: float) -> list[Frame]:
+            if self._nmt not in PDO_ALLOWED or len(frame.data) < layout.min_length:
+                return []
+            return self._on_rpdo(layout, layout.decode(frame.data), now)
+
+        return route
+
+    def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
+        """Write an RPDO's signals into the dictionary as SDO writes would, hooks included.
+        A frame with any value out of range is ignored whole (errata P15)."""
+        table = self.description.table
+        mapped = [(table[s.entry], signals[s.name]) for s in layout.signals if s.entry]
+        if not all(entry.accepts(value) for entry, value in mapped):
+            return []
+        for entry, value in mapped:
+            if self._store.write_from_pdo(entry.name, value) is not None:
+                return []
+        frames, self._outbox = self._outbox, []
+        return frames
+
+    # -- hooks for device twins -----------------------------------------------------------------
+
+    def _on_boot(self, now: float, application: bool) -> list[Frame]:
+        return []
+
+    def _on_power_off(self) -> None:
+        """Live application state is lost (power off or reset node)."""
+
+    def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
+        return []
+
+    def _on_advance(self, now: float) -> list[Frame]:
+        return []
+
+    def _deadlines(self) -> Iterable[float | None]:
+        return ()
+
+    def _on_extended(self, frame: Frame, now: float) -> list[Frame]:
+        return []
+
+    def _snapshot(self) -> dict[str, Any]:
+        return {}

@@ -1,0 +1,150 @@
+"""The live object dictionary of a twin: current values of every entry of its object table.
+
+This is where SDO requests meet the table: existence, access, length and range are checked here
+in CiA 301 order (object, sub-index, access, length, value), then the twin's write hook for the
+entry may refuse the value or act on it. Values are cached in their wire encoding, so an upload
+is one dictionary look-up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+from blinkcan.devices.objects import ObjectEntry, ObjectTable, Value
+from blinkcan.protocol.abort import AbortCode
+
+#: A write hook: called with the new value before it is stored; returns an abort code to refuse.
+WriteHook = Callable[[int], "AbortCode | None"]
+
+
+class _Slot:
+    __slots__ = ("entry", "hook", "keeps_value", "raw", "readable", "size", "value", "writable")
+
+    def __init__(self, entry: ObjectEntry, value: Value) -> None:
+        self.entry = entry
+        self.readable = entry.access.readable
+        self.writable = entry.access.writable
+        self.size = entry.data_type.size
+        self.hook: WriteHook | None = None
+        self.keeps_value = True
+        self.value = value
+        self.raw = entry.encode(value)
+
+
+class ObjectStore:
+    """Current values by entry name, served to an :class:`~blinkcan.protocol.SdoServer`."""
+
+    def __init__(self, table: ObjectTable, node_id: int) -> None:
+        self.table = table
+        self._slots: dict[bytes, _Slot] = {}
+        self._by_name: dict[str, _Slot] = {}
+        for entry in table:
+            slot = _Slot(entry, entry.default_for(node_id))
+            self._slots[entry.mux] = slot
+            self._by_name[entry.name] = slot
+        self._indices = frozenset(entry.index.to_bytes(2, "little") for entry in table)
+        #: called after a stored entry changed through SDO (the twin persists its settings)
+        self.on_stored_change: Callable[[], None] | None = None
+
+    # -- Python side ----------------------------------------------------------------------
+
+    def __getitem__(self, name: str) -> Value:
+        return self._by_name[name].value
+
+    def get_int(self, name: str) -> int:
+        value = self._by_name[name].value
+        assert isinstance(value, int), name
+        return value
+
+    def set(self, name: str, value: Value) -> None:
+        """Set a value with no checks (the device itself changing its state)."""
+        slot = self._by_name[name]
+        slot.value = value
+        slot.raw = slot.entry.encode(value)
+
+    def set_hook(self, name: str, hook: WriteHook, keeps_value: bool = True) -> None:
+        """Run ``hook`` on every write of ``name`` (SDO or RPDO). With ``keeps_value=False``
+        the written value is a command, not the entry's new value: the hook updates the
+        store itself (the Keybox's 2008h masks read back the pin states, KBX §21)."""
+        slot = self._by_name[name]
+        slot.hook = hook
+        slot.keeps_value = keeps_value
+
+    def write_from_pdo(self, name: str, value: int) -> AbortCode | None:
+        """An RPDO writing a mapped entry: hooks run as for SDO, access is not checked."""
+        slot = self._by_name[name]
+        return self._commit(slot, value)
+
+    def _commit(self, slot: _Slot, value: Value) -> AbortCode | None:
+        if slot.hook is not None:
+            refusal = slot.hook(value)  # type: ignore[arg-type]
+            if refusal is not None:
+                return refusal
+            if not slot.keeps_value:
+                return None
+        slot.value = value
+        slot.raw = slot.entry.encode(value)
+        if slot.entry.stored and self.on_stored_change is not None:
+            self.on_stored_change()
+        return None
+
+    def entries(self) -> Iterator[ObjectEntry]:
+        return iter(self.table)
+
+    def stored_values(self) -> dict[str, Value]:
+        return {name: slot.value for name, slot in self._by_name.items() if slot.entry.stored}
+
+    def load(self, node_id: int, stored: dict[str, Value] | None) -> None:
+        """Power-on values: stored entries from ``stored`` (or factory), live entries from
+        their defaults or from the stored entry named by ``power_on_from``."""
+        stored = stored or {}
+        for slot in self._by_name.values():
+            entry = slot.entry
+            if entry.stored:
+                value = stored.get(entry.name, entry.default_for(node_id))
+            elif entry.power_on_from is not None:
+                value = stored.get(entry.power_on_from, self.table[entry.power_on_from].default)
+            else:
+                value = entry.default_for(node_id)
+            self.set(entry.name, value)
+
+    # -- SDO side (ObjectAccess) ------------------------------------------------------------
+
+    def _missing(self, mux: bytes) -> AbortCode:
+        if mux[:2] in self._indices:
+            return AbortCode.SUBINDEX_DOES_NOT_EXIST
+        return AbortCode.OBJECT_DOES_NOT_EXIST
+
+    def sdo_upload(self, mux: bytes) -> bytes | AbortCode:
+        slot = self._slots.get(mux)
+        if slot is None:
+            return self._missing(mux)
+        if not slot.readable:
+            return AbortCode.WRITE_ONLY
+        return slot.raw
+
+    def sdo_download(self, mux: bytes, data: bytes, size_indicated: bool) -> int:
+        slot = self._slots.get(mux)
+        if slot is None:
+            return self._missing(mux)
+        if not slot.writable:
+            return AbortCode.READ_ONLY
+        size = slot.size
+        if size is not None:
+            if size_indicated:
+                if len(data) != size:
+                    return AbortCode.DATA_TYPE_LENGTH_MISMATCH
+            else:
+                data = data[:size]
+        entry = slot.entry
+        value = entry.decode(data)
+        if not entry.accepts(value):
+            return AbortCode.INVALID_VALUE
+        if slot.hook is not None or entry.stored:
+            refusal = self._commit(slot, value)
+            if refusal is not None:
+                return refusal
+        else:
+            slot.value = value
+            slot.raw = entry.encode(value)
+        return entry.acknowledge

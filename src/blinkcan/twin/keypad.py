@@ -1,0 +1,279 @@
+"""The PKP-2600-SI keypad twin (manual rev 1.1, `pkp-2600-si-canopen-manual.txt`).
+
+On top of :class:`CanopenTwin`: the key-state TPDO with its tick timer, LED and brightness
+objects and RPDOs, the startup LED show, DEMO mode, and the switch to J1939 and back.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from typing import Any
+
+from blinkcan.devices.colours import BacklightColour
+from blinkcan.devices.keypad import (
+    KEY_COUNT,
+    PROTOCOL_CANOPEN,
+    PROTOCOL_J1939,
+    TICK_PERIOD_S,
+    describe_keypad,
+)
+from blinkcan.devices.model import Quirks
+from blinkcan.protocol.abort import AbortCode
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.cob import NMT
+from blinkcan.protocol.nmt import NmtState, parse_nmt
+from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.keypad_display import (
+    BLINK_PERIOD_S,
+    SHOW_NAMES,
+    STARTUP_SHOWS,
+    DemoMode,
+    ShowPlayer,
+    led_word,
+    render_key,
+)
+from blinkcan.twin.nvm import Nvm
+
+#: PKP §44 / errata "Protocol switch": J1939 PGN EF00h to DA 21h, any priority and source.
+J1939_RETURN_ID_MASK = 0x03FFFF00
+J1939_RETURN_ID = 0x00EF2100
+J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")
+
+
+def check_key(key: int) -> int:
+    if isinstance(key, bool) or not isinstance(key, int):
+        raise TypeError(f"key must be an int, not {type(key).__name__}")
+    if not 1 <= key <= KEY_COUNT:
+        raise ValueError(f"key {key} outside 1..{KEY_COUNT}")
+    return key
+
+
+class KeypadTwin(CanopenTwin):
+    """A PKP-2600-SI that behaves on the bus as the manual describes.
+
+    ``node_id`` is the unit's factory node id; ``nvm`` a path to keep its stored settings in
+    (or None for memory). ``manual`` selects the firmware generation.
+    """
+
+    def __init__(
+        self,
+        node_id: int = 0x15,
+        quirks: Quirks = "firmware",
+        nvm: str | os.PathLike[str] | Nvm | None = None,
+        manual: str = "1.1",
+    ) -> None:
+        description = describe_keypad(manual, quirks, node_id)
+        super().__init__(description, node_id, nvm)
+        self._key_pdo = description.pdo("key_state")
+        self._key_cob_id = self._key_pdo.cob_id(node_id)
+        self._keys = 0
+        self._periodic_next: float | None = None
+        self._show: ShowPlayer | None = None
+        self._show_mode = 0
+        self._demo: DemoMode | None = None
+        self._j1939 = False
+        store = self._store
+        store.set_hook("tpdo1_event_timer", self._on_event_timer)
+        store.set_hook("can_protocol", self._on_can_protocol)
+
+    # -- physical side ------------------------------------------------------------------------
+
+    def press(self, key: int, now: float) -> list[Frame]:
+        """Press key 1..12; returns the key-state PDO if the keypad sends one."""
+        return self._set_key(check_key(key), True, now)
+
+    def release(self, key: int, now: float) -> list[Frame]:
+        """Release key 1..12."""
+        return self._set_key(check_key(key), False, now)
+
+    @property
+    def keys_pressed(self) -> frozenset[int]:
+        return frozenset(k for k in range(1, KEY_COUNT + 1) if self._keys >> (k - 1) & 1)
+
+    def _set_key(self, key: int, down: bool, now: float) -> list[Frame]:
+        if not self._powered:
+            return []
+        self._now = now
+        bit = 1 << (key - 1)
+        keys = self._keys | bit if down else self._keys & ~bit
+        if keys == self._keys:
+            return []
+        self._keys = keys
+        self._store.set("keys_pressed", keys)
+        if down and self._demo is not None:
+            self._demo.press(key, now)
+        # PKP §10: sent on every change while operational (event-driven FEh)
+        if self._j1939 or self._nmt is not NmtState.OPERATIONAL:
+            return []
+        return [self._key_state_frame(now)]
+
+    def _key_state_frame(self, now: float) -> Frame:
+        # errata P8: byte 4 advances every 100 ms from power-on and wraps
+        tick = int((now - self._boot_time) / TICK_PERIOD_S) & 0xFF
+        data = self._keys.to_bytes(2, "little") + b"\x00\x00" + bytes((tick,))
+        return Frame(self._key_cob_id, data)
+
+    # -- CANopen hooks ------------------------------------------------------------------------
+
+    def receive(self, frame: Frame, now: float) -> list[Frame]:
+        if self._demo is not None and self._addressed(frame):
+            self._demo = None  # PKP §24: "another command message" leaves DEMO mode
+        return super().receive(frame, now)
+
+    def _addressed(self, frame: Frame) -> bool:
+        if frame.extended or frame.can_id not in self._routes:
+            return False
+        if frame.can_id == NMT:
+            request = parse_nmt(frame, self.description.nmt_aliases)
+            return request is not None and request.node_id in (0, self._node_id)
+        return True
+
+    def _build_routes(self) -> dict[int, Any]:
+        return {} if self._j1939 else super()._build_routes()
+
+    def _on_boot(self, now: float, application: bool) -> list[Frame]:
+        self._key_cob_id = self._key_pdo.cob_id(self._node_id)
+        self._periodic_next = None
+        if application:
+            self._show = None
+            self._show_mode = self._store.get_int("startup_led_show")
+            steps = STARTUP_SHOWS.get(self._show_mode)
+            if steps is not None and not self._j1939:
+                self._show = ShowPlayer(steps, now)
+            # DEMO mode starts at power-on (PKP §24: "disconnect and reconnect")
+            self._demo = DemoMode(now) if self._store.get_int("demo_mode") else None
+        return []
+
+    def _on_power_off(self) -> None:
+        self._keys = 0
+        self._store.set("keys_pressed", 0)
+        self._show = None
+        self._demo = None
+        self._periodic_next = None
+
+    def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
+        period = self._store.get_int("tpdo1_event_timer")
+        operational = state is NmtState.OPERATIONAL
+        self._periodic_next = now + period / 1000 if operational and period else None
+        return []
+
+    def _on_event_timer(self, value: int) -> AbortCode | None:
+        operational = self._nmt is NmtState.OPERATIONAL
+        self._periodic_next = self._now + value / 1000 if operational and value else None
+        return None
+
+    def _on_can_protocol(self, value: int) -> AbortCode | None:
+        if value == PROTOCOL_J1939:
+            # Acknowledge first (errata P10), then reboot into J1939, silent on CANopen.
+            self._after_reply.append(self._switch_to_j1939)
+        return None
+
+    def _switch_to_j1939(self, now: float) -> list[Frame]:
+        self._j1939 = True
+        self._on_power_off()
+        self._boot(now, application=True)
+        self._nmt = NmtState.BOOT_UP
+        self._heartbeat_next = None
+        return []
+
+    def _on_extended(self, frame: Frame, now: float) -> list[Frame]:
+        if not self._j1939:
+            return []
+        if (frame.can_id & J1939_RETURN_ID_MASK) != J1939_RETURN_ID:
+            return []
+        if frame.data != J1939_RETURN_DATA:
+            return []
+        # errata "Protocol switch": back to CANopen with CANopen factory defaults
+        self._j1939 = False
+        self._restore_factory_settings()
+        self._store.set("can_protocol", PROTOCOL_CANOPEN)
+        self._persist()
+        self._on_power_off()
+        return self._boot(now, application=True)
+
+    def _boot(self, now: float, application: bool) -> list[Frame]:
+        if application:
+            stored = self._nvm.load() or {}
+            self._j1939 = stored.get("can_protocol", PROTOCOL_CANOPEN) == PROTOCOL_J1939
+        if self._j1939:  # J1939 mode: CANopen silent; only the way back is answered
+            super()._boot(now, application)
+            self._routes = {}
+            self._nmt = NmtState.BOOT_UP
+            self._heartbeat_next = None
+            self._show = None
+            return []
+        return super()._boot(now, application)
+
+    def _on_advance(self, now: float) -> list[Frame]:
+        frames: list[Frame] = []
+        due = self._periodic_next
+        if due is not None and now >= due:
+            frames.append(self._key_state_frame(now))  # PKP §41b periodic state transmission
+            period = self._store.get_int("tpdo1_event_timer") / 1000
+            due += period
+            self._periodic_next = due if due > now else now + period
+        if self._show is not None and self._show.finished(now):
+            self._show = None
+        return frames
+
+    def _deadlines(self) -> Iterable[float | None]:
+        now = self._now
+        return (
+            self._periodic_next,
+            self._show.next_change(now) if self._show is not None else None,
+            self._demo.next_change(now) if self._demo is not None else None,
+        )
+
+    # -- what the keypad shows ------------------------------------------------------------------
+
+    def displayed_leds(self, now: float | None = None) -> tuple[int, int]:
+        """(on word, blink word) the keys show: the startup show, DEMO mode, or the objects."""
+        now = self._now if now is None else now
+        if self._show is not None:
+            step = self._show.step(now)
+            if step is not None:
+                return step.on, step.blink
+        if self._demo is not None:
+            return self._demo.leds(now)
+        store = self._store
+        on = led_word(store.get_int("led_on_red"), store.get_int("led_on_green"),
+                      store.get_int("led_on_blue"))
+        blink = led_word(store.get_int("led_blink_red"), store.get_int("led_blink_green"),
+                         store.get_int("led_blink_blue"))
+        return on, blink
+
+    def _backlight(self) -> dict[str, object]:
+        if self._demo is not None:
+            colour = self._demo.backlight_colour
+            level = self._demo.level if colour is not None else 0
+            return {"colour": colour.label if colour else "off", "level": level}
+        colour_code = self._store.get_int("backlight_colour")
+        return {"colour": BacklightColour(colour_code).label,
+                "level": self._store.get_int("backlight_brightness")}
+
+    def _snapshot(self) -> dict[str, Any]:
+        if not self._powered or self._j1939:
+            on = blink = 0
+        else:
+            on, blink = self.displayed_leds()
+        keys = [
+            {"key": key, "pressed": bool(self._keys >> (key - 1) & 1), **render_key(on, blink, key)}
+            for key in range(1, KEY_COUNT + 1)
+        ]
+        indicator = self._store.get_int("indicator_brightness")
+        if self._demo is not None:
+            indicator = self._demo.level
+        show = None
+        if self._show is not None and not self._show.finished(self._now):
+            show = {"mode": SHOW_NAMES[self._show_mode], "step": self._show.step_index(self._now)}
+        return {
+            "protocol": "j1939" if self._j1939 else "canopen",
+            "keys": keys,
+            "indicator_brightness": indicator,
+            "backlight": self._backlight() if self._powered else {"colour": "off", "level": 0},
+            "blink_period_s": BLINK_PERIOD_S,
+            "startup_show": show,
+            "demo": self._demo.describe() if self._demo is not None else None,
+            "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
+        }

@@ -1,0 +1,219 @@
+"""What the keypad shows: LED words rendered per key, the startup LED show and DEMO mode.
+
+An LED word is the 36-bit picture of PKP §11: red bits 0-11, green 12-23, blue 24-35 (bit k-1 of
+each colour is key k). Blinking follows one model (PKP §12, §17 "if the blink message is sent when
+the LED is already ON, the LED blinks in alternative mode"): each blink period has two phases; a
+channel that is on and not blinking is lit in both, on and blinking in phase A only, blinking
+only in phase B only. So red on + red/green blink alternates red and green (errata P9).
+
+Durations the manuals do not give (blink period, show steps) are blinkcan decisions, named here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel, channel_name
+from blinkcan.devices.keypad import KEY_COUNT, LEVEL_MAX, SHOW_COMPLETE, SHOW_FAST_FLASH
+
+BLINK_PERIOD_S = 0.5  # one phase A + one phase B; not in the manual
+_KEY_MASK = (1 << KEY_COUNT) - 1
+ALL_KEYS = _KEY_MASK
+
+
+def led_word(red: int, green: int, blue: int) -> int:
+    return (red & _KEY_MASK) | (green & _KEY_MASK) << KEY_COUNT | (blue & _KEY_MASK) << (2 * KEY_COUNT)
+
+
+def fill(keys_mask: int, channels: int) -> int:
+    """An LED word lighting ``keys_mask`` in ``channels``."""
+    return led_word(
+        keys_mask if channels & Channel.RED else 0,
+        keys_mask if channels & Channel.GREEN else 0,
+        keys_mask if channels & Channel.BLUE else 0,
+    )
+
+
+def key_channels(word: int, key: int) -> int:
+    """The channels of ``key`` (1..12) lit in an LED word."""
+    bit = key - 1
+    return (
+        (word >> bit) & 1
+        | ((word >> (KEY_COUNT + bit)) & 1) << 1
+        | ((word >> (2 * KEY_COUNT + bit)) & 1) << 2
+    )
+
+
+def render_key(on: int, blink: int, key: int) -> dict[str, object]:
+    """One key's LEDs for snapshot(): steady colour, blink colour, the two blink phases."""
+    lit, blinking = key_channels(on, key), key_channels(blink, key)
+    phase_b = (lit & ~blinking) | (blinking & ~lit)
+    return {
+        "colour": channel_name(lit),
+        "blink_colour": channel_name(blinking),
+        "alternate": bool(lit & blinking),
+        "phases": [channel_name(lit), channel_name(phase_b)],
+    }
+
+
+@dataclass(frozen=True)
+class ShowStep:
+    duration: float
+    on: int
+    blink: int = 0
+
+
+def _complete_show() -> tuple[ShowStep, ...]:
+    """Each colour fills the keys one by one, then all keys white (durations ours)."""
+    steps = [
+        ShowStep(0.06, fill((1 << count) - 1, channel))
+        for channel in (Channel.RED, Channel.GREEN, Channel.BLUE)
+        for count in range(1, KEY_COUNT + 1)
+    ]
+    steps.append(ShowStep(0.3, fill(ALL_KEYS, Channel.RED | Channel.GREEN | Channel.BLUE)))
+    return tuple(steps)
+
+
+def _fast_flash() -> tuple[ShowStep, ...]:
+    white = fill(ALL_KEYS, Channel.RED | Channel.GREEN | Channel.BLUE)
+    return (ShowStep(0.1, white), ShowStep(0.1, 0)) * 3
+
+
+STARTUP_SHOWS: dict[int, tuple[ShowStep, ...]] = {
+    SHOW_COMPLETE: _complete_show(),
+    SHOW_FAST_FLASH: _fast_flash(),
+}
+SHOW_NAMES = {0: "off", SHOW_COMPLETE: "complete", SHOW_FAST_FLASH: "fast flash"}
+
+
+class ShowPlayer:
+    """Plays a sequence of steps from ``start``, once or looping."""
+
+    def __init__(self, steps: tuple[ShowStep, ...], start: float, loop: bool = False) -> None:
+        self.steps = steps
+        self.start = start
+        self.loop = loop
+        self._length = sum(step.duration for step in steps)
+
+    def _locate(self, now: float) -> tuple[int, float] | None:
+        """(step index, time that step ends) at ``now``, or None once a single play is over."""
+        elapsed = now - self.start
+        if elapsed < 0:
+            elapsed = 0.0
+        base = self.start
+        if self.loop:
+            rounds = int(elapsed // self._length)
+            elapsed -= rounds * self._length
+            base += rounds * self._length
+        elif elapsed >= self._length:
+            return None
+        end = base
+        for i, step in enumerate(self.steps):
+            end += step.duration
+            if elapsed < end - base:
+                return i, end
+        return len(self.steps) - 1, end
+
+    def finished(self, now: float) -> bool:
+        return self._locate(now) is None
+
+    def step(self, now: float) -> ShowStep | None:
+        located = self._locate(now)
+        return None if located is None else self.steps[located[0]]
+
+    def step_index(self, now: float) -> int | None:
+        located = self._locate(now)
+        return None if located is None else located[0]
+
+    def next_change(self, now: float) -> float | None:
+        located = self._locate(now)
+        return None if located is None else located[1]
+
+
+# -- DEMO mode (PKP §24 and appendix, errata P21) -------------------------------------------
+
+#: Key 1 cycles the backlight: red, green, blue, yellow, cyan, magenta, white, amber,
+#: yellow/green, off (None).
+DEMO_COLOURS: tuple[BacklightColour | None, ...] = (*BacklightColour, None)
+#: Key 4 step 3: keys n and n+6 blink alternately in these colours (errata P21).
+DEMO_PAIR_COLOURS: tuple[Channel, ...] = (
+    Channel.RED,
+    Channel.RED | Channel.GREEN,  # amber
+    Channel.RED | Channel.GREEN,  # yellow
+    Channel.GREEN,
+    Channel.GREEN | Channel.BLUE,  # cyan
+    Channel.RED | Channel.GREEN | Channel.BLUE,  # white
+)
+DEMO_STEP_NAMES = ("complete LED show", "keys on in sequence", "alternate blinking pairs")
+DEMO_LEVEL_STEP = 8  # keys 2 and 3 change the brightness by this much (ours)
+_SEQUENCE_STEP_S = 0.2  # ours
+
+
+def _pair_blink() -> tuple[int, int]:
+    on = blink = 0
+    for pair, channels in enumerate(DEMO_PAIR_COLOURS):
+        first, second = 1 << pair, 1 << (pair + 6)
+        on |= fill(first, channels)  # on + blink: lit in phase A
+        blink |= fill(first | second, channels)  # blink only: lit in phase B
+    return on, blink
+
+
+class DemoMode:
+    """DEMO mode's local state: the keys drive the LEDs and backlight, no host involved."""
+
+    def __init__(self, now: float) -> None:
+        self.colour_index = 0  # "Entering this mode, you turn on backlight red"
+        self.step: int | None = None
+        self.level = LEVEL_MAX
+        self._player: ShowPlayer | None = None
+
+    @property
+    def backlight_colour(self) -> BacklightColour | None:
+        return DEMO_COLOURS[self.colour_index]
+
+    def press(self, key: int, now: float) -> None:
+        if key == 1:
+            self.colour_index = (self.colour_index + 1) % len(DEMO_COLOURS)
+        elif key == 2:
+            self.level = min(LEVEL_MAX, self.level + DEMO_LEVEL_STEP)
+        elif key == 3:
+            self.level = max(0, self.level - DEMO_LEVEL_STEP)
+        elif key == 4:
+            self.step = 0 if self.step is None else (self.step + 1) % len(DEMO_STEP_NAMES)
+            self._player = self._make_player(now)
+        # PKP appendix (rev 1.5): other keys have no effect in DEMO mode
+
+    def _make_player(self, now: float) -> ShowPlayer | None:
+        if self.step == 0:
+            return ShowPlayer(STARTUP_SHOWS[SHOW_COMPLETE], now, loop=True)
+        if self.step == 1:
+            steps = tuple(
+                ShowStep(_SEQUENCE_STEP_S, (1 << count) - 1) for count in range(1, KEY_COUNT + 1)
+            )
+            return ShowPlayer(steps, now, loop=True)
+        return None
+
+    def leds(self, now: float) -> tuple[int, int]:
+        """(on word, blink word) shown at ``now``."""
+        if self.step is None:
+            return 0, 0
+        if self.step == 2:
+            return _pair_blink()
+        assert self._player is not None
+        step = self._player.step(now)
+        assert step is not None
+        if self.step == 1:  # keys in sequence, in the backlight colour (key 1 changes it)
+            colour = self.backlight_colour
+            return fill(step.on, BACKLIGHT_CHANNELS[colour] if colour else Channel.NONE), 0
+        return step.on, step.blink
+
+    def next_change(self, now: float) -> float | None:
+        return None if self._player is None else self._player.next_change(now)
+
+    def describe(self) -> dict[str, object]:
+        colour = self.backlight_colour
+        return {
+            "backlight_colour": colour.label if colour else "off",
+            "step": None if self.step is None else DEMO_STEP_NAMES[self.step],
+            "level": self.level,
+        }
