@@ -103,7 +103,7 @@ class SdoServer:
 
     def _refuse(self, data: bytes) -> bytes:
         mux = self._mux if self._state is not TransferState.IDLE else _NO_MULTIPLEXER
-        if data[0] >> 5 in (1, 2, 5, 6):
+        if data[0] >> 5 not in (0, 3):  # segment frames carry data, not a multiplexer
             mux = data[1:4]
         self._state = TransferState.IDLE
         return abort_data(mux, AbortCode.COMMAND_SPECIFIER_INVALID)

@@ -12,7 +12,7 @@ Device twins subclass :class:`CanopenTwin` and add their application behaviour t
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from blinkcan.devices.model import DeviceDescription
@@ -94,6 +94,11 @@ class CanopenTwin:
     @property
     def powered(self) -> bool:
         return self._powered
+
+    @property
+    def listening(self) -> Mapping[int, object]:
+        """The standard COB-IDs this twin acts on; a new mapping after every boot."""
+        return self._routes
 
     @property
     def objects(self) -> ObjectStore:

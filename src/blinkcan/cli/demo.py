@@ -1,0 +1,151 @@
+"""``blinkcan demo``: a keypad twin on a virtual bus, driven by a short scripted host.
+
+Every step sends the frames the manual prints and shows what came back, with its meaning.
+"""
+
+from __future__ import annotations
+
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import can
+import click
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from blinkcan.decode import FrameDescriber
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime import Emulator, to_frame, to_message
+from blinkcan.twin import KeypadTwin
+
+SETTLE_S = 0.03
+_STYLE = {"off": "grey35", "red": "red", "green": "green", "blue": "blue", "yellow": "yellow",
+          "cyan": "cyan", "magenta": "magenta", "white": "white"}
+
+
+@dataclass(frozen=True)
+class Step:
+    title: str
+    frames: tuple[str, ...] = ()  # "615 40 00 10 00 00 00 00 00"
+    action: Callable[[Emulator, KeypadTwin], object] | None = None
+    wait: float = SETTLE_S
+
+
+def _f(text: str) -> Frame:
+    ident, *data = text.split()
+    return Frame(int(ident, 16), bytes(int(b, 16) for b in data))
+
+
+SCRIPT = (
+    Step("Read the device type (PKP §26)", ("615 40 00 10 00 00 00 00 00",)),
+    Step("Read the device name, segmented (PKP §28)",
+         ("615 40 08 10 00 00 00 00 00", "615 60 00 00 00 00 00 00 00",
+          "615 70 00 00 00 00 00 00 00")),
+    Step("Read the firmware version: this firmware sends it reversed (errata P6)",
+         ("615 40 0A 10 00 00 00 00 00",)),
+    Step("Read the vendor id (PKP §32)", ("615 40 18 10 01 00 00 00 00",)),
+    Step("Switch the startup LED show off, stored (PKP §23)", ("615 2F 14 20 00 00 00 00 00",)),
+    Step("Heartbeat every 200 ms, stored (PKP §25)", ("615 2B 17 10 00 C8 00 00 00",)),
+    Step("Reset the node: boot-up, no show this time (PKP §6)", ("000 81 15",), wait=0.25),
+    Step("Start the keypad (PKP §4)", ("000 01 15",), wait=0.22),
+    Step("Press key 4 (PKP §10)", action=lambda emu, kp: emu.press(kp, 4)),
+    Step("Release key 4", action=lambda emu, kp: emu.release(kp, 4)),
+    Step("Red LEDs 2 and 7, green LED 5 on (PKP §11)", ("215 42 00 01 00 00 00 00 00",)),
+    Step("Key 1 red, then blinking red/green alternately (errata P9)",
+         ("215 43 00 01 00 00 00 00 00", "315 01 10 00 00 00 00 00 00")),
+    Step("Blue backlight at 50 % (PKP §18c, §14)",
+         ("615 2F 03 20 03 03 00 00 00", "515 20 00 00 00 00 00 00 00")),
+    Step("Hold key 12 and read the keys by SDO (PKP §15)",
+         ("615 40 00 20 01 00 00 00 00",), action=lambda emu, kp: emu.press(kp, 12)),
+    Step("Ask for object 1001h, which this keypad lacks (PKP §27)",
+         ("615 40 01 10 00 00 00 00 00",)),
+    Step("Stop the keypad: it stays silent (PKP §7)",
+         ("000 02 15", "615 40 00 10 00 00 00 00 00"), wait=0.05),
+)
+
+
+def _collect(host: can.BusABC, until: float) -> list[tuple[Frame, float]]:
+    """Frames the host receives until ``until``, each with the time it arrived."""
+    frames = []
+    while (left := until - time.monotonic()) > 0:
+        message = host.recv(left)
+        if message is not None and (frame := to_frame(message)) is not None:
+            frames.append((frame, time.monotonic()))
+    return frames
+
+
+def _keypad_grid(snapshot: dict[str, object]) -> Table:
+    grid = Table(show_header=False, box=None, padding=(0, 1))
+    keys = snapshot["keys"]
+    assert isinstance(keys, list)
+    for row in (keys[:6], keys[6:]):
+        cells = []
+        for key in row:
+            colour, blink = key["colour"], key["blink_colour"]
+            label = Text(f"[{key['key']:>2}]", style=f"bold {_STYLE[colour]}")
+            if blink != "off":
+                label.append("~", style=_STYLE[blink])
+            cells.append(label)
+        grid.add_row(*cells)
+    return grid
+
+
+def run_demo(console: Console) -> int:
+    channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    host = can.Bus(interface="virtual", channel=channel)
+    keypad = KeypadTwin(node_id=0x15)
+    describer = FrameDescriber({keypad.node_id: keypad.description})
+    table = Table(title="PKP-2600-SI keypad twin, node 15h, on a virtual CAN bus",
+                  title_justify="left")
+    for column in ("t ms", "", "id", "data", "meaning"):
+        table.add_column(column, no_wrap=column != "meaning")
+    start = time.monotonic()
+
+    def show(frame: Frame, sent_by_host: bool, at: float | None = None) -> None:
+        arrow = Text("host ->", style="cyan") if sent_by_host else Text("   <- ", style="yellow")
+        at = time.monotonic() if at is None else at
+        table.add_row(f"{(at - start) * 1000:6.0f}", arrow, f"{frame.can_id:03X}",
+                      frame.data.hex(" ").upper(), describer.describe(frame))
+
+    try:
+        with Emulator(device_bus, [keypad]) as emulator:
+            table.add_section()
+            table.add_row("", "", "", "", Text("Power on", style="bold"))
+            for frame, at in _collect(host, time.monotonic() + SETTLE_S):
+                show(frame, False, at)
+            for step in SCRIPT:
+                table.add_section()
+                table.add_row("", "", "", "", Text(step.title, style="bold"))
+                if step.action is not None:
+                    step.action(emulator, keypad)
+                for text in step.frames:
+                    frame = _f(text)
+                    host.send(to_message(frame))
+                    show(frame, True)
+                    for reply, at in _collect(host, time.monotonic() + step.wait):
+                        show(reply, False, at)
+                if not step.frames:
+                    for frame, at in _collect(host, time.monotonic() + step.wait):
+                        show(frame, False, at)
+            snapshot = emulator.snapshot(keypad)
+    finally:
+        host.shutdown()
+        device_bus.shutdown()
+    console.print(table)
+    console.print("\n[bold]What the keypad shows now[/] (~ = blinking in that colour):")
+    console.print(_keypad_grid(snapshot))
+    backlight = snapshot["backlight"]
+    console.print(f"backlight {backlight['colour']} at {backlight['level']}/63, "  # type: ignore[index]
+                  f"NMT {snapshot['nmt_state']}, node {snapshot['node_id']:02X}h, "
+                  f"{snapshot['bitrate'] // 1000} kbit/s")
+    return 0
+
+
+@click.command("demo")
+def command() -> None:
+    """A keypad twin on a virtual bus, driven by a scripted host; frames and meaning shown."""
+    raise SystemExit(run_demo(Console(highlight=False)))

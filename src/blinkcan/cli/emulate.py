@@ -1,0 +1,97 @@
+"""``blinkcan emulate DEVICE[:NODE] ...``: run twins on a bus until Ctrl-C."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import can
+import click
+from rich.console import Console
+
+from blinkcan.cli.bus_options import bus_options, parse_int
+from blinkcan.decode import FrameDescriber
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime import Emulator, open_bus
+from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.nvm import NvmError
+from blinkcan.twin.registry import DEFAULT_NODE_IDS, twin_class
+
+
+def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
+                quirks: str) -> list[CanopenTwin]:
+    if nvm is not None and len(devices) != 1:
+        raise click.UsageError("--nvm names one file, for one device")
+    if node_id is not None and len(devices) != 1:
+        raise click.UsageError("--node-id is for one device; write DEVICE:NODE for several")
+    twins: list[CanopenTwin] = []
+    for spec in devices:
+        name, _, node_text = spec.partition(":")
+        try:
+            cls = twin_class(name)
+        except ValueError as error:
+            raise click.BadParameter(str(error), param_hint="DEVICE") from None
+        node = parse_int(node_text) if node_text else node_id
+        if node is None:
+            node = DEFAULT_NODE_IDS[name.lower()]
+        try:
+            twins.append(cls(node_id=node, quirks=quirks, nvm=nvm))  # type: ignore[call-arg]
+        except (ValueError, TypeError) as error:
+            raise click.ClickException(str(error)) from None
+    return twins
+
+
+@click.command("emulate")
+@click.argument("devices", nargs=-1, required=True, metavar="DEVICE[:NODE]...")
+@click.option("--node-id", default=None, help="Node id of a single device (0x15, 21, 15h).")
+@click.option("--nvm", default=None, type=click.Path(dir_okay=False),
+              help="JSON file keeping a single device's stored settings across runs.")
+@click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
+              show_default=True, help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
+@click.option("--response-delay", type=float, default=0.0, show_default=True,
+              help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
+@click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
+@bus_options
+def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quirks: str,
+            response_delay: float, quiet: bool, interface: str | None, channel: str | None,
+            bitrate: int | None) -> None:
+    """Run device twins on a CAN bus until Ctrl-C. DEVICE: keypad (or pkp-2600-si).
+
+    \b
+    blinkcan emulate keypad
+    blinkcan emulate keypad:0x15 keypad:0x16 -i socketcan -c vcan0
+    """
+    console = Console(highlight=False)
+    try:
+        twins = build_twins(devices, parse_int(node_id) if node_id else None, nvm, quirks)
+    except NvmError as error:
+        raise click.ClickException(str(error)) from None
+    try:
+        bus = open_bus(interface, channel, bitrate)
+    except (can.CanError, ValueError, ImportError, OSError) as error:
+        raise click.ClickException(f"cannot open the bus: {error}") from None
+    describer = FrameDescriber({t.node_id: t.description for t in twins})
+    printer = None if quiet else _FramePrinter(console, describer)
+    emulator = Emulator(bus, twins, response_delay=response_delay)
+    if printer is not None:
+        emulator.on_frame = printer
+    names = ", ".join(f"{t.description.kind} {t.node_id:02X}h" for t in twins)
+    console.print(f"[bold]blinkcan[/] emulating {names} on {bus.channel_info}. Ctrl-C stops.")
+    try:
+        with emulator:
+            threading.Event().wait()
+    except KeyboardInterrupt:
+        console.print("stopped")
+    finally:
+        bus.shutdown()
+
+
+class _FramePrinter:
+    def __init__(self, console: Console, describer: FrameDescriber) -> None:
+        self.console = console
+        self.describer = describer
+
+    def __call__(self, frame: Frame, sent: bool, now: float) -> Any:
+        arrow = "[cyan]->[/]" if sent else "[yellow]<-[/]"
+        self.console.print(f"{now:12.3f} {arrow} {frame.can_id:03X} "
+                           f"{frame.data.hex(' ').upper():<24} {self.describer.describe(frame)}")

@@ -1,0 +1,27 @@
+"""``blinkcan`` command line: one module per subcommand, registered here."""
+
+from __future__ import annotations
+
+import logging
+
+import click
+
+from blinkcan import __version__
+from blinkcan.cli import demo, emulate
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="blinkcan")
+@click.option("-v", "--verbose", count=True, help="More log output (-vv for debug).")
+def cli(verbose: int) -> None:
+    """Digital twins, drivers and decoders for Blink Marine CANopen keypads and Keyboxes."""
+    level = logging.WARNING - 10 * verbose
+    logging.basicConfig(level=max(level, logging.DEBUG), format="%(levelname)s %(name)s: %(message)s")
+
+
+cli.add_command(emulate.command)
+cli.add_command(demo.command)
+
+
+def main() -> None:
+    cli(prog_name="blinkcan")

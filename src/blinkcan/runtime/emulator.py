@@ -1,0 +1,311 @@
+"""Run twins on a python-can bus: the only place where twins meet threads and clocks.
+
+One owning thread calls every twin; a python-can ``Notifier`` reads the bus and queues frames
+for it. Rules:
+- Frames a twin sends go on the bus and, because a bus does not echo its own frames, are also
+  delivered to the other twins of this emulator that listen to that COB-ID.
+- Timers come from ``twin.next_deadline()``, kept in a heap; lateness is recorded.
+- With ``response_delay`` > 0 a twin's reply leaves that long after the request, and an SDO
+  request that reaches a twin still busy answering the previous one is dropped, as real keypads
+  do (errata.md, field reports).
+- An exception in a twin is logged with its traceback and never stops the loop.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import logging
+import queue
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Iterable
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+import can
+
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime.canbus import to_frame, to_message
+from blinkcan.twin.base import CanopenTwin
+
+log = logging.getLogger(__name__)
+T = TypeVar("T")
+
+_STOP = object()
+_MAX_IDLE_WAIT = 0.5
+
+
+@dataclass
+class EmulatorStats:
+    """Counters and the lateness of timed frames (seconds after their deadline)."""
+
+    frames_sent: int = 0
+    frames_received: int = 0
+    send_errors: int = 0
+    twin_errors: int = 0
+    lateness: deque[float] = field(default_factory=lambda: deque(maxlen=200_000))
+
+
+class _Listener(can.Listener):  # type: ignore[misc]
+    def __init__(self, inbox: queue.SimpleQueue[Any]) -> None:
+        self._inbox = inbox
+
+    def on_message_received(self, msg: can.Message) -> None:
+        self._inbox.put(msg)
+
+    def on_error(self, exc: Exception) -> None:
+        log.error("bus read failed: %s", exc)
+
+
+class Emulator:
+    """Drives ``twins`` on ``bus``. Powers the twins on at :meth:`start`."""
+
+    def __init__(
+        self,
+        bus: can.BusABC,
+        twins: Iterable[CanopenTwin],
+        response_delay: float = 0.0,
+        notifier: can.Notifier | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        if response_delay < 0:
+            raise ValueError(f"response_delay must be >= 0 seconds, got {response_delay}")
+        self.bus = bus
+        self.twins: list[CanopenTwin] = list(twins)
+        self.response_delay = response_delay
+        self.stats = EmulatorStats()
+        self._clock = clock
+        self._given_notifier = notifier
+        self._notifier: can.Notifier | None = None
+        self._inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._listener = _Listener(self._inbox)
+        self._thread: threading.Thread | None = None
+        self._running = False
+        self._timers: list[tuple[float, int, int]] = []  # (deadline, seq, twin index)
+        self._deadline: list[float | None] = [None] * len(self.twins)
+        self._delayed: list[tuple[float, int, int, list[Frame]]] = []
+        self._busy_until: list[float] = [0.0] * len(self.twins)
+        self._seq = itertools.count()
+        self._index: dict[int, tuple[int, ...]] = {}
+        self._routes_seen: list[object] = [None] * len(self.twins)
+        #: optional tap: ``on_frame(frame, sent, now)`` for every frame sent or received
+        self.on_frame: Callable[[Frame, bool, float], object] | None = None
+
+    # -- lifecycle --------------------------------------------------------------------------
+
+    def start(self) -> Emulator:
+        if self._thread is not None:
+            raise RuntimeError("emulator already started")
+        self._running = True
+        if self._given_notifier is not None:
+            self._given_notifier.add_listener(self._listener)
+        else:
+            self._notifier = can.Notifier(self.bus, [self._listener], timeout=0.1)
+        self._thread = threading.Thread(target=self._run, name="blinkcan-emulator", daemon=True)
+        self._thread.start()
+        self.run(self._power_on_all)
+        return self
+
+    def stop(self) -> None:
+        if self._thread is None:
+            return
+        self._running = False
+        self._inbox.put(_STOP)
+        self._thread.join(timeout=5)
+        self._thread = None
+        if self._notifier is not None:
+            self._notifier.stop()
+            self._notifier = None
+        elif self._given_notifier is not None:
+            self._given_notifier.remove_listener(self._listener)
+
+    def __enter__(self) -> Emulator:
+        return self.start()
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    # -- acting on twins from other threads --------------------------------------------------
+
+    def run(self, action: Callable[[float], T], timeout: float = 5.0) -> T:
+        """Run ``action(now)`` on the emulator thread and return its result. A list of frames
+        it returns is sent, as if the device had sent it."""
+        if self._thread is None:
+            raise RuntimeError("emulator not started")
+        if threading.current_thread() is self._thread:
+            return self._perform(action)
+        future: Future[T] = Future()
+        self._inbox.put((action, future))
+        return future.result(timeout)
+
+    def press(self, twin: Any, key: int) -> list[Frame]:
+        return self.run(lambda now: twin.press(key, now))
+
+    def release(self, twin: Any, key: int) -> list[Frame]:
+        return self.run(lambda now: twin.release(key, now))
+
+    def power_off(self, twin: CanopenTwin) -> None:
+        self.run(lambda now: twin.power_off())
+
+    def power_on(self, twin: CanopenTwin) -> list[Frame]:
+        return self.run(twin.power_on)
+
+    def power_cycle(self, twin: CanopenTwin, off_time: float = 0.0) -> list[Frame]:
+        self.power_off(twin)
+        if off_time:
+            time.sleep(off_time)
+        return self.power_on(twin)
+
+    def snapshot(self, twin: CanopenTwin) -> dict[str, Any]:
+        return self.run(lambda now: twin.snapshot())
+
+    # -- the loop ----------------------------------------------------------------------------
+
+    def _power_on_all(self, now: float) -> list[Frame]:
+        for i, twin in enumerate(self.twins):
+            self._emit(i, self._call(i, twin.power_on, now), now)
+        return []
+
+    def _run(self) -> None:
+        inbox = self._inbox
+        while self._running:
+            wake = self._next_wakeup()
+            wait = _MAX_IDLE_WAIT if wake is None else wake - self._clock()
+            item: Any = None
+            if wait > 0:
+                try:
+                    item = inbox.get(timeout=min(wait, _MAX_IDLE_WAIT))
+                except queue.Empty:
+                    item = None
+            while True:
+                if item is _STOP:
+                    return
+                if item is not None:
+                    self._handle(item)
+                try:
+                    item = inbox.get_nowait()
+                except queue.Empty:
+                    break
+            self._run_timers(self._clock())
+
+    def _handle(self, item: Any) -> None:
+        now = self._clock()
+        if isinstance(item, can.Message):
+            frame = to_frame(item)
+            if frame is not None:
+                self.stats.frames_received += 1
+                if self.on_frame is not None:
+                    self.on_frame(frame, False, now)
+                self._deliver(frame, None, now)
+            return
+        action, future = item
+        try:
+            result = self._perform(action)
+        except BaseException as error:  # the caller gets it; the loop goes on
+            future.set_exception(error)
+        else:
+            future.set_result(result)
+
+    def _perform(self, action: Callable[[float], T]) -> T:
+        now = self._clock()
+        result = action(now)
+        if isinstance(result, list) and all(isinstance(f, Frame) for f in result):
+            self._emit(-1, result, now)  # a device's frames: every other twin may listen
+        for i in range(len(self.twins)):
+            self._reschedule(i)
+        return result
+
+    def _call(self, i: int, method: Callable[..., list[Frame]], *args: Any) -> list[Frame]:
+        try:
+            return method(*args)
+        except Exception:
+            self.stats.twin_errors += 1
+            log.exception("twin %s raised; the emulator goes on", self.twins[i].__class__.__name__)
+            return []
+
+    def _deliver(self, frame: Frame, source: int | None, now: float) -> None:
+        """Give ``frame`` to every twin listening to its COB-ID except its sender."""
+        targets = self._targets(frame)
+        for i in targets:
+            if i == source:
+                continue
+            twin = self.twins[i]
+            if self.response_delay:
+                if twin.is_sdo_request(frame):
+                    if now < self._busy_until[i]:
+                        continue  # still answering the previous request: dropped
+                    self._busy_until[i] = now + self.response_delay
+                replies = self._call(i, twin.receive, frame, now)
+                if replies:
+                    due = now + self.response_delay
+                    heapq.heappush(self._delayed, (due, next(self._seq), i, replies))
+            else:
+                self._emit(i, self._call(i, twin.receive, frame, now), now)
+            self._reschedule(i)
+
+    def _targets(self, frame: Frame) -> Iterable[int]:
+        if frame.extended:
+            return range(len(self.twins))
+        self._refresh_index()
+        return self._index.get(frame.can_id, ())
+
+    def _refresh_index(self) -> None:
+        changed = False
+        for i, twin in enumerate(self.twins):
+            routes = twin.listening
+            if routes is not self._routes_seen[i]:
+                self._routes_seen[i] = routes
+                changed = True
+        if changed:
+            index: dict[int, list[int]] = {}
+            for i, twin in enumerate(self.twins):
+                for can_id in twin.listening:
+                    index.setdefault(can_id, []).append(i)
+            self._index = {can_id: tuple(ids) for can_id, ids in index.items()}
+
+    def _emit(self, source: int, frames: list[Frame], now: float) -> None:
+        for frame in frames:
+            try:
+                self.bus.send(to_message(frame, now))
+                self.stats.frames_sent += 1
+                if self.on_frame is not None:
+                    self.on_frame(frame, True, now)
+            except can.CanError as error:
+                self.stats.send_errors += 1
+                log.warning("send failed for %r: %s", frame, error)
+            self._deliver(frame, source, now)
+
+    def _reschedule(self, i: int) -> None:
+        deadline = self.twins[i].next_deadline()
+        if deadline != self._deadline[i]:
+            self._deadline[i] = deadline
+            if deadline is not None:
+                heapq.heappush(self._timers, (deadline, next(self._seq), i))
+
+    def _next_wakeup(self) -> float | None:
+        timers, delayed = self._timers, self._delayed
+        while timers and timers[0][0] != self._deadline[timers[0][2]]:
+            heapq.heappop(timers)  # stale entry
+        candidates = [heap[0][0] for heap in (timers, delayed) if heap]
+        return min(candidates) if candidates else None
+
+    def _run_timers(self, now: float) -> None:
+        delayed = self._delayed
+        while delayed and delayed[0][0] <= now:
+            due, _, i, frames = heapq.heappop(delayed)
+            self._emit(i, frames, now)
+        timers = self._timers
+        lateness = self.stats.lateness
+        while timers and timers[0][0] <= now:
+            deadline, _, i = heapq.heappop(timers)
+            if deadline != self._deadline[i]:
+                continue
+            self._deadline[i] = None
+            frames = self._call(i, self.twins[i].advance, now)
+            if frames:
+                lateness.append(now - deadline)
+                self._emit(i, frames, now)
+            self._reschedule(i)

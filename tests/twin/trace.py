@@ -1,0 +1,65 @@
+"""Replay byte traces in the manuals' notation against a twin.
+
+A trace is lines: ``> 615 40 00 20 01 …`` sends a frame, ``< 595 4B …`` is the next frame the
+device must send in reply (``??`` matches any byte), ``< -`` says it stays silent,
+``press 4`` / ``release 4`` act on the keys, ``wait 0.5`` advances time, ``on``/``off`` switch
+power. Every frame the device sends must be listed.
+"""
+
+from __future__ import annotations
+
+from blinkcan.protocol import Frame
+from blinkcan.twin.base import CanopenTwin
+from tests.conftest import frame
+
+
+def _matches(pattern: str, actual: Frame) -> bool:
+    ident, *data = pattern.split()
+    if int(ident, 16) != actual.can_id or len(data) != len(actual.data):
+        return False
+    return all(p == "??" or int(p, 16) == b for p, b in zip(data, actual.data))
+
+
+class Bench:
+    """A twin and a clock."""
+
+    def __init__(self, twin: CanopenTwin, now: float = 0.0) -> None:
+        self.twin = twin
+        self.now = now
+        self.pending: list[Frame] = []
+
+    def replay(self, trace: str) -> None:
+        for number, raw in enumerate(trace.strip().splitlines(), start=1):
+            line = raw.split("#", 1)[0].strip()
+            if not line:
+                continue
+            verb, _, rest = line.partition(" ")
+            if verb == ">":
+                self._check_drained(raw)
+                self.pending = self.twin.receive(frame(rest), self.now)
+            elif verb == "<":
+                if rest.strip() == "-":
+                    assert self.pending == [], f"line {number} {raw!r}: expected silence, got {self.pending}"
+                    continue
+                assert self.pending, f"line {number} {raw!r}: the device sent nothing"
+                actual = self.pending.pop(0)
+                assert _matches(rest, actual), f"line {number} {raw!r}: the device sent {actual}"
+            elif verb in ("press", "release"):
+                self._check_drained(raw)
+                self.pending = getattr(self.twin, verb)(int(rest), self.now)
+            elif verb == "wait":
+                self._check_drained(raw)
+                self.now += float(rest)
+                self.pending = self.twin.advance(self.now)
+            elif verb == "on":
+                self._check_drained(raw)
+                self.pending = self.twin.power_on(self.now)
+            elif verb == "off":
+                self._check_drained(raw)
+                self.twin.power_off()
+            else:
+                raise ValueError(f"unknown trace line {raw!r}")
+        self._check_drained("end of trace")
+
+    def _check_drained(self, where: str) -> None:
+        assert not self.pending, f"before {where!r}: unlisted frames {self.pending}"
