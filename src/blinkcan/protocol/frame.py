@@ -8,6 +8,9 @@ STANDARD_ID_MAX = 0x7FF
 EXTENDED_ID_MAX = 0x1FFFFFFF
 
 
+_new_tuple = tuple.__new__
+
+
 class _FrameFields(NamedTuple):
     can_id: int
     data: bytes
@@ -33,6 +36,11 @@ class Frame(_FrameFields):
         if not 0 <= can_id <= limit:
             raise ValueError(f"CAN id {can_id:#x} outside 0..{limit:#x}")
         return tuple.__new__(cls, (can_id, data, extended))
+
+    @classmethod
+    def trusted(cls, can_id: int, data: bytes, extended: bool = False) -> Frame:
+        """Build without checks, for code that made ``data`` itself (a twin's replies)."""
+        return _new_tuple(cls, (can_id, data, extended))
 
     def __repr__(self) -> str:
         ident = f"{self.can_id:08X}" if self.extended else f"{self.can_id:03X}"

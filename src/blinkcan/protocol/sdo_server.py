@@ -61,7 +61,8 @@ _Handler = Callable[[bytes], "bytes | None"]
 class SdoServer:
     """One server channel (one per node)."""
 
-    __slots__ = ("_access", "_buffer", "_mux", "_position", "_size", "_state", "_table", "_toggle")
+    __slots__ = ("_access", "_buffer", "_handlers", "_idle", "_mux", "_position", "_replies",
+                 "_size", "_state", "_tables", "_toggle")
 
     def __init__(self, access: ObjectAccess) -> None:
         self._access = access
@@ -71,18 +72,22 @@ class SdoServer:
         self._position = 0
         self._toggle = 0
         self._size: int | None = None
-        initiate_upload, initiate_download = self._initiate_upload, self._initiate_download
-        abort, refuse = self._client_abort, self._refuse
-        # (state, client command specifier) -> handler: the whole protocol as a table.
-        self._table: dict[tuple[TransferState, int], _Handler] = {}
+        #: mux -> (value bytes, reply): an unchanged value object gets the same reply bytes
+        self._replies: dict[bytes, tuple[bytes, bytes]] = {}
+        # state -> handler per client command specifier (0..7): the protocol as a table. A list
+        # per state, not a dict keyed by (state, ccs): hashing an enum costs a Python call.
+        refuse = self._refuse
+        self._tables: dict[TransferState, list[_Handler]] = {}
         for state in TransferState:
-            for ccs in range(8):
-                self._table[state, ccs] = refuse
-            self._table[state, 1] = initiate_download
-            self._table[state, 2] = initiate_upload
-            self._table[state, 4] = abort
-        self._table[TransferState.UPLOADING, 3] = self._upload_segment
-        self._table[TransferState.DOWNLOADING, 0] = self._download_segment
+            handlers: list[_Handler] = [refuse] * 8
+            handlers[1] = self._initiate_download
+            handlers[2] = self._initiate_upload
+            handlers[4] = self._client_abort
+            self._tables[state] = handlers
+        self._tables[TransferState.UPLOADING][3] = self._upload_segment
+        self._tables[TransferState.DOWNLOADING][0] = self._download_segment
+        self._idle = self._tables[TransferState.IDLE]
+        self._handlers = self._idle
 
     @property
     def state(self) -> TransferState:
@@ -90,14 +95,18 @@ class SdoServer:
 
     def reset(self) -> None:
         """Forget any open transfer (power off, NMT reset)."""
-        self._state = TransferState.IDLE
+        self._enter(TransferState.IDLE)
         self._buffer = bytearray()
+
+    def _enter(self, state: TransferState) -> None:
+        self._state = state
+        self._handlers = self._tables[state]
 
     def on_request(self, data: bytes) -> bytes | None:
         """The eight reply bytes for one request, or None (a client abort needs no reply)."""
         if len(data) < 8:
             data = data + ZEROS[len(data) :]
-        return self._table[self._state, data[0] >> 5](data)
+        return self._handlers[data[0] >> 5](data)
 
     # -- handlers -------------------------------------------------------------------------
 
@@ -105,23 +114,29 @@ class SdoServer:
         mux = self._mux if self._state is not TransferState.IDLE else _NO_MULTIPLEXER
         if data[0] >> 5 not in (0, 3):  # segment frames carry data, not a multiplexer
             mux = data[1:4]
-        self._state = TransferState.IDLE
+        self._enter(TransferState.IDLE)
         return abort_data(mux, AbortCode.COMMAND_SPECIFIER_INVALID)
 
     def _client_abort(self, data: bytes) -> None:
-        self._state = TransferState.IDLE
+        self._enter(TransferState.IDLE)
         return None
 
     def _initiate_upload(self, data: bytes) -> bytes:
         mux = data[1:4]
-        self._state = TransferState.IDLE
+        if self._handlers is not self._idle:
+            self._enter(TransferState.IDLE)
         value = self._access.sdo_upload(mux)
+        cached = self._replies.get(mux)
+        if cached is not None and cached[0] is value:
+            return cached[1]
         if type(value) is not bytes:
             return abort_data(mux, value)
         size = len(value)
         if 0 < size <= 4:
-            return bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
-        self._state = TransferState.UPLOADING
+            reply = bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
+            self._replies[mux] = (value, reply)
+            return reply
+        self._enter(TransferState.UPLOADING)
         self._mux = mux
         self._buffer = bytearray(value)
         self._position = 0
@@ -131,7 +146,7 @@ class SdoServer:
     def _upload_segment(self, data: bytes) -> bytes:
         toggle = data[0] & TOGGLE
         if toggle != self._toggle:
-            self._state = TransferState.IDLE
+            self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
         start = self._position
         chunk = bytes(self._buffer[start : start + 7])
@@ -139,13 +154,14 @@ class SdoServer:
         last = self._position >= len(self._buffer)
         self._toggle ^= TOGGLE
         if last:
-            self._state = TransferState.IDLE
+            self._enter(TransferState.IDLE)
         command = toggle | ((7 - len(chunk)) << 1) | last
         return bytes((command,)) + chunk + ZEROS[len(chunk) : 7]
 
     def _initiate_download(self, data: bytes) -> bytes:
         command, mux = data[0], data[1:4]
-        self._state = TransferState.IDLE
+        if self._handlers is not self._idle:
+            self._enter(TransferState.IDLE)
         if command & 0x02:  # expedited
             result = self._access.sdo_download(
                 mux, expedited_payload(command, data), bool(command & 0x01)
@@ -156,7 +172,7 @@ class SdoServer:
         size = int.from_bytes(data[4:8], "little") if command & 0x01 else None
         if size is not None and size > MAX_DOWNLOAD_SIZE:
             return abort_data(mux, AbortCode.OUT_OF_MEMORY)
-        self._state = TransferState.DOWNLOADING
+        self._enter(TransferState.DOWNLOADING)
         self._mux = mux
         self._size = size
         self._buffer = bytearray()
@@ -167,17 +183,17 @@ class SdoServer:
         command = data[0]
         toggle = command & TOGGLE
         if toggle != self._toggle:
-            self._state = TransferState.IDLE
+            self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
         self._buffer += data[1 : 8 - ((command >> 1) & 0x07)]
         if len(self._buffer) > MAX_DOWNLOAD_SIZE:
-            self._state = TransferState.IDLE
+            self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.OUT_OF_MEMORY)
         self._toggle ^= TOGGLE
         reply = bytes((0x20 | toggle,)) + ZEROS[:7]
         if not command & 0x01:
             return reply
-        self._state = TransferState.IDLE
+        self._enter(TransferState.IDLE)
         if self._size is not None and self._size != len(self._buffer):
             return abort_data(self._mux, AbortCode.DATA_TYPE_LENGTH_MISMATCH)
         result = self._access.sdo_download(self._mux, bytes(self._buffer), True)

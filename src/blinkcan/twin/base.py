@@ -35,6 +35,7 @@ from blinkcan.twin.dictionary import ObjectStore
 from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
 
 _Route = Callable[[Frame, float], list[Frame]]
+_new_tuple = tuple.__new__
 
 NMT_STATE_NAMES = {
     NmtState.BOOT_UP: "initialising",
@@ -90,6 +91,17 @@ class CanopenTwin:
     @property
     def nmt_state(self) -> NmtState:
         return self._nmt
+
+    @property
+    def _nmt(self) -> NmtState:
+        return self._nmt_state
+
+    @_nmt.setter
+    def _nmt(self, state: NmtState) -> None:
+        # the gates are kept as booleans: hashing an enum on every frame costs a Python call
+        self._nmt_state = state
+        self._sdo_allowed = state in SDO_ALLOWED
+        self._pdo_allowed = state in PDO_ALLOWED
 
     @property
     def powered(self) -> bool:
@@ -251,12 +263,12 @@ class CanopenTwin:
     # -- SDO ----------------------------------------------------------------------------------
 
     def _on_sdo(self, frame: Frame, now: float) -> list[Frame]:
-        if self._nmt not in SDO_ALLOWED:  # no SDO while stopped (CiA 301 table 84)
+        if not self._sdo_allowed:  # no SDO while stopped (CiA 301 table 84)
             return []
         reply = self._sdo.on_request(frame.data)
         if reply is None:
             return []
-        frames = [Frame(self._sdo_tx, reply)]
+        frames = [_new_tuple(Frame, (self._sdo_tx, reply, False))]  # Frame.trusted, inlined
         if self._outbox:
             frames += self._outbox
             self._outbox = []
@@ -274,7 +286,7 @@ class CanopenTwin:
 
     def _rpdo_route(self, layout: PdoLayout) -> _Route:
         def route(frame: Frame, now: float) -> list[Frame]:
-            if self._nmt not in PDO_ALLOWED or len(frame.data) < layout.min_length:
+            if not self._pdo_allowed or len(frame.data) < layout.min_length:
                 return []
             return self._on_rpdo(layout, layout.decode(frame.data), now)
 

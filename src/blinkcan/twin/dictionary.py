@@ -18,17 +18,37 @@ WriteHook = Callable[[int], "AbortCode | None"]
 
 
 class _Slot:
-    __slots__ = ("entry", "hook", "keeps_value", "raw", "readable", "size", "value", "writable")
+    """One entry's live value and the facts about its type, computed once (hot path)."""
+
+    __slots__ = ("entry", "hook", "keeps_value", "raw", "readable", "signed", "size", "spans",
+                 "value", "writable")
 
     def __init__(self, entry: ObjectEntry, value: Value) -> None:
         self.entry = entry
         self.readable = entry.access.readable
         self.writable = entry.access.writable
         self.size = entry.data_type.size
+        self.signed = entry.data_type.is_signed
+        self.spans = _valid_spans(entry)
         self.hook: WriteHook | None = None
         self.keeps_value = True
         self.value = value
         self.raw = entry.encode(value)
+
+
+def _valid_spans(entry: ObjectEntry) -> tuple[tuple[int, int], ...]:
+    """The entry's valid integer values as inclusive spans, clipped to its data type."""
+    size = entry.data_type.size
+    if size is None:
+        return ()
+    if entry.data_type.is_signed:
+        low, high = -(1 << (8 * size - 1)), (1 << (8 * size - 1)) - 1
+    else:
+        low, high = 0, (1 << (8 * size)) - 1
+    if entry.valid is None:
+        return ((low, high),)
+    return tuple((max(lo, low), min(hi, high)) for lo, hi in entry.valid.spans
+                 if lo <= high and hi >= low)
 
 
 class ObjectStore:
@@ -130,15 +150,21 @@ class ObjectStore:
         if not slot.writable:
             return AbortCode.READ_ONLY
         size = slot.size
-        if size is not None:
-            if size_indicated:
-                if len(data) != size:
-                    return AbortCode.DATA_TYPE_LENGTH_MISMATCH
-            else:
-                data = data[:size]
         entry = slot.entry
-        value = entry.decode(data)
-        if not entry.accepts(value):
+        if size is None:  # a string
+            text = entry.decode(data)
+            refusal = self._commit(slot, text)
+            return entry.acknowledge if refusal is None else refusal
+        if size_indicated:
+            if len(data) != size:
+                return AbortCode.DATA_TYPE_LENGTH_MISMATCH
+        elif len(data) != size:
+            data = data[:size]
+        value = int.from_bytes(data, "little", signed=slot.signed)
+        for low, high in slot.spans:
+            if low <= value <= high:
+                break
+        else:
             return AbortCode.INVALID_VALUE
         if slot.hook is not None or entry.stored:
             refusal = self._commit(slot, value)
@@ -146,5 +172,5 @@ class ObjectStore:
                 return refusal
         else:
             slot.value = value
-            slot.raw = entry.encode(value)
+            slot.raw = bytes(data)
         return entry.acknowledge

@@ -1,0 +1,1 @@
+"""Benchmarks: each prints our figure beside its anchor's, measured in the same run."""

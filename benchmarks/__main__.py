@@ -1,0 +1,17 @@
+"""Run the benchmarks: ``python3 dev.py bench`` (``--smoke`` for a short CI run)."""
+
+from __future__ import annotations
+
+import argparse
+
+from benchmarks import sdo_twin
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(prog="python3 dev.py bench")
+    parser.add_argument("--smoke", action="store_true", help="short run, to check they still work")
+    args = parser.parse_args()
+    sdo_twin.main(smoke=args.smoke)
+
+
+main()

@@ -1,0 +1,103 @@
+"""The SDO server state machine alone, on a small fake dictionary: bytes in, bytes out."""
+
+from __future__ import annotations
+
+from blinkcan.protocol import AbortCode, SdoServer
+from blinkcan.protocol.sdo import multiplexer
+
+
+class FakeDictionary:
+    """2000h/00: 4-byte value; 3000h/00: a writable string; 4000h/00 write-only; 5000h quirk 43h."""
+
+    def __init__(self) -> None:
+        self.values: dict[bytes, bytes] = {
+            multiplexer(0x2000, 0): b"\x01\x02\x03\x04",
+            multiplexer(0x3000, 0): b"",
+        }
+        self.written: list[tuple[int, int, bytes]] = []
+
+    def sdo_upload(self, mux: bytes) -> bytes | AbortCode:
+        if mux == multiplexer(0x4000, 0):
+            return AbortCode.WRITE_ONLY
+        if mux not in self.values:
+            return AbortCode.OBJECT_DOES_NOT_EXIST
+        return self.values[mux]
+
+    def sdo_download(self, mux: bytes, data: bytes, size_indicated: bool) -> int:
+        if mux == multiplexer(0x5000, 0):
+            return 0x43
+        if mux not in self.values:
+            return AbortCode.OBJECT_DOES_NOT_EXIST
+        self.values[mux] = data
+        return 0x60
+
+
+def h(text: str) -> bytes:
+    return bytes.fromhex(text)
+
+
+def test_expedited_upload_sizes() -> None:
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    for size, command in ((1, "4F"), (2, "4B"), (3, "47"), (4, "43")):
+        fake.values[multiplexer(0x2000, 0)] = bytes(range(1, size + 1))
+        reply = server.on_request(h("4000200000000000"))
+        assert reply == h(command + "002000") + bytes(range(1, size + 1)) + bytes(4 - size)
+
+
+def test_segmented_download_with_toggle_and_size() -> None:
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    assert server.on_request(h("210030000A000000")) == h("6000300000000000")
+    assert server.on_request(h("00") + b"Blink M") == h("2000000000000000")
+    assert server.on_request(h("19") + b"ari" + bytes(4)) == h("3000000000000000")
+    assert fake.values[multiplexer(0x3000, 0)] == b"Blink Mari"
+
+
+def test_segmented_download_size_mismatch_and_toggle_error() -> None:
+    server = SdoServer(FakeDictionary())
+    server.on_request(h("2100300005000000"))
+    assert server.on_request(h("0B") + b"ab" + bytes(5)) == h("8000300010000706")
+    server.on_request(h("2000300000000000"))
+    assert server.on_request(h("10") + bytes(7)) == h("8000300000000305")
+
+
+def test_a_new_initiate_abandons_an_open_transfer() -> None:
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    fake.values[multiplexer(0x3000, 0)] = b"0123456789"
+    assert server.on_request(h("4000300000000000"))[0] == 0x41
+    assert server.on_request(h("4000200000000000")) == h("4300200001020304")
+    assert server.on_request(h("6000000000000000")) == h("8000000001000405")
+
+
+def test_client_abort_gets_no_reply_and_ends_the_transfer() -> None:
+    fake = FakeDictionary()
+    fake.values[multiplexer(0x3000, 0)] = b"0123456789"
+    server = SdoServer(fake)
+    server.on_request(h("4000300000000000"))
+    assert server.on_request(h("8000300000000408")) is None
+    assert server.on_request(h("6000000000000000")) == h("8000000001000405")
+
+
+def test_empty_value_uploads_as_one_empty_segment() -> None:
+    server = SdoServer(FakeDictionary())
+    assert server.on_request(h("4000300000000000")) == h("4100300000000000")
+    assert server.on_request(h("6000000000000000")) == h("0F00000000000000")
+
+
+def test_write_only_and_quirk_acknowledge() -> None:
+    server = SdoServer(FakeDictionary())
+    assert server.on_request(h("4000400000000000")) == h("8000400001000106")
+    assert server.on_request(h("2300500001000000")) == h("4300500000000000")
+
+
+def test_short_requests_are_padded_and_answered() -> None:
+    server = SdoServer(FakeDictionary())
+    assert server.on_request(h("40002000")) == h("4300200001020304")
+    assert server.on_request(b"") == h("8000000001000405")
+
+
+def test_oversized_segmented_download_is_refused() -> None:
+    server = SdoServer(FakeDictionary())
+    assert server.on_request(h("2100300000100000")) == h("8000300005000405")

@@ -1,0 +1,141 @@
+"""The keypad twin in the Emulator on a virtual bus: python-canopen as the reference client."""
+
+from __future__ import annotations
+
+import time
+import uuid
+from collections.abc import Iterator
+
+import can
+import canopen
+import pytest
+
+from blinkcan.formats.canopen_od import object_dictionary
+from blinkcan.protocol import Frame
+from blinkcan.runtime import Emulator, to_frame, to_message
+from blinkcan.twin import KeypadTwin
+
+
+@pytest.fixture
+def channel() -> str:
+    return f"test-{uuid.uuid4().hex}"
+
+
+@pytest.fixture
+def host(channel: str) -> Iterator[can.BusABC]:
+    bus = can.Bus(interface="virtual", channel=channel)
+    yield bus
+    bus.shutdown()
+
+
+def wait_for(host: can.BusABC, can_id: int, timeout: float = 2.0) -> Frame:
+    end = time.monotonic() + timeout
+    while (left := end - time.monotonic()) > 0:
+        message = host.recv(left)
+        if message is not None and message.arbitration_id == can_id:
+            frame = to_frame(message)
+            assert frame is not None
+            return frame
+    raise AssertionError(f"no frame {can_id:03X}h within {timeout} s")
+
+
+@pytest.mark.parametrize("quirks", ["firmware", "cia301"])
+def test_remote_node_reads_every_readable_object(channel: str, quirks: str) -> None:
+    twin = KeypadTwin(node_id=0x15, quirks=quirks)  # type: ignore[arg-type]
+    network = canopen.Network()
+    network.connect(interface="virtual", channel=channel)
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [twin]):
+            node = canopen.RemoteNode(0x15, object_dictionary(twin.description, 0x15))
+            network.add_node(node)
+            readable = [e for e in twin.description.table if e.access.readable]
+            assert len(readable) > 60
+            for entry in readable:
+                raw = node.sdo.upload(entry.index, entry.subindex)
+                expected = entry.encode(entry.default_for(0x15))
+                assert raw == expected, f"{entry.index:04X}h/{entry.subindex:02X} {entry.name}"
+            assert node.sdo["Manufacturer device name"].raw == "BlinkMarine"
+            assert node.sdo["Identity object"]["Vendor-ID"].raw == 0x3E2
+            node.sdo["Producer heartbeat time"].raw = 100
+            assert twin.objects["producer_heartbeat_time"] == 100
+            with pytest.raises(canopen.SdoAbortedError) as error:
+                node.sdo["Producer heartbeat time"].raw = 5
+            assert error.value.code == 0x06090030
+    finally:
+        network.disconnect()
+        device_bus.shutdown()
+
+
+def test_keys_leds_and_heartbeat_through_the_bus(channel: str, host: can.BusABC) -> None:
+    twin = KeypadTwin()
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [twin]) as emulator:
+            assert wait_for(host, 0x715).data == b"\x00"
+            host.send(to_message(Frame(0x615, bytes.fromhex("2B17100032000000"))))
+            assert wait_for(host, 0x595).data[0] == 0x60
+            heartbeat = wait_for(host, 0x715)
+            assert heartbeat.data == b"\x7f"
+            host.send(to_message(Frame(0, b"\x01\x15")))
+            assert wait_for(host, 0x715).data == b"\x05"
+            emulator.press(twin, 7)
+            assert wait_for(host, 0x195).data[:2] == b"\x40\x00"
+            host.send(to_message(Frame(0x215, bytes.fromhex("4200000000000000"))))
+            deadline = time.monotonic() + 2
+            while emulator.run(lambda now: twin.objects["led_on_red"]) != 0x42:
+                assert time.monotonic() < deadline
+                time.sleep(0.005)
+    finally:
+        device_bus.shutdown()
+
+
+def test_overlapping_sdo_requests_are_dropped_with_a_response_delay(
+        channel: str, host: can.BusABC) -> None:
+    twin = KeypadTwin()
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [twin], response_delay=0.05):
+            wait_for(host, 0x715)
+            request = to_message(Frame(0x615, bytes.fromhex("4000100000000000")))
+            host.send(request)
+            host.send(request)  # arrives while the keypad is still answering: dropped
+            wait_for(host, 0x595)
+            with pytest.raises(AssertionError):
+                wait_for(host, 0x595, timeout=0.2)
+            host.send(request)  # after the reply: answered
+            assert wait_for(host, 0x595).data[0] == 0x43
+    finally:
+        device_bus.shutdown()
+
+
+def test_a_twin_that_raises_does_not_stop_the_emulator(channel: str, host: can.BusABC) -> None:
+    class Broken(KeypadTwin):
+        def receive(self, frame: Frame, now: float) -> list[Frame]:
+            if frame.data[:1] == b"\xee":
+                raise RuntimeError("boom")
+            return super().receive(frame, now)
+
+    twin = Broken()
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [twin]) as emulator:
+            wait_for(host, 0x715)
+            host.send(to_message(Frame(0x615, b"\xee" + bytes(7))))
+            host.send(to_message(Frame(0x615, bytes.fromhex("4000100000000000"))))
+            assert wait_for(host, 0x595).data[0] == 0x43
+            assert emulator.stats.twin_errors == 1
+    finally:
+        device_bus.shutdown()
+
+
+def test_two_keypads_on_one_bus_and_a_power_cycle(channel: str, host: can.BusABC) -> None:
+    first, second = KeypadTwin(0x15), KeypadTwin(0x16)
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [first, second]) as emulator:
+            boot_ids = {wait_for(host, 0x715).can_id, wait_for(host, 0x716).can_id}
+            assert boot_ids == {0x715, 0x716}
+            assert emulator.power_cycle(second) == [Frame(0x716, b"\x00")]
+    finally:
+        device_bus.shutdown()

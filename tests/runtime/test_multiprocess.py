@@ -1,0 +1,63 @@
+"""Across processes: ``blinkcan emulate`` in a child process, this process as the host, on
+python-can's ``udp_multicast`` interface."""
+
+from __future__ import annotations
+
+import os
+import random
+import subprocess
+import sys
+import time
+
+import can
+import pytest
+
+from blinkcan.protocol import Frame
+from blinkcan.runtime import to_frame, to_message
+
+pytestmark = pytest.mark.multiprocess
+
+
+def _multicast_bus(channel: str) -> can.BusABC:
+    try:
+        return can.Bus(interface="udp_multicast", channel=channel, receive_own_messages=False)
+    except (OSError, ImportError, can.CanError) as error:
+        pytest.skip(f"udp_multicast unavailable here ({error}); on a machine without a default "
+                    "route run: ip route add 224.0.0.0/4 dev lo")
+
+
+def test_keypad_emulated_in_another_process_answers() -> None:
+    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    host = _multicast_bus(channel)
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    child = subprocess.Popen(
+        [sys.executable, "-m", "blinkcan", "emulate", "keypad:0x21", "-q",
+         "-i", "udp_multicast", "-c", channel],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+    )
+    try:
+        frames: list[Frame] = []
+        end = time.monotonic() + 20
+        while time.monotonic() < end and Frame(0x721, b"\x00") not in frames:
+            message = host.recv(0.5)
+            if message is not None and (frame := to_frame(message)) is not None:
+                frames.append(frame)
+            if child.poll() is not None:
+                break
+        assert Frame(0x721, b"\x00") in frames, child.communicate(timeout=5)[0] if child.poll() is not None else frames
+        host.send(to_message(Frame(0x621, bytes.fromhex("4000100000000000"))))
+        end = time.monotonic() + 5
+        while time.monotonic() < end:
+            message = host.recv(0.5)
+            if message is not None and message.arbitration_id == 0x5A1:
+                assert bytes(message.data) == bytes.fromhex("430010009101 0B00".replace(" ", ""))
+                break
+        else:
+            pytest.fail("no SDO reply across processes")
+    finally:
+        child.terminate()
+        try:
+            child.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            child.kill()
+        host.shutdown()
