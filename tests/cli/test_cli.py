@@ -37,5 +37,6 @@ def test_emulate_refuses_a_corrupt_nvm_file(tmp_path: Path) -> None:
     path = tmp_path / "nvm.json"
     path.write_text("garbage")
     result = CliRunner().invoke(cli, ["emulate", "keypad", "--nvm", str(path)])
-    assert result.exit_code == 1 and "not valid JSON" in result.output
+    assert result.exit_code == 1
+    assert "not valid JSON" in result.output
     assert path.read_text() == "garbage"

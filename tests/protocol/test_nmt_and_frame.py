@@ -8,7 +8,9 @@ from blinkcan.protocol.nmt import TRANSITIONS, NmtAction
 
 def test_frame_is_immutable_and_equal_by_value() -> None:
     a, b = Frame(0x615, b"\x40"), Frame(0x615, bytearray(b"\x40"))
-    assert a == b and hash(a) == hash(b) and type(b.data) is bytes
+    assert a == b
+    assert hash(a) == hash(b)
+    assert type(b.data) is bytes
     with pytest.raises(AttributeError):
         a.can_id = 1  # type: ignore[misc]
 

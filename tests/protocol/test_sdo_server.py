@@ -66,7 +66,7 @@ def test_a_new_initiate_abandons_an_open_transfer() -> None:
     fake = FakeDictionary()
     server = SdoServer(fake)
     fake.values[multiplexer(0x3000, 0)] = b"0123456789"
-    assert server.on_request(h("4000300000000000"))[0] == 0x41
+    assert server.on_request(h("4000300000000000")) == h("410030000A000000")
     assert server.on_request(h("4000200000000000")) == h("4300200001020304")
     assert server.on_request(h("6000000000000000")) == h("8000000001000405")
 

@@ -44,7 +44,9 @@ def test_keypad_emulated_in_another_process_answers() -> None:
                 frames.append(frame)
             if child.poll() is not None:
                 break
-        assert Frame(0x721, b"\x00") in frames, child.communicate(timeout=5)[0] if child.poll() is not None else frames
+        exited = child.poll() is not None
+        output = child.communicate(timeout=5)[0] if exited else frames
+        assert Frame(0x721, b"\x00") in frames, output
         host.send(to_message(Frame(0x621, bytes.fromhex("4000100000000000"))))
         end = time.monotonic() + 5
         while time.monotonic() < end:

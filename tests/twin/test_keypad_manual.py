@@ -352,9 +352,11 @@ def test_s33_to_s36_rpdo_parameters(bench: Bench, index: str, cob: str) -> None:
     ("03", ["08 02 03 20"]),                                # §40
 ])
 def test_s37_to_s40_rpdo_mappings(bench: Bench, index: str, entries: list[str]) -> None:
-    trace = [f"> 615 40 {index} 16 00 00 00 00 00", f"< 595 4F {index} 16 00 {len(entries):02X} 00 00 00"]
+    count = len(entries)
+    trace = [f"> 615 40 {index} 16 00 00 00 00 00", f"< 595 4F {index} 16 00 {count:02X} 00 00 00"]
     for sub, entry in enumerate(entries, start=1):
-        trace += [f"> 615 40 {index} 16 {sub:02X} 00 00 00 00", f"< 595 43 {index} 16 {sub:02X} {entry}"]
+        trace += [f"> 615 40 {index} 16 {sub:02X} 00 00 00 00",
+                  f"< 595 43 {index} 16 {sub:02X} {entry}"]
     bench.replay("\n".join(trace))
 
 

@@ -65,7 +65,8 @@ def test_settings_survive_power_cycles(writes: dict[str, int]) -> None:
         size = entry.data_type.size or 4
         command = {1: 0x2F, 2: 0x2B, 4: 0x23}[size]
         raw = (value & ((1 << (8 * size)) - 1)).to_bytes(size, "little")
-        twin.receive(Frame(0x600 + twin.node_id, bytes((command,)) + entry.mux + raw.ljust(4, b"\0")), 0.0)
+        data = bytes((command,)) + entry.mux + raw.ljust(4, b"\0")
+        twin.receive(Frame(0x600 + twin.node_id, data), 0.0)
     before = twin.snapshot()["settings"]
     twin.power_off()
     twin.power_on(1.0)

@@ -77,7 +77,8 @@ def test_no_sdo_and_no_pdo_while_stopped(bench: Bench) -> None:
 def test_pdos_act_only_while_operational(bench: Bench) -> None:
     bench.replay("> 215 01 00 00 00 00 00 00 00\npress 1\n< -")
     assert bench.twin.objects["led_on_red"] == 0
-    bench.replay("release 1\n> 000 01 15\n> 215 01 00 00 00 00 00 00 00\npress 1\n< 195 01 00 00 00 ??")
+    bench.replay("release 1\n> 000 01 15\n> 215 01 00 00 00 00 00 00 00\n"
+                 "press 1\n< 195 01 00 00 00 ??")
     assert bench.twin.objects["led_on_red"] == 1
 
 
@@ -200,7 +201,7 @@ def test_powered_off_twin_is_silent() -> None:
 
 @pytest.mark.parametrize("bad", [0, 13, -1])
 def test_press_rejects_keys_outside_1_to_12(bad: int) -> None:
-    with pytest.raises(ValueError, match="1..12"):
+    with pytest.raises(ValueError, match=r"1\.\.12"):
         KeypadTwin().press(bad, 0.0)
 
 
@@ -221,7 +222,8 @@ def test_complete_show_plays_then_the_objects_show() -> None:
     assert twin.snapshot()["startup_show"] == {"mode": "complete", "step": 0}
     assert twin.snapshot()["keys"][0]["colour"] == "red"
     deadline = twin.next_deadline()
-    assert deadline is not None and deadline > 0
+    assert deadline is not None
+    assert deadline > 0
     twin.advance(1.0)
     assert twin.snapshot()["keys"][0]["colour"] == "green"
     twin.advance(5.0)
@@ -245,7 +247,7 @@ def test_fast_flash_and_no_show() -> None:
     assert twin.snapshot()["startup_show"] is None
 
 
-# -- DEMO mode (§24, appendix, errata P21) ----------------------------------------------------------
+# -- DEMO mode (§24, appendix, errata P21) ----------------------------------------------
 
 @pytest.fixture
 def demo() -> Bench:
@@ -280,8 +282,10 @@ def test_demo_key_4_steps_and_pairs_blink_alternately(demo: Bench) -> None:
         steps.append(demo.twin.snapshot()["demo"]["step"])
     assert steps == ["complete LED show", "keys on in sequence", "alternate blinking pairs"]
     keys = demo.twin.snapshot()["keys"]
-    assert keys[0]["phases"] == ["red", "off"] and keys[6]["phases"] == ["off", "red"]
-    assert keys[4]["phases"] == ["cyan", "off"] and keys[10]["phases"] == ["off", "cyan"]
+    assert keys[0]["phases"] == ["red", "off"]
+    assert keys[6]["phases"] == ["off", "red"]
+    assert keys[4]["phases"] == ["cyan", "off"]
+    assert keys[10]["phases"] == ["off", "cyan"]
 
 
 def test_demo_keys_2_and_3_change_brightness(demo: Bench) -> None:
@@ -297,7 +301,7 @@ def test_another_command_leaves_demo_mode(demo: Bench) -> None:
     assert demo.twin.snapshot()["backlight"] == {"colour": "amber", "level": 0}
 
 
-# -- non-volatile settings ----------------------------------------------------------------------------
+# -- non-volatile settings ---------------------------------------------------------------
 
 def test_settings_survive_the_process_in_an_nvm_file(tmp_path: Path) -> None:
     path = tmp_path / "keypad.json"
@@ -306,7 +310,8 @@ def test_settings_survive_the_process_in_an_nvm_file(tmp_path: Path) -> None:
     first.receive(frame("615 2B 17 10 00 C8 00 00 00"), 0.0)
     first.receive(frame("615 2F 13 20 00 22 00 00 00"), 0.0)
     document = json.loads(path.read_text())
-    assert document["model"] == "pkp-2600-si" and document["settings"]["node_id"] == 0x22
+    assert document["model"] == "pkp-2600-si"
+    assert document["settings"]["node_id"] == 0x22
     second = KeypadTwin(nvm=path)  # another process would do the same
     assert second.power_on(0.0) == [frame("722 00")]
     assert second.objects["producer_heartbeat_time"] == 200

@@ -17,7 +17,7 @@ def _matches(pattern: str, actual: Frame) -> bool:
     ident, *data = pattern.split()
     if int(ident, 16) != actual.can_id or len(data) != len(actual.data):
         return False
-    return all(p == "??" or int(p, 16) == b for p, b in zip(data, actual.data))
+    return all(p == "??" or int(p, 16) == b for p, b in zip(data, actual.data, strict=False))
 
 
 class Bench:
@@ -39,7 +39,8 @@ class Bench:
                 self.pending = self.twin.receive(frame(rest), self.now)
             elif verb == "<":
                 if rest.strip() == "-":
-                    assert self.pending == [], f"line {number} {raw!r}: expected silence, got {self.pending}"
+                    assert self.pending == [], (
+                        f"line {number} {raw!r}: expected silence, got {self.pending}")
                     continue
                 assert self.pending, f"line {number} {raw!r}: the device sent nothing"
                 actual = self.pending.pop(0)

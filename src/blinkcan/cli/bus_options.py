@@ -16,11 +16,10 @@ def bus_options(function: F) -> F:
                             help="Bit rate in bit/s (python-can config if unset).")(function)
     function = click.option("-c", "--channel", default=None,
                             help="Channel, e.g. can0 or a virtual channel name.")(function)
-    function = click.option("-i", "--interface", default=None,
+    return click.option("-i", "--interface", default=None,
                             help="python-can interface (socketcan, pcan, kvaser, slcan, "
                                  "udp_multicast, virtual, ...). Default: python-can's "
                                  "configuration, else virtual.")(function)
-    return function
 
 
 def parse_int(text: str) -> int:

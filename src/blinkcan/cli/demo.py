@@ -139,7 +139,7 @@ def run_demo(console: Console) -> int:
     console.print("\n[bold]What the keypad shows now[/] (~ = blinking in that colour):")
     console.print(_keypad_grid(snapshot))
     backlight = snapshot["backlight"]
-    console.print(f"backlight {backlight['colour']} at {backlight['level']}/63, "  # type: ignore[index]
+    console.print(f"backlight {backlight['colour']} at {backlight['level']}/63, "
                   f"NMT {snapshot['nmt_state']}, node {snapshot['node_id']:02X}h, "
                   f"{snapshot['bitrate'] // 1000} kbit/s")
     return 0

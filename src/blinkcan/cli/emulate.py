@@ -47,7 +47,8 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
 @click.option("--nvm", default=None, type=click.Path(dir_okay=False),
               help="JSON file keeping a single device's stored settings across runs.")
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
-              show_default=True, help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
+              show_default=True,
+              help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
 @click.option("--response-delay", type=float, default=0.0, show_default=True,
               help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")

@@ -16,7 +16,8 @@ from blinkcan.cli import demo, emulate
 def cli(verbose: int) -> None:
     """Digital twins, drivers and decoders for Blink Marine CANopen keypads and Keyboxes."""
     level = logging.WARNING - 10 * verbose
-    logging.basicConfig(level=max(level, logging.DEBUG), format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(level=max(level, logging.DEBUG),
+                        format="%(levelname)s %(name)s: %(message)s")
 
 
 cli.add_command(emulate.command)

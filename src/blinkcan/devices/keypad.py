@@ -208,7 +208,8 @@ def describe_keypad(
 ) -> DeviceDescription:
     """The keypad of one firmware generation in one quirk profile."""
     if generation not in GENERATIONS:
-        raise ValueError(f"keypad manual must be one of {', '.join(GENERATIONS)}, not {generation!r}")
+        valid = ", ".join(GENERATIONS)
+        raise ValueError(f"keypad manual must be one of {valid}, not {generation!r}")
     check_quirks(quirks)
     return DeviceDescription(
         model=MODEL,

@@ -10,7 +10,6 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field, replace
 from enum import Enum, IntEnum
-from typing import Union
 
 from blinkcan.protocol.sdo import multiplexer
 
@@ -87,8 +86,8 @@ class NodeIdRelative:
         return self.offset + node_id
 
 
-Value = Union[int, str]
-Default = Union[int, str, NodeIdRelative]
+Value = int | str
+Default = int | str | NodeIdRelative
 
 
 @dataclass(frozen=True)
@@ -236,7 +235,7 @@ class ObjectTable:
     def has_index(self, index: int) -> bool:
         return any(obj.index == index for obj in self.objects)
 
-    def object(self, index: int) -> ObjectDef | None:
+    def object_at(self, index: int) -> ObjectDef | None:
         for obj in self.objects:
             if obj.index == index:
                 return obj

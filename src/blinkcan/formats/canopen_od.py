@@ -5,14 +5,16 @@ The interop tests load it into a ``RemoteNode``; the EDS writer exports it with 
 
 from __future__ import annotations
 
+from typing import Any
+
 import canopen.objectdictionary as cod
 
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import NodeIdRelative, ObjectEntry, ObjectKind
 
 
-def _variable(entry: ObjectEntry, name: str) -> cod.ODVariable:
-    variable = cod.ODVariable(name, entry.index, entry.subindex)
+def _variable(entry: ObjectEntry, name: str) -> Any:
+    variable: Any = cod.ODVariable(name, entry.index, entry.subindex)
     variable.data_type = int(entry.data_type)
     variable.access_type = entry.access.value
     variable.pdo_mappable = entry.pdo_mappable
@@ -31,9 +33,9 @@ def _variable(entry: ObjectEntry, name: str) -> cod.ODVariable:
 
 
 def object_dictionary(description: DeviceDescription, node_id: int | None = None
-                      ) -> cod.ObjectDictionary:
+                      ) -> Any:
     """A python-canopen object dictionary for ``description`` (node id for $NODEID values)."""
-    od = cod.ObjectDictionary()
+    od: Any = cod.ObjectDictionary()  # type: ignore[no-untyped-call]
     od.node_id = node_id if node_id is not None else description.default_node_id
     od.device_information.product_name = description.table["model_id"].default
     od.device_information.vendor_name = "Blink Marine"
@@ -44,7 +46,8 @@ def object_dictionary(description: DeviceDescription, node_id: int | None = None
         if obj.kind is ObjectKind.VAR:
             od.add_object(_variable(obj.entries[0], obj.label))
             continue
-        container = (cod.ODArray if obj.kind is ObjectKind.ARRAY else cod.ODRecord)(obj.label, obj.index)
+        kind = cod.ODArray if obj.kind is ObjectKind.ARRAY else cod.ODRecord
+        container: Any = kind(obj.label, obj.index)
         for entry in obj.entries:
             container.add_member(_variable(entry, entry.label))
         od.add_object(container)

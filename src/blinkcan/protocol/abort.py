@@ -62,7 +62,9 @@ _MEANINGS: dict[AbortCode, str] = {
     AbortCode.GENERAL_ERROR: "general error",
     AbortCode.CANNOT_TRANSFER: "data cannot be transferred or stored to the application",
     AbortCode.CANNOT_TRANSFER_LOCAL_CONTROL: "data cannot be transferred because of local control",
-    AbortCode.CANNOT_TRANSFER_DEVICE_STATE: "data cannot be transferred in the present device state",
+    AbortCode.CANNOT_TRANSFER_DEVICE_STATE: (
+        "data cannot be transferred in the present device state"
+    ),
 }
 
 

@@ -25,7 +25,8 @@ class Frame(_FrameFields):
 
     __slots__ = ()
 
-    def __new__(cls, can_id: int, data: bytes = b"", extended: bool = False) -> Frame:
+    def __new__(cls, can_id: int, data: bytes | bytearray | memoryview = b"",
+                extended: bool = False) -> Frame:
         if type(data) is not bytes:
             if not isinstance(data, (bytes, bytearray, memoryview)):
                 raise TypeError(f"Frame data must be bytes, not {type(data).__name__}")

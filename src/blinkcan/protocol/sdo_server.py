@@ -27,12 +27,12 @@ from blinkcan.protocol.sdo import (
     TOGGLE,
     ZEROS,
     abort_data,
-    expedited_payload,
 )
 
 #: The largest segmented download the server buffers (both devices have only short objects).
 MAX_DOWNLOAD_SIZE = 1024
 _NO_MULTIPLEXER = b"\x00\x00\x00"
+_ACKNOWLEDGE_PREFIX = [bytes((command,)) for command in range(256)]
 
 
 class ObjectAccess(Protocol):
@@ -119,7 +119,6 @@ class SdoServer:
 
     def _client_abort(self, data: bytes) -> None:
         self._enter(TransferState.IDLE)
-        return None
 
     def _initiate_upload(self, data: bytes) -> bytes:
         mux = data[1:4]
@@ -129,7 +128,7 @@ class SdoServer:
         cached = self._replies.get(mux)
         if cached is not None and cached[0] is value:
             return cached[1]
-        if type(value) is not bytes:
+        if not isinstance(value, bytes):
             return abort_data(mux, value)
         size = len(value)
         if 0 < size <= 4:
@@ -162,13 +161,14 @@ class SdoServer:
         command, mux = data[0], data[1:4]
         if self._handlers is not self._idle:
             self._enter(TransferState.IDLE)
-        if command & 0x02:  # expedited
-            result = self._access.sdo_download(
-                mux, expedited_payload(command, data), bool(command & 0x01)
-            )
+        if command & 0x02:  # expedited: n bytes when the size is indicated, else four
+            if command & 0x01:
+                result = self._access.sdo_download(mux, data[4 : 8 - ((command >> 2) & 3)], True)
+            else:
+                result = self._access.sdo_download(mux, data[4:8], False)
             if result > 0xFF:
                 return abort_data(mux, result)
-            return bytes((result,)) + mux + b"\x00\x00\x00\x00"
+            return _ACKNOWLEDGE_PREFIX[result] + mux + b"\x00\x00\x00\x00"
         size = int.from_bytes(data[4:8], "little") if command & 0x01 else None
         if size is not None and size > MAX_DOWNLOAD_SIZE:
             return abort_data(mux, AbortCode.OUT_OF_MEMORY)

@@ -49,7 +49,7 @@ class EmulatorStats:
     lateness: deque[float] = field(default_factory=lambda: deque(maxlen=200_000))
 
 
-class _Listener(can.Listener):  # type: ignore[misc]
+class _Listener(can.Listener):
     def __init__(self, inbox: queue.SimpleQueue[Any]) -> None:
         self._inbox = inbox
 
@@ -295,7 +295,7 @@ class Emulator:
     def _run_timers(self, now: float) -> None:
         delayed = self._delayed
         while delayed and delayed[0][0] <= now:
-            due, _, i, frames = heapq.heappop(delayed)
+            _due, _, i, frames = heapq.heappop(delayed)
             self._emit(i, frames, now)
         timers = self._timers
         lateness = self.stats.lateness

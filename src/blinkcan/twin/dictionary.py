@@ -63,6 +63,7 @@ class ObjectStore:
             self._slots[entry.mux] = slot
             self._by_name[entry.name] = slot
         self._indices = frozenset(entry.index.to_bytes(2, "little") for entry in table)
+        self._stored = [(name, slot) for name, slot in self._by_name.items() if slot.entry.stored]
         #: called after a stored entry changed through SDO (the twin persists its settings)
         self.on_stored_change: Callable[[], None] | None = None
 
@@ -112,7 +113,7 @@ class ObjectStore:
         return iter(self.table)
 
     def stored_values(self) -> dict[str, Value]:
-        return {name: slot.value for name, slot in self._by_name.items() if slot.entry.stored}
+        return {name: slot.value for name, slot in self._stored}
 
     def load(self, node_id: int, stored: dict[str, Value] | None) -> None:
         """Power-on values: stored entries from ``stored`` (or factory), live entries from
@@ -123,7 +124,8 @@ class ObjectStore:
             if entry.stored:
                 value = stored.get(entry.name, entry.default_for(node_id))
             elif entry.power_on_from is not None:
-                value = stored.get(entry.power_on_from, self.table[entry.power_on_from].default)
+                source = self.table[entry.power_on_from]
+                value = stored.get(source.name, source.default_for(node_id))
             else:
                 value = entry.default_for(node_id)
             self.set(entry.name, value)

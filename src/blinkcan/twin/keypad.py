@@ -20,8 +20,8 @@ from blinkcan.devices.keypad import (
 )
 from blinkcan.devices.model import Quirks
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.cob import NMT
+from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState, parse_nmt
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keypad_display import (
@@ -116,21 +116,27 @@ class KeypadTwin(CanopenTwin):
 
     # -- CANopen hooks ------------------------------------------------------------------------
 
-    def receive(self, frame: Frame, now: float) -> list[Frame]:
-        if self._demo is not None and self._addressed(frame):
-            self._demo = None  # PKP §24: "another command message" leaves DEMO mode
-        return super().receive(frame, now)
-
-    def _addressed(self, frame: Frame) -> bool:
-        if frame.extended or frame.can_id not in self._routes:
-            return False
-        if frame.can_id == NMT:
-            request = parse_nmt(frame, self.description.nmt_aliases)
-            return request is not None and request.node_id in (0, self._node_id)
-        return True
-
     def _build_routes(self) -> dict[int, Any]:
-        return {} if self._j1939 else super()._build_routes()
+        if self._j1939:
+            return {}
+        routes = super()._build_routes()
+        if self._demo is None:
+            return routes
+        # PKP §24: "another command message" leaves DEMO mode. Only while DEMO mode is on do
+        # the routes carry this check, so normal traffic pays nothing for it.
+        return {can_id: self._leaving_demo(route) for can_id, route in routes.items()}
+
+    def _leaving_demo(self, route: Any) -> Any:
+        def leave_then_route(frame: Frame, now: float) -> list[Frame]:
+            if frame.can_id == NMT:
+                request = parse_nmt(frame, self.description.nmt_aliases)
+                if request is None or request.node_id not in (0, self._node_id):
+                    return route(frame, now)  # type: ignore[no-any-return]
+            self._demo = None
+            self._routes = self._build_routes()
+            return route(frame, now)  # type: ignore[no-any-return]
+
+        return leave_then_route
 
     def _on_boot(self, now: float, application: bool) -> list[Frame]:
         self._key_cob_id = self._key_pdo.cob_id(self._node_id)
@@ -143,6 +149,8 @@ class KeypadTwin(CanopenTwin):
                 self._show = ShowPlayer(steps, now)
             # DEMO mode starts at power-on (PKP §24: "disconnect and reconnect")
             self._demo = DemoMode(now) if self._store.get_int("demo_mode") else None
+            if self._demo is not None:
+                self._routes = self._build_routes()
         return []
 
     def _on_power_off(self) -> None:

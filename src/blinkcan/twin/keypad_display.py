@@ -22,7 +22,8 @@ ALL_KEYS = _KEY_MASK
 
 
 def led_word(red: int, green: int, blue: int) -> int:
-    return (red & _KEY_MASK) | (green & _KEY_MASK) << KEY_COUNT | (blue & _KEY_MASK) << (2 * KEY_COUNT)
+    mask = _KEY_MASK
+    return (red & mask) | (green & mask) << KEY_COUNT | (blue & mask) << (2 * KEY_COUNT)
 
 
 def fill(keys_mask: int, channels: int) -> int:
