@@ -53,6 +53,13 @@ def open_nvm(nvm: str | os.PathLike[str] | Nvm | None, description: DeviceDescri
     return nvm
 
 
+def next_due(due: float, period: float, now: float) -> float:
+    """The next time of a periodic event that was due at ``due``: no drift, and no burst of
+    catch-up frames after a stall."""
+    due += period
+    return due if due > now else now + period
+
+
 class CanopenTwin:
     """The CANopen side of a Blink device; see the module docstring."""
 
@@ -79,6 +86,7 @@ class CanopenTwin:
         self._now = 0.0
         self._boot_time = 0.0
         self._heartbeat_next: float | None = None
+        self._heartbeat_period = 0.0
         self._store.set_hook("producer_heartbeat_time", self._on_heartbeat_time)
 
     # -- public contract --------------------------------------------------------------------
@@ -159,9 +167,7 @@ class CanopenTwin:
         due = self._heartbeat_next
         if due is not None and now >= due:
             frames.append(heartbeat_frame(self._node_id, self._nmt))
-            period = self._store.get_int("producer_heartbeat_time") / 1000
-            due += period
-            self._heartbeat_next = due if due > now else now + period
+            self._heartbeat_next = next_due(due, self._heartbeat_period, now)
         frames += self._on_advance(now)
         return frames
 
@@ -228,9 +234,8 @@ class CanopenTwin:
         frames: list[Frame] = []
         if self._store.get_int("boot_up_service"):  # PKP §8/§20, KBX §15/§27
             frames.append(heartbeat_frame(self._node_id, NmtState.BOOT_UP))
-        period = self._store.get_int("producer_heartbeat_time")
         # PKP §25: "the boot-up message is regarded as first heartbeat message"
-        self._heartbeat_next = now + period / 1000 if period else None
+        self._schedule_heartbeat(self._store.get_int("producer_heartbeat_time"), now)
         frames += self._on_boot(now, application)
         if self._store.get_int("active_on_startup"):  # PKP §21, KBX §26
             frames += self._enter(NmtState.OPERATIONAL, now)
@@ -279,8 +284,14 @@ class CanopenTwin:
         return frames
 
     def _on_heartbeat_time(self, value: int) -> AbortCode | None:
-        self._heartbeat_next = self._now + value / 1000 if value else None
+        self._schedule_heartbeat(value, self._now)
         return None
+
+    def _schedule_heartbeat(self, period_ms: int, now: float) -> None:
+        """The running period is kept apart from the stored value, which may change (restore
+        defaults) without taking effect until the next reset."""
+        self._heartbeat_period = period_ms / 1000
+        self._heartbeat_next = now + self._heartbeat_period if period_ms else None
 
     # -- PDO ----------------------------------------------------------------------------------
 

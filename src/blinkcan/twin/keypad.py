@@ -23,7 +23,7 @@ from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import NMT
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState, parse_nmt
-from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.base import CanopenTwin, next_due
 from blinkcan.twin.keypad_display import (
     BLINK_PERIOD_S,
     SHOW_NAMES,
@@ -69,6 +69,7 @@ class KeypadTwin(CanopenTwin):
         self._key_cob_id = self._key_pdo.cob_id(node_id)
         self._keys = 0
         self._periodic_next: float | None = None
+        self._periodic_period = 0.0
         self._show: ShowPlayer | None = None
         self._show_mode = 0
         self._demo: DemoMode | None = None
@@ -161,15 +162,17 @@ class KeypadTwin(CanopenTwin):
         self._periodic_next = None
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
-        period = self._store.get_int("tpdo1_event_timer")
-        operational = state is NmtState.OPERATIONAL
-        self._periodic_next = now + period / 1000 if operational and period else None
+        self._schedule_periodic(self._store.get_int("tpdo1_event_timer"), now)
         return []
 
     def _on_event_timer(self, value: int) -> AbortCode | None:
-        operational = self._nmt is NmtState.OPERATIONAL
-        self._periodic_next = self._now + value / 1000 if operational and value else None
+        self._schedule_periodic(value, self._now)
         return None
+
+    def _schedule_periodic(self, period_ms: int, now: float) -> None:
+        operational = self._nmt is NmtState.OPERATIONAL
+        self._periodic_period = period_ms / 1000
+        self._periodic_next = now + self._periodic_period if operational and period_ms else None
 
     def _on_can_protocol(self, value: int) -> AbortCode | None:
         if value == PROTOCOL_J1939:
@@ -218,9 +221,7 @@ class KeypadTwin(CanopenTwin):
         due = self._periodic_next
         if due is not None and now >= due:
             frames.append(self._key_state_frame(now))  # PKP §41b periodic state transmission
-            period = self._store.get_int("tpdo1_event_timer") / 1000
-            due += period
-            self._periodic_next = due if due > now else now + period
+            self._periodic_next = next_due(due, self._periodic_period, now)
         if self._show is not None and self._show.finished(now):
             self._show = None
         return frames
