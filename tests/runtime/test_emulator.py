@@ -10,10 +10,11 @@ import can
 import canopen
 import pytest
 
+from blinkcan.devices.model import Quirks
 from blinkcan.formats.canopen_od import object_dictionary
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator, to_frame, to_message
-from blinkcan.twin import KeypadTwin
+from blinkcan.twin import KeyboxTwin, KeypadTwin
 
 
 @pytest.fixture
@@ -40,27 +41,39 @@ def wait_for(host: can.BusABC, can_id: int, timeout: float = 2.0) -> Frame:
 
 
 @pytest.mark.parametrize("quirks", ["firmware", "cia301"])
-def test_remote_node_reads_every_readable_object(channel: str, quirks: str) -> None:
-    twin = KeypadTwin(node_id=0x15, quirks=quirks)  # type: ignore[arg-type]
+@pytest.mark.parametrize("kind", ["keypad", "keybox"])
+def test_remote_node_reads_every_readable_object(channel: str, quirks: Quirks, kind: str) -> None:
+    twin = KeypadTwin(quirks=quirks) if kind == "keypad" else KeyboxTwin(quirks=quirks)
+    node_id = twin.node_id
     network = canopen.Network()
     network.connect(interface="virtual", channel=channel)
     device_bus = can.Bus(interface="virtual", channel=channel)
     try:
         with Emulator(device_bus, [twin]):
-            node = canopen.RemoteNode(0x15, object_dictionary(twin.description, 0x15))
+            node = canopen.RemoteNode(node_id, object_dictionary(twin.description, node_id))
             network.add_node(node)
             readable = [e for e in twin.description.table if e.access.readable]
-            assert len(readable) > 60
+            assert len(readable) > 40
             for entry in readable:
                 raw = node.sdo.upload(entry.index, entry.subindex)
-                expected = entry.encode(entry.default_for(0x15))
+                expected = entry.encode(entry.default_for(node_id))
                 assert raw == expected, f"{entry.index:04X}h/{entry.subindex:02X} {entry.name}"
             assert node.sdo["Manufacturer device name"].raw == "BlinkMarine"
+            if isinstance(twin, KeyboxTwin):
+                node.sdo["Output state"]["Outputs HIGH"].raw = 0x0008  # pin 4 HIGH
+                assert twin.outputs.state[3] == 1
+                restore = node.sdo["Restore default parameters"][1]
+                load = int.from_bytes(b"load", "little")
+                if quirks == "firmware":  # errata K3: the stock client rejects 43h
+                    with pytest.raises(canopen.SdoCommunicationError, match="0x43"):
+                        restore.raw = load
+                else:
+                    restore.raw = load
             assert node.sdo["Identity object"]["Vendor-ID"].raw == 0x3E2
             node.sdo["Producer heartbeat time"].raw = 100
             assert twin.objects["producer_heartbeat_time"] == 100
             with pytest.raises(canopen.SdoAbortedError) as error:
-                node.sdo["Producer heartbeat time"].raw = 5
+                node.sdo["Producer heartbeat time"].raw = 0xFF00  # errata P1, K17
             assert error.value.code == 0x06090030
     finally:
         network.disconnect()
@@ -137,5 +150,32 @@ def test_two_keypads_on_one_bus_and_a_power_cycle(channel: str, host: can.BusABC
             boot_ids = {wait_for(host, 0x715).can_id, wait_for(host, 0x716).can_id}
             assert boot_ids == {0x715, 0x716}
             assert emulator.power_cycle(second) == [Frame(0x716, b"\x00")]
+    finally:
+        device_bus.shutdown()
+
+
+def test_keybox_fault_and_heartbeat_loss_on_the_bus(channel: str, host: can.BusABC) -> None:
+    keybox = KeyboxTwin()
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [keybox]) as emulator:
+            wait_for(host, 0x70C)
+            host.send(to_message(Frame(0x60C, bytes.fromhex("2316100132000100"))))  # 50 ms, node 1
+            assert wait_for(host, 0x58C).data[0] == 0x60
+            host.send(to_message(Frame(0x701, b"\x05")))
+            host.send(to_message(Frame(0, b"\x01\x0c")))
+            host.send(to_message(Frame(0x20C, bytes.fromhex("0000080000000000"))))  # pin 4 HIGH
+            host.send(to_message(Frame(0x701, b"\x05")))
+            deadline = time.monotonic() + 2
+            while emulator.snapshot(keybox)["pins"][3]["state"] != "high":
+                assert time.monotonic() < deadline
+                host.send(to_message(Frame(0x701, b"\x05")))
+                time.sleep(0.01)
+            emulator.run(lambda now: keybox.blow_fuse(4, now))
+            assert wait_for(host, 0x18C).data == bytes.fromhex("0800000000000000")
+            time.sleep(0.2)  # the host heartbeat stops: outputs off, pre-operational
+            snapshot = emulator.snapshot(keybox)
+            assert snapshot["nmt_state"] == "pre-operational"
+            assert snapshot["heartbeat_consumer"]["state"] == "lost"
     finally:
         device_bus.shutdown()

@@ -2,7 +2,8 @@
 
 A trace is lines: ``> 615 40 00 20 01 …`` sends a frame, ``< 595 4B …`` is the next frame the
 device must send in reply (``??`` matches any byte), ``< -`` says it stays silent,
-``press 4`` / ``release 4`` act on the keys, ``wait 0.5`` advances time, ``on``/``off`` switch
+``press 4`` / ``release 4`` act on the keys, ``blow_fuse 4`` / ``replace_fuse 4`` /
+``set_input 4 1`` on the Keybox's pins, ``wait 0.5`` advances time, ``on``/``off`` switch
 power. Every frame the device sends must be listed.
 """
 
@@ -45,9 +46,13 @@ class Bench:
                 assert self.pending, f"line {number} {raw!r}: the device sent nothing"
                 actual = self.pending.pop(0)
                 assert _matches(rest, actual), f"line {number} {raw!r}: the device sent {actual}"
-            elif verb in ("press", "release"):
+            elif verb in ("press", "release", "blow_fuse", "replace_fuse"):
                 self._check_drained(raw)
                 self.pending = getattr(self.twin, verb)(int(rest), self.now)
+            elif verb == "set_input":
+                self._check_drained(raw)
+                pin, level = rest.split()
+                self.pending = self.twin.set_input(int(pin), level == "1", self.now)  # type: ignore[attr-defined]
             elif verb == "wait":
                 self._check_drained(raw)
                 self.now += float(rest)

@@ -1,0 +1,278 @@
+"""The Keybox twin (`keybox-canopen-manual.txt`): 13 outputs with fuses, fault reporting,
+PWM, inputs, consumer heartbeat and restore defaults, on top of :class:`CanopenTwin`.
+
+Where the manual is silent about outputs, the twin is fail-safe (blinkcan decisions):
+- NMT stop switches every output OFF (a stopped node must not keep loads powered); enter
+  pre-operational keeps them (SDO still drives outputs there, errata K19).
+- Reset node, reset communication and power-on start with every output OFF.
+- FAULT stays latched through OFF commands and heartbeat loss, until RESET or a power cycle.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from enum import Enum
+from typing import Any
+
+from blinkcan.devices.common import TIMER_MS_MAX
+from blinkcan.devices.keybox import (
+    DEFAULT_NODE_ID,
+    FAULT_PERIOD_UNIT_S,
+    LOW_SIDE_CAPABLE,
+    PIN_COUNT,
+    PWM_LEVEL_MAX,
+    RESTORE_SIGNATURE,
+    describe_keybox,
+)
+from blinkcan.devices.model import Quirks
+from blinkcan.devices.pdo import PdoLayout
+from blinkcan.protocol.abort import AbortCode
+from blinkcan.protocol.cob import HEARTBEAT
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.nmt import NmtState
+from blinkcan.twin.base import CanopenTwin, next_due
+from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
+from blinkcan.twin.nvm import Nvm
+
+_STATE_NAMES = {PinState.OFF: "off", PinState.HIGH: "high", PinState.FAULT: "fault"}
+
+
+class ConsumerState(Enum):
+    """Heartbeat consumer (KBX §28): monitoring starts at the first heartbeat received."""
+
+    OFF = "off"
+    WAITING = "waiting"
+    ACTIVE = "active"
+    LOST = "lost"
+
+
+def split_consumer_entry(value: int) -> tuple[int, int, int]:
+    """1016h/01 (errata K8): (time ms, node id, reserved byte)."""
+    return value & 0xFFFF, (value >> 16) & 0xFF, value >> 24
+
+
+class KeyboxTwin(CanopenTwin):
+    """A Keybox that behaves on the bus as the manual describes, with fault injection.
+
+    ``low_side`` names the pins built as low-side drivers (only 2 and 5 can be, errata K22).
+    """
+
+    def __init__(
+        self,
+        node_id: int = DEFAULT_NODE_ID,
+        quirks: Quirks = "firmware",
+        nvm: str | os.PathLike[str] | Nvm | None = None,
+        low_side: Iterable[int] = (),
+    ) -> None:
+        low = frozenset(low_side)
+        if not low <= set(LOW_SIDE_CAPABLE):
+            raise ValueError(f"only pins {LOW_SIDE_CAPABLE} can be built low-side, not "
+                             f"{sorted(low - set(LOW_SIDE_CAPABLE))}")
+        description = describe_keybox(quirks, node_id)
+        super().__init__(description, node_id, nvm)
+        self.outputs = Outputs(low)
+        self._fault_pdo: PdoLayout = description.pdo("faults")
+        self._fault_cob_id = self._fault_pdo.cob_id(node_id)
+        self._fault_next: float | None = None
+        self._fault_period = 0.0
+        self._consumer = ConsumerState.OFF
+        self._consumer_deadline: float | None = None
+        store = self._store
+        for pin in range(1, PIN_COUNT + 1):
+            store.set_hook(f"pin_{pin}_state", self._pin_hook(pin), keeps_value=False)
+        store.set_hook("output_off_mask", self._on_off_mask, keeps_value=False)
+        store.set_hook("output_high_mask", self._on_high_mask, keeps_value=False)
+        store.set_hook("pwm", self._on_pwm, keeps_value=False)
+        store.set_hook("restore_all_parameters", self._on_restore, keeps_value=False)
+        store.set_hook("consumer_heartbeat_time", self._on_consumer_time)
+        store.set_hook("fault_period", self._on_fault_period)
+
+    # -- fault injection and physical side ----------------------------------------------------
+
+    def blow_fuse(self, pin: int, now: float) -> list[Frame]:
+        """The fuse of ``pin`` blows; a HIGH high-side pin goes FAULT and reports it."""
+        return self._physical(self.outputs.blow_fuse, check_pin(pin), now)
+
+    def replace_fuse(self, pin: int, now: float) -> list[Frame]:
+        """A new fuse: a latched FAULT stays until RESET (KBX §7)."""
+        return self._physical(self.outputs.replace_fuse, check_pin(pin), now)
+
+    def set_input(self, pin: int, level: bool, now: float) -> list[Frame]:
+        """The external level on ``pin`` (read by 2003h, errata K21)."""
+        check_pin(pin)
+        if not isinstance(level, bool):
+            raise TypeError(f"level must be a bool, not {type(level).__name__}")
+        self.outputs.external[pin - 1] = level
+        self._refresh()
+        return []
+
+    def _physical(self, action: Any, pin: int, now: float) -> list[Frame]:
+        faults = action(pin)
+        if not self._powered:
+            return []
+        self._now = now
+        return self._after_outputs_change(faults or [])
+
+    # -- output commands (SDO hooks and RPDO) ----------------------------------------------------
+
+    def _pin_hook(self, pin: int) -> Any:
+        def on_write(value: int) -> AbortCode | None:
+            self._outbox += self._after_outputs_change(self.outputs.command(pin, value))
+            return None
+
+        return on_write
+
+    def _on_off_mask(self, value: int) -> AbortCode | None:
+        self._outbox += self._after_outputs_change(self.outputs.command_masks(value, 0))
+        return None
+
+    def _on_high_mask(self, value: int) -> AbortCode | None:
+        self._outbox += self._after_outputs_change(self.outputs.command_masks(0, value))
+        return None
+
+    def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
+        # KBX §17: one frame carries both masks; OFF wins (errata K12), so both go at once
+        return self._after_outputs_change(
+            self.outputs.command_masks(signals["off"], signals["high"]))
+
+    def _on_pwm(self, value: int) -> AbortCode | None:
+        mask, level = value & 0xFF, value >> 8
+        if mask & ~0b11 or level > PWM_LEVEL_MAX:  # errata K16
+            return AbortCode.INVALID_VALUE
+        self._outbox += self._after_outputs_change(self.outputs.set_pwm(mask, level))
+        return None
+
+    def _after_outputs_change(self, new_faults: list[int]) -> list[Frame]:
+        """Update the objects that read the outputs; report new faults at once (KBX §18)."""
+        self._refresh()
+        if new_faults and self._pdo_allowed:
+            return [self._fault_frame()]
+        return []
+
+    def _refresh(self) -> None:
+        outputs, store = self.outputs, self._store
+        for pin in range(1, PIN_COUNT + 1):
+            store.set(f"pin_{pin}_state", int(outputs.state[pin - 1]))
+        store.set("output_off_mask", outputs.mask(PinState.OFF))
+        store.set("output_high_mask", outputs.mask(PinState.HIGH))
+        store.set("output_fault_mask", outputs.mask(PinState.FAULT))
+        store.set("pwm", outputs.pwm_register())
+        store.set("input_levels", outputs.input_levels())
+
+    def _fault_frame(self) -> Frame:
+        data = self._fault_pdo.encode({"faults": self.outputs.mask(PinState.FAULT)})
+        return Frame(self._fault_cob_id, data)
+
+    # -- restore defaults, consumer heartbeat, periodic faults -------------------------------------
+
+    def _on_restore(self, value: int) -> AbortCode | None:
+        if value != RESTORE_SIGNATURE:  # errata: a wrong signature aborts 0800 0020h
+            return AbortCode.CANNOT_TRANSFER
+        self._restore_factory_settings()  # applied at the next reset (errata K18)
+        return None
+
+    def _on_consumer_time(self, value: int) -> AbortCode | None:
+        period, node, reserved = split_consumer_entry(value)
+        if reserved or not 1 <= node <= 0x7F or not (period == 0 or 10 <= period <= TIMER_MS_MAX):
+            return AbortCode.INVALID_VALUE  # errata K8
+        self._store.set("consumer_heartbeat_time", value)
+        self._start_consumer()
+        self._routes = self._build_routes()  # listen to the newly monitored node
+        return None
+
+    def _start_consumer(self) -> None:
+        period, _, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+        self._consumer = ConsumerState.WAITING if period else ConsumerState.OFF
+        self._consumer_deadline = None
+
+    def _on_heartbeat(self, frame: Frame, now: float) -> list[Frame]:
+        if self._consumer is ConsumerState.OFF or not frame.data:
+            return []
+        period, _, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+        self._consumer = ConsumerState.ACTIVE
+        self._consumer_deadline = now + period / 1000
+        return []
+
+    def _heartbeat_lost(self, now: float) -> list[Frame]:
+        # KBX §28 note 2: outputs off, pre-operational until a new NMT start
+        self._consumer = ConsumerState.LOST
+        self._consumer_deadline = None
+        self.outputs.all_off()
+        self._refresh()
+        return self._enter(NmtState.PRE_OPERATIONAL, now)
+
+    def _on_fault_period(self, value: int) -> AbortCode | None:
+        self._schedule_faults(value, self._now)
+        return None
+
+    def _schedule_faults(self, units: int, now: float) -> None:
+        self._fault_period = units * FAULT_PERIOD_UNIT_S
+        operational = self._nmt is NmtState.OPERATIONAL
+        self._fault_next = now + self._fault_period if operational and units else None
+
+    # -- CanopenTwin hooks ------------------------------------------------------------------
+
+    def _build_routes(self) -> dict[int, Any]:
+        routes = super()._build_routes()
+        period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+        if period:
+            routes[HEARTBEAT + node] = self._on_heartbeat
+        return routes
+
+    def _on_boot(self, now: float, application: bool) -> list[Frame]:
+        self._fault_cob_id = self._fault_pdo.cob_id(self._node_id)
+        self.outputs.power_on()  # fail-safe: every reset starts with outputs OFF
+        self._refresh()
+        self._start_consumer()
+        self._fault_next = None
+        return []
+
+    def _on_power_off(self) -> None:
+        self.outputs.power_on()
+        self._consumer = ConsumerState.OFF
+        self._consumer_deadline = None
+        self._fault_next = None
+
+    def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
+        if state is NmtState.STOPPED:
+            self.outputs.all_off()  # fail-safe (module docstring)
+            self._refresh()
+        self._schedule_faults(self._store.get_int("fault_period"), now)
+        return []
+
+    def _on_advance(self, now: float) -> list[Frame]:
+        frames: list[Frame] = []
+        deadline = self._consumer_deadline
+        if deadline is not None and now >= deadline:
+            frames += self._heartbeat_lost(now)
+        due = self._fault_next
+        if due is not None and now >= due:
+            frames.append(self._fault_frame())  # KBX §25 periodic fault message
+            self._fault_next = next_due(due, self._fault_period, now)
+        return frames
+
+    def _deadlines(self) -> Iterable[float | None]:
+        return (self._consumer_deadline, self._fault_next)
+
+    def _snapshot(self) -> dict[str, Any]:
+        outputs = self.outputs
+        inputs = outputs.input_levels()
+        pins = []
+        for pin in range(1, PIN_COUNT + 1):
+            in_pwm = outputs.in_pwm(pin)
+            pins.append({
+                "pin": pin,
+                "state": _STATE_NAMES[outputs.state[pin - 1]],
+                "fuse": "ok" if outputs.fuse_ok[pin - 1] else "blown",
+                "pwm_percent": outputs.pwm_level * 10 if in_pwm else None,
+                "input": bool(inputs >> (pin - 1) & 1),
+                "low_side": pin in outputs.low_side,
+            })
+        period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+        return {
+            "pins": pins,
+            "heartbeat_consumer": {"node_id": node, "time_ms": period,
+                                   "state": self._consumer.value},
+            "fault_period_ms": self._store.get_int("fault_period") * 10,
+        }
