@@ -362,3 +362,9 @@ def test_j1939_mode_survives_a_power_cycle_and_the_way_back_restores_defaults() 
         wait 1
         < -                              # heartbeat back to its default: off
     """)
+
+
+def test_an_unpowered_twin_has_a_snapshot() -> None:
+    snapshot = KeypadTwin(node_id=0x20).snapshot()
+    assert (snapshot["nmt_state"], snapshot["node_id"], snapshot["bitrate"]) == ("off", 0x20,
+                                                                              125_000)

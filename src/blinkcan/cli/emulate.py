@@ -13,13 +13,14 @@ from blinkcan.cli.bus_options import bus_options, parse_int
 from blinkcan.decode import FrameDescriber
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator, open_bus
+from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.nvm import NvmError
 from blinkcan.twin.registry import DEFAULT_NODE_IDS, twin_class
 
 
 def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
-                quirks: str) -> list[CanopenTwin]:
+                quirks: str, low_side: tuple[int, ...] = ()) -> list[CanopenTwin]:
     if nvm is not None and len(devices) != 1:
         raise click.UsageError("--nvm names one file, for one device")
     if node_id is not None and len(devices) != 1:
@@ -34,8 +35,11 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
         node = parse_int(node_text) if node_text else node_id
         if node is None:
             node = DEFAULT_NODE_IDS[name.lower()]
+        options: dict[str, object] = {"node_id": node, "quirks": quirks, "nvm": nvm}
+        if low_side and cls is KeyboxTwin:
+            options["low_side"] = low_side
         try:
-            twins.append(cls(node_id=node, quirks=quirks, nvm=nvm))  # type: ignore[call-arg]
+            twins.append(cls(**options))  # type: ignore[arg-type]
         except (ValueError, TypeError) as error:
             raise click.ClickException(str(error)) from None
     return twins
@@ -51,20 +55,24 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
               help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
 @click.option("--response-delay", type=float, default=0.0, show_default=True,
               help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
+@click.option("--low-side", default="", metavar="PINS",
+              help="Keybox pins built as low-side drivers, e.g. 2,5 (errata K22).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @bus_options
 def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quirks: str,
-            response_delay: float, quiet: bool, interface: str | None, channel: str | None,
-            bitrate: int | None) -> None:
-    """Run device twins on a CAN bus until Ctrl-C. DEVICE: keypad (or pkp-2600-si).
+            response_delay: float, low_side: str, quiet: bool, interface: str | None,
+            channel: str | None, bitrate: int | None) -> None:
+    """Run device twins on a CAN bus until Ctrl-C. DEVICE: keypad (pkp-2600-si) or keybox.
 
     \b
     blinkcan emulate keypad
+    blinkcan emulate keypad keybox:0x0C --low-side 2,5
     blinkcan emulate keypad:0x15 keypad:0x16 -i socketcan -c vcan0
     """
     console = Console(highlight=False)
     try:
-        twins = build_twins(devices, parse_int(node_id) if node_id else None, nvm, quirks)
+        pins = tuple(parse_int(p) for p in low_side.split(",") if p.strip())
+        twins = build_twins(devices, parse_int(node_id) if node_id else None, nvm, quirks, pins)
     except NvmError as error:
         raise click.ClickException(str(error)) from None
     try:

@@ -132,6 +132,11 @@ class FrameDescriber:
             return f"indicator brightness {values['level']}/63"
         if name == "backlight_brightness":
             return f"backlight brightness {values['level']}/63"
+        if name == "outputs":
+            off, high = values["off"], values["high"] & ~values["off"]  # KBX §17: OFF wins
+            return f"outputs OFF: {bit_list(off)}; HIGH: {bit_list(high)}"
+        if name == "faults":
+            return f"pins in FAULT: {bit_list(values['faults'])}"
         return f"{name} {values}"
 
 

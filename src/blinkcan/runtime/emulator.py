@@ -91,6 +91,7 @@ class Emulator:
         self._seq = itertools.count()
         self._index: dict[int, tuple[int, ...]] = {}
         self._routes_seen: list[object] = [None] * len(self.twins)
+        self._index_dirty = True
         #: optional tap: ``on_frame(frame, sent, now)`` for every frame sent or received
         self.on_frame: Callable[[Frame, bool, float], object] | None = None
 
@@ -166,7 +167,9 @@ class Emulator:
 
     def _power_on_all(self, now: float) -> list[Frame]:
         for i, twin in enumerate(self.twins):
-            self._emit(i, self._call(i, twin.power_on, now), now)
+            frames = self._call(i, twin.power_on, now)
+            self._reschedule(i)
+            self._emit(i, frames, now)
         return []
 
     def _run(self) -> None:
@@ -212,10 +215,10 @@ class Emulator:
     def _perform(self, action: Callable[[float], T]) -> T:
         now = self._clock()
         result = action(now)
-        if isinstance(result, list) and all(isinstance(f, Frame) for f in result):
-            self._emit(-1, result, now)  # a device's frames: every other twin may listen
         for i in range(len(self.twins)):
             self._reschedule(i)
+        if isinstance(result, list) and all(isinstance(f, Frame) for f in result):
+            self._emit(-1, result, now)  # a device's frames: every other twin may listen
         return result
 
     def _call(self, i: int, method: Callable[..., list[Frame]], *args: Any) -> list[Frame]:
@@ -239,12 +242,14 @@ class Emulator:
                         continue  # still answering the previous request: dropped
                     self._busy_until[i] = now + self.response_delay
                 replies = self._call(i, twin.receive, frame, now)
+                self._reschedule(i)
                 if replies:
                     due = now + self.response_delay
                     heapq.heappush(self._delayed, (due, next(self._seq), i, replies))
             else:
-                self._emit(i, self._call(i, twin.receive, frame, now), now)
-            self._reschedule(i)
+                replies = self._call(i, twin.receive, frame, now)
+                self._reschedule(i)
+                self._emit(i, replies, now)
 
     def _targets(self, frame: Frame) -> Iterable[int]:
         if frame.extended:
@@ -253,18 +258,16 @@ class Emulator:
         return self._index.get(frame.can_id, ())
 
     def _refresh_index(self) -> None:
-        changed = False
+        """Rebuild COB-ID -> twins after any twin's routes changed (a boot, a new node id)."""
+        if not self._index_dirty:
+            return
+        self._index_dirty = False
+        index: dict[int, list[int]] = {}
         for i, twin in enumerate(self.twins):
-            routes = twin.listening
-            if routes is not self._routes_seen[i]:
-                self._routes_seen[i] = routes
-                changed = True
-        if changed:
-            index: dict[int, list[int]] = {}
-            for i, twin in enumerate(self.twins):
-                for can_id in twin.listening:
-                    index.setdefault(can_id, []).append(i)
-            self._index = {can_id: tuple(ids) for can_id, ids in index.items()}
+            self._routes_seen[i] = twin.listening
+            for can_id in twin.listening:
+                index.setdefault(can_id, []).append(i)
+        self._index = {can_id: tuple(ids) for can_id, ids in index.items()}
 
     def _emit(self, source: int, frames: list[Frame], now: float) -> None:
         for frame in frames:
@@ -279,7 +282,12 @@ class Emulator:
             self._deliver(frame, source, now)
 
     def _reschedule(self, i: int) -> None:
-        deadline = self.twins[i].next_deadline()
+        """After any call into twin ``i``: its next deadline, and whether its routes changed
+        (only a call into a twin can change them, so no other twin needs a look)."""
+        twin = self.twins[i]
+        if twin.listening is not self._routes_seen[i]:
+            self._index_dirty = True
+        deadline = twin.next_deadline()
         if deadline != self._deadline[i]:
             self._deadline[i] = deadline
             if deadline is not None:
@@ -305,7 +313,7 @@ class Emulator:
                 continue
             self._deadline[i] = None
             frames = self._call(i, self.twins[i].advance, now)
+            self._reschedule(i)
             if frames:
                 lateness.append(now - deadline)
                 self._emit(i, frames, now)
-            self._reschedule(i)

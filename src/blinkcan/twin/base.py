@@ -78,8 +78,9 @@ class CanopenTwin:
         self._sdo = SdoServer(self._store)
         self._powered = False
         self._nmt = NmtState.BOOT_UP
-        self._node_id = node_id
-        self._sdo_tx = SDO_TX + node_id
+        self._node_id = self._store.get_int("node_id")
+        self._bitrate_code = self._store.get_int("baud_rate")
+        self._sdo_tx = SDO_TX + self._node_id
         self._routes: dict[int, _Route] = {}
         self._outbox: list[Frame] = []
         self._after_reply: list[Callable[[float], list[Frame]]] = []
@@ -166,7 +167,7 @@ class CanopenTwin:
         frames: list[Frame] = []
         due = self._heartbeat_next
         if due is not None and now >= due:
-            frames.append(heartbeat_frame(self._node_id, self._nmt))
+            frames.append(self._heartbeat_frames[self._nmt])
             self._heartbeat_next = next_due(due, self._heartbeat_period, now)
         frames += self._on_advance(now)
         return frames
@@ -227,6 +228,8 @@ class CanopenTwin:
             self._bitrate_code = self._store.get_int("baud_rate")
         self._sdo.reset()
         self._sdo_tx = SDO_TX + self._node_id
+        self._heartbeat_frames = {state: heartbeat_frame(self._node_id, state)
+                                  for state in NmtState}
         self._routes = self._build_routes()
         self._nmt = NmtState.PRE_OPERATIONAL
         self._boot_time = now

@@ -36,6 +36,14 @@ class _Slot:
         self.raw = entry.encode(value)
 
 
+def _store_value(slot: _Slot, value: Value) -> None:
+    slot.value = value
+    if slot.size is not None and isinstance(value, int):
+        slot.raw = value.to_bytes(slot.size, "little", signed=slot.signed)
+    else:
+        slot.raw = slot.entry.encode(value)
+
+
 def _valid_spans(entry: ObjectEntry) -> tuple[tuple[int, int], ...]:
     """The entry's valid integer values as inclusive spans, clipped to its data type."""
     size = entry.data_type.size
@@ -79,9 +87,7 @@ class ObjectStore:
 
     def set(self, name: str, value: Value) -> None:
         """Set a value with no checks (the device itself changing its state)."""
-        slot = self._by_name[name]
-        slot.value = value
-        slot.raw = slot.entry.encode(value)
+        _store_value(self._by_name[name], value)
 
     def set_hook(self, name: str, hook: WriteHook, keeps_value: bool = True) -> None:
         """Run ``hook`` on every write of ``name`` (SDO or RPDO). With ``keeps_value=False``
@@ -103,9 +109,10 @@ class ObjectStore:
                 return refusal
             if not slot.keeps_value:
                 return None
-        slot.value = value
-        slot.raw = slot.entry.encode(value)
-        if slot.entry.stored and self.on_stored_change is not None:
+        changed = value != slot.value
+        _store_value(slot, value)
+        # an unchanged stored value is not written again (as devices spare their EEPROM)
+        if changed and slot.entry.stored and self.on_stored_change is not None:
             self.on_stored_change()
         return None
 

@@ -36,6 +36,7 @@ from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
 from blinkcan.twin.nvm import Nvm
 
 _STATE_NAMES = {PinState.OFF: "off", PinState.HIGH: "high", PinState.FAULT: "fault"}
+_PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in range(1, PIN_COUNT + 1))
 
 
 class ConsumerState(Enum):
@@ -72,10 +73,13 @@ class KeyboxTwin(CanopenTwin):
         description = describe_keybox(quirks, node_id)
         super().__init__(description, node_id, nvm)
         self.outputs = Outputs(low)
+        self._shown_states: list[PinState | None] = [None] * PIN_COUNT
+        self._inputs_changed = True
         self._fault_pdo: PdoLayout = description.pdo("faults")
         self._fault_cob_id = self._fault_pdo.cob_id(node_id)
         self._fault_next: float | None = None
         self._fault_period = 0.0
+        self._fault_frame_cache: Frame | None = None
         self._consumer = ConsumerState.OFF
         self._consumer_deadline: float | None = None
         store = self._store
@@ -104,11 +108,13 @@ class KeyboxTwin(CanopenTwin):
         if not isinstance(level, bool):
             raise TypeError(f"level must be a bool, not {type(level).__name__}")
         self.outputs.external[pin - 1] = level
+        self._inputs_changed = True
         self._refresh()
         return []
 
     def _physical(self, action: Any, pin: int, now: float) -> list[Frame]:
         faults = action(pin)
+        self._inputs_changed = True  # a fuse changes what the pin reads
         if not self._powered:
             return []
         self._now = now
@@ -151,18 +157,35 @@ class KeyboxTwin(CanopenTwin):
         return []
 
     def _refresh(self) -> None:
+        """Bring the objects that read the outputs (2001h, 2003h, 2008h, 2009h) up to date;
+        only what changed is written."""
         outputs, store = self.outputs, self._store
-        for pin in range(1, PIN_COUNT + 1):
-            store.set(f"pin_{pin}_state", int(outputs.state[pin - 1]))
-        store.set("output_off_mask", outputs.mask(PinState.OFF))
-        store.set("output_high_mask", outputs.mask(PinState.HIGH))
-        store.set("output_fault_mask", outputs.mask(PinState.FAULT))
-        store.set("pwm", outputs.pwm_register())
-        store.set("input_levels", outputs.input_levels())
+        states = outputs.state
+        if states != self._shown_states:
+            for i, state in enumerate(states):
+                if state is not self._shown_states[i]:
+                    store.set(_PIN_ENTRIES[i], int(state))
+            self._shown_states = list(states)
+            store.set("output_off_mask", outputs.mask(PinState.OFF))
+            store.set("output_high_mask", outputs.mask(PinState.HIGH))
+            store.set("output_fault_mask", outputs.mask(PinState.FAULT))
+            self._fault_frame_cache = None
+            self._inputs_changed = True
+        pwm = outputs.pwm_register()
+        if pwm != store["pwm"]:
+            store.set("pwm", pwm)
+        if self._inputs_changed:  # outputs, fuses or external levels moved (errata K21)
+            store.set("input_levels", outputs.input_levels())
+            self._inputs_changed = False
 
     def _fault_frame(self) -> Frame:
-        data = self._fault_pdo.encode({"faults": self.outputs.mask(PinState.FAULT)})
-        return Frame(self._fault_cob_id, data)
+        """The fault PDO for the present FAULT mask; cached, the periodic message repeats it."""
+        frame = self._fault_frame_cache
+        if frame is None or frame.can_id != self._fault_cob_id:
+            faults = self._store.get_int("output_fault_mask")
+            frame = Frame(self._fault_cob_id, self._fault_pdo.encode({"faults": faults}))
+            self._fault_frame_cache = frame
+        return frame
 
     # -- restore defaults, consumer heartbeat, periodic faults -------------------------------------
 
@@ -254,6 +277,16 @@ class KeyboxTwin(CanopenTwin):
 
     def _deadlines(self) -> Iterable[float | None]:
         return (self._consumer_deadline, self._fault_next)
+
+    def next_deadline(self) -> float | None:
+        # the emulator asks after every call; two timers plus the heartbeat, without lists
+        if not self._powered:
+            return None
+        best = self._heartbeat_next
+        for deadline in (self._consumer_deadline, self._fault_next):
+            if deadline is not None and (best is None or deadline < best):
+                best = deadline
+        return best
 
     def _snapshot(self) -> dict[str, Any]:
         outputs = self.outputs
