@@ -286,3 +286,30 @@ def test_settings_survive_the_process(tmp_path: Path) -> None:
 def test_fault_injection_rejects_pins_outside_1_to_13(bad: int) -> None:
     with pytest.raises(ValueError, match=r"1\.\.13"):
         KeyboxTwin().blow_fuse(bad, 0.0)
+
+
+def test_the_keypads_legacy_stop_is_not_a_keybox_command(started: Bench) -> None:
+    started.replay("> 000 00 0C")
+    assert started.twin.snapshot()["nmt_state"] == "operational"
+
+
+def test_active_on_startup_and_no_boot_up() -> None:
+    bench = boot()
+    bench.replay("""
+        > 60C 2F 13 20 00 01 00 00 00
+        < 58C 60 13 20 00 00 00 00 00
+        > 60C 2F 15 20 00 00 00 00 00
+        < 58C 60 15 20 00 00 00 00 00
+        off
+        on
+        < -
+    """)
+    assert bench.twin.snapshot()["nmt_state"] == "operational"
+
+
+def test_bit_rate_codes_apply_at_the_next_reset() -> None:
+    bench = boot()
+    bench.replay("> 60C 2F 10 20 00 02 00 00 00\n< 58C 60 10 20 00 00 00 00 00")
+    assert bench.twin.snapshot()["bitrate"] == 125_000
+    bench.replay("> 000 81 0C\n< 70C 00")
+    assert bench.twin.snapshot()["bitrate"] == 500_000  # errata B1: Keybox code 02h
