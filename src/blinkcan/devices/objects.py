@@ -266,48 +266,14 @@ class ObjectTable:
 # -- builders: the tables in devices/ read like the manuals' object lists -------------------
 
 
-@dataclass(frozen=True)
-class Sub:
-    """A sub-entry given to :func:`record`; the index is filled in there."""
-
-    subindex: int
-    name: str
-    label: str
-    data_type: DataType
-    access: Access
-    default: Default
-    valid: Ranges | None = None
-    stored: bool = False
-    power_on_from: str | None = None
-    acknowledge: int = 0x60
-    pdo_mappable: bool = False
-    unit: str = ""
-    doc: str = ""
-
-    def at(self, index: int) -> ObjectEntry:
-        return ObjectEntry(
-            index,
-            self.subindex,
-            self.name,
-            self.label,
-            self.data_type,
-            self.access,
-            self.default,
-            self.valid,
-            self.stored,
-            self.power_on_from,
-            self.acknowledge,
-            self.pdo_mappable,
-            self.unit,
-            self.doc,
-        )
+Sub = ObjectEntry  # an entry given to var()/record() before its index is known (index 0)
 
 
 def var(index: int, label: str, sub: Sub) -> ObjectDef:
     """A VAR object: one entry at sub-index 0."""
     if sub.subindex != 0:
         raise ValueError("a VAR object has its value at sub-index 0")
-    return ObjectDef(index, sub.name, label, ObjectKind.VAR, (sub.at(index),))
+    return ObjectDef(index, sub.name, label, ObjectKind.VAR, (replace(sub, index=index),))
 
 
 def record(
@@ -320,7 +286,7 @@ def record(
 ) -> ObjectDef:
     """A RECORD or ARRAY: sub 00h "highest sub-index supported" (errata P18) is added, read-only,
     its value the highest sub-index given unless ``highest`` says otherwise."""
-    entries = [s.at(index) for s in subs]
+    entries = [replace(s, index=index) for s in subs]
     top = highest if highest is not None else max(e.subindex for e in entries)
     count = ObjectEntry(
         index,
@@ -335,19 +301,20 @@ def record(
 
 
 def u8(sub: int, name: str, label: str, access: Access, default: Default, **kw: object) -> Sub:
-    return Sub(sub, name, label, DataType.UNSIGNED8, access, default, **kw)  # type: ignore[arg-type]
+    return ObjectEntry(0, sub, name, label, DataType.UNSIGNED8, access, default, **kw)  # type: ignore[arg-type]
 
 
 def u16(sub: int, name: str, label: str, access: Access, default: Default, **kw: object) -> Sub:
-    return Sub(sub, name, label, DataType.UNSIGNED16, access, default, **kw)  # type: ignore[arg-type]
+    return ObjectEntry(0, sub, name, label, DataType.UNSIGNED16, access, default, **kw)  # type: ignore[arg-type]
 
 
 def u32(sub: int, name: str, label: str, access: Access, default: Default, **kw: object) -> Sub:
-    return Sub(sub, name, label, DataType.UNSIGNED32, access, default, **kw)  # type: ignore[arg-type]
+    return ObjectEntry(0, sub, name, label, DataType.UNSIGNED32, access, default, **kw)  # type: ignore[arg-type]
 
 
 def text(sub: int, name: str, label: str, default: str, **kw: object) -> Sub:
-    return Sub(sub, name, label, DataType.VISIBLE_STRING, Access.RO, default, **kw)  # type: ignore[arg-type]
+    return ObjectEntry(0, sub, name, label, DataType.VISIBLE_STRING, Access.RO, default,
+                       **kw)  # type: ignore[arg-type]
 
 
 def mapping_value(index: int, subindex: int, bits: int) -> int:

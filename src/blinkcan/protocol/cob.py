@@ -24,13 +24,21 @@ NODE_ID_MIN = 1
 NODE_ID_MAX = 0x7F
 
 
+def check_range(what: str, value: int, low: int, high: int, hexadecimal: bool = False) -> int:
+    """Return ``value`` if it is an int in low..high, else raise TypeError/ValueError naming
+    the valid range (how every Python-side argument of blinkcan is checked)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"{what} must be an int, not {type(value).__name__}")
+    if not low <= value <= high:
+        if hexadecimal:
+            raise ValueError(f"{what} {value:#x} outside {low:#04x}..{high:#04x}")
+        raise ValueError(f"{what} {value} outside {low}..{high}")
+    return value
+
+
 def check_node_id(node_id: int) -> int:
     """Return ``node_id`` if it is a valid CANopen node id (1..127), else raise."""
-    if isinstance(node_id, bool) or not isinstance(node_id, int):
-        raise TypeError(f"node id must be an int, not {type(node_id).__name__}")
-    if not NODE_ID_MIN <= node_id <= NODE_ID_MAX:
-        raise ValueError(f"node id {node_id:#x} outside {NODE_ID_MIN:#04x}..{NODE_ID_MAX:#04x}")
-    return node_id
+    return check_range("node id", node_id, NODE_ID_MIN, NODE_ID_MAX, hexadecimal=True)
 
 
 def split_cob_id(can_id: int) -> tuple[int, int]:

@@ -15,6 +15,7 @@ from collections.abc import Iterable
 from enum import Enum, IntEnum
 
 from blinkcan.devices.keybox import PIN_COUNT, PIN_MASK, PWM_PINS
+from blinkcan.protocol.cob import check_range
 
 
 class PinState(IntEnum):
@@ -56,11 +57,7 @@ _PWM_BITS = {pin: 1 << i for i, pin in enumerate(PWM_PINS)}
 
 
 def check_pin(pin: int) -> int:
-    if isinstance(pin, bool) or not isinstance(pin, int):
-        raise TypeError(f"pin must be an int, not {type(pin).__name__}")
-    if not 1 <= pin <= PIN_COUNT:
-        raise ValueError(f"pin {pin} outside 1..{PIN_COUNT}")
-    return pin
+    return check_range("pin", pin, 1, PIN_COUNT)
 
 
 def pins_of(mask: int) -> Iterable[int]:

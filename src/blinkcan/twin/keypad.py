@@ -20,7 +20,7 @@ from blinkcan.devices.keypad import (
 )
 from blinkcan.devices.model import Quirks
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import NMT
+from blinkcan.protocol.cob import NMT, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState, parse_nmt
 from blinkcan.twin.base import CanopenTwin, next_due
@@ -42,11 +42,7 @@ J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")
 
 
 def check_key(key: int) -> int:
-    if isinstance(key, bool) or not isinstance(key, int):
-        raise TypeError(f"key must be an int, not {type(key).__name__}")
-    if not 1 <= key <= KEY_COUNT:
-        raise ValueError(f"key {key} outside 1..{KEY_COUNT}")
-    return key
+    return check_range("key", key, 1, KEY_COUNT)
 
 
 class KeypadTwin(CanopenTwin):
