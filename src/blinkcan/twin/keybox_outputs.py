@@ -11,7 +11,6 @@ PWM is latched like any other but not reported by a fault PDO (KBX §18 note, §
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from enum import Enum, IntEnum
 
 from blinkcan.devices.keybox import PIN_COUNT, PIN_MASK, PWM_PINS
@@ -60,8 +59,14 @@ def check_pin(pin: int) -> int:
     return check_range("pin", pin, 1, PIN_COUNT)
 
 
-def pins_of(mask: int) -> Iterable[int]:
-    return (pin for pin in range(1, PIN_COUNT + 1) if mask >> (pin - 1) & 1)
+def pins_of(mask: int) -> list[int]:
+    """The pins (1..13) whose bits are set, lowest first."""
+    pins = []
+    while mask:
+        lowest = mask & -mask
+        pins.append(lowest.bit_length())
+        mask ^= lowest
+    return pins
 
 
 class Outputs:
