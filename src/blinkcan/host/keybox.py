@@ -1,0 +1,225 @@
+"""The Keybox driver: outputs, faults, inputs, PWM, configuration, and a host heartbeat the
+Keybox can watch, so that if the application dies the Keybox switches its outputs off.
+
+Outputs are commanded by SDO (2001h per pin, 2008h masks): every command is acknowledged, and
+SDO acts in pre-operational as well as operational (errata K19). Faults arrive by the fault PDO
+(KBX §18); ``fault_poll`` adds polling of 2008h/03 for buses where PDOs may be missed.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+
+import can
+
+from blinkcan.devices.keybox import (
+    FAULT_PERIOD_UNIT_S,
+    PIN_COUNT,
+    PIN_FAULT,
+    PIN_HIGH,
+    PIN_OFF,
+    PIN_RESET,
+    PWM_LEVEL_MAX,
+    PWM_PINS,
+    RESTORE_SIGNATURE,
+    describe_keybox,
+)
+from blinkcan.host.bus import HostBus, Timer
+from blinkcan.host.device import Device, in_thread
+from blinkcan.host.events import EventSource
+from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_range
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.nmt import NmtState
+from blinkcan.protocol.sdo_client import SdoError
+
+log = logging.getLogger(__name__)
+
+STATE_NAMES = {PIN_OFF: "off", PIN_HIGH: "high", PIN_FAULT: "fault"}
+
+
+@dataclass(frozen=True)
+class FaultEvent:
+    pin: int
+    fault: bool  # True: the pin went FAULT; False: it left FAULT
+    time: float
+
+
+def _mask(pins: Iterable[int]) -> int:
+    mask = 0
+    for pin in pins:
+        mask |= 1 << (check_range("pin", pin, 1, PIN_COUNT) - 1)
+    return mask
+
+
+def _pins(mask: int) -> frozenset[int]:
+    return frozenset(p for p in range(1, PIN_COUNT + 1) if mask >> (p - 1) & 1)
+
+
+class Keybox(Device):
+    """Drive a Keybox at ``node_id`` on ``bus``.
+
+    ``watchdog``: seconds between host heartbeats; the Keybox is told (1016h) to switch its
+    outputs off when they stop for two periods. ``host_node_id`` names the host's heartbeat.
+    ``fault_poll``: seconds between polls of the FAULT mask (None: the fault PDO only).
+    """
+
+    def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x0C, *, start: bool = True,
+                 watchdog: float | None = None, host_node_id: int = 0x7F,
+                 fault_poll: float | None = None, sdo_timeout: float = 0.5) -> None:
+        super().__init__(bus, node_id, describe_keybox("cia301", node_id),
+                         sdo_timeout=sdo_timeout)
+        self.faults = EventSource[FaultEvent]()
+        self.fault_pins: frozenset[int] = frozenset()
+        self.auto_start = start
+        self.host_node_id = check_node_id(host_node_id)
+        self._producer: Timer | None = None
+        self._poller: Timer | None = None
+        fault_pdo = self.description.pdo("faults")
+        self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
+        if watchdog is not None:
+            self.watch_host(watchdog)
+        if start:
+            self.start()
+        if fault_poll is not None:
+            self._poller = self.host.call_every(
+                fault_poll, lambda: in_thread(self._poll_faults), first=fault_poll)
+
+    # -- outputs ----------------------------------------------------------------------------------
+
+    def on(self, pin: int) -> None:
+        """Output ``pin`` (1..13) HIGH (KBX §19)."""
+        self._pin(pin, PIN_HIGH)
+
+    def off(self, pin: int) -> None:
+        self._pin(pin, PIN_OFF)
+
+    def reset(self, pin: int | None = None) -> None:
+        """RESET a pin out of FAULT to OFF (KBX §7). Without a pin: NMT reset of the Keybox."""
+        if pin is None:
+            super().reset()
+            return
+        self._pin(pin, PIN_RESET)
+
+    def _pin(self, pin: int, code: int) -> None:
+        check_range("pin", pin, 1, PIN_COUNT)
+        self.write(f"pin_{pin}_state", code)
+
+    def set_outputs(self, high: Iterable[int] = (), off: Iterable[int] = ()) -> None:
+        """Pins in ``high`` HIGH, pins in ``off`` OFF, the others unchanged (KBX §21)."""
+        high_mask, off_mask = _mask(high), _mask(off)
+        if high_mask & off_mask:
+            raise ValueError(f"pins {sorted(_pins(high_mask & off_mask))} asked HIGH and OFF")
+        if off_mask:
+            self.write("output_off_mask", off_mask)
+        if high_mask:
+            self.write("output_high_mask", high_mask)
+
+    def set_pwm(self, pins: Iterable[int], duty: int) -> None:
+        """PWM on pins 12 and/or 13 at ``duty`` 0..10 (x 10 %); pins not named leave PWM."""
+        chosen = set(pins)
+        if not chosen <= set(PWM_PINS):
+            raise ValueError(f"PWM is on pins {PWM_PINS} only, not {sorted(chosen)}")
+        check_range("PWM duty", duty, 0, PWM_LEVEL_MAX)
+        mask = sum(1 << i for i, pin in enumerate(PWM_PINS) if pin in chosen)
+        self.write("pwm", mask | duty << 8)
+
+    def state(self, pin: int) -> str:
+        """"off", "high" or "fault"."""
+        check_range("pin", pin, 1, PIN_COUNT)
+        return STATE_NAMES[int(self.read(f"pin_{pin}_state"))]
+
+    def states(self) -> dict[int, str]:
+        """Every pin's state, from the three 2008h masks."""
+        high = _pins(int(self.read("output_high_mask")))
+        fault = _pins(int(self.read("output_fault_mask")))
+        return {p: "fault" if p in fault else "high" if p in high else "off"
+                for p in range(1, PIN_COUNT + 1)}
+
+    def inputs(self) -> dict[int, bool]:
+        """The level on every pin (2003h/01, errata K21)."""
+        levels = int(self.read("input_levels"))
+        return {p: bool(levels >> (p - 1) & 1) for p in range(1, PIN_COUNT + 1)}
+
+    # -- faults -----------------------------------------------------------------------------------
+
+    def on_fault(self, callback: Callable[[FaultEvent], object]) -> Callable[[], None]:
+        return self.faults.subscribe(callback)
+
+    def fault_events(self, timeout: float | None = None) -> Iterator[FaultEvent]:
+        return self.faults.iterate(timeout)
+
+    def _on_faults(self, frame: Frame, now: float) -> None:
+        if len(frame.data) >= 2:
+            self._update_faults(int.from_bytes(frame.data[:2], "little"), now)
+
+    def _update_faults(self, mask: int, now: float) -> None:
+        pins = _pins(mask & ((1 << PIN_COUNT) - 1))
+        before, self.fault_pins = self.fault_pins, pins
+        for pin in sorted(pins - before):
+            self.faults.emit(FaultEvent(pin, True, now))
+        for pin in sorted(before - pins):
+            self.faults.emit(FaultEvent(pin, False, now))
+
+    def _poll_faults(self) -> None:
+        """Best effort: a poll that fails (device away, bus closing) is logged and skipped."""
+        try:
+            mask = int(self.read("output_fault_mask"))
+            self.host.run(lambda: self._update_faults(mask, self.host.clock()))
+        except (SdoError, RuntimeError, TimeoutError) as error:
+            log.debug("fault poll of node %02Xh skipped: %s", self.node_id, error)
+
+    # -- configuration ----------------------------------------------------------------------------
+
+    def set_fault_period(self, period: float) -> None:
+        """Send the fault PDO every ``period`` s as well (2012h, 10 ms units); 0 = on change."""
+        self.write("fault_period", round(period / FAULT_PERIOD_UNIT_S))
+
+    def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
+        """Watch ``node_id``'s heartbeat; missing it for ``period`` s switches outputs off
+        (KBX §28). ``period`` 0 stops watching."""
+        check_node_id(node_id)
+        ms = round(period * 1000)
+        if ms and not 10 <= ms <= 0xFEFF:
+            raise ValueError(f"consumer heartbeat period must be 0 or 0.01..65.279 s, not {period}")
+        self.write("consumer_heartbeat_time", ms | node_id << 16)
+
+    def restore_factory_defaults(self, *, confirm: bool = False) -> None:
+        """Every stored setting back to factory values at the next reset (KBX §36)."""
+        if not confirm:
+            raise ValueError("this erases every stored setting at the next reset: pass "
+                             "confirm=True")
+        self.write("restore_all_parameters", RESTORE_SIGNATURE)
+
+    def watch_host(self, period: float) -> None:
+        """Send a host heartbeat every ``period`` s and have the Keybox switch its outputs off
+        when it misses two (KBX §28 note 1: consumer time about twice the producer's)."""
+        check_range("watchdog period in ms", round(period * 1000), 10, 0xFEFF // 2)
+        self.set_consumer_heartbeat(self.host_node_id, 2 * period)
+        self._start_producer(period)
+
+    def _start_producer(self, period: float) -> None:
+        if self._producer is not None:
+            self._producer.cancel()
+        frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
+        self._producer = self.host.call_every(period, lambda: self.host.send(frame))
+
+    def stop_host_heartbeat(self) -> None:
+        """Stop the host heartbeat (as a crashed application would): the Keybox reacts."""
+        if self._producer is not None:
+            self._producer.cancel()
+            self._producer = None
+
+    # -- recovery and lifecycle -------------------------------------------------------------------
+
+    def _on_boot_up(self, now: float) -> None:
+        self.fault_pins = frozenset()  # a reset clears FAULT latches; outputs start OFF
+        if self.auto_start:
+            self.start()
+
+    def close(self) -> None:
+        self.stop_host_heartbeat()
+        if self._poller is not None:
+            self._poller.cancel()
+        super().close()

@@ -1,0 +1,248 @@
+"""The PKP-2600-SI keypad driver: key events, LEDs by colour, brightness, configuration.
+
+The driver keeps the picture the application asked for and sends only what changed, at most
+one LED-on and one LED-blink PDO per change (or per ``with keypad.batch():``). When the keypad
+reboots it forgets its LEDs (errata.md, field reports): the driver starts it again and re-sends
+the whole picture.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+
+import can
+
+from blinkcan.devices.colours import BacklightColour, Channel, led_colour
+from blinkcan.devices.keypad import (
+    KEY_COUNT,
+    LEVEL_MAX,
+    SHOW_COMPLETE,
+    SHOW_FAST_FLASH,
+    SHOW_OFF,
+    describe_keypad,
+)
+from blinkcan.host.bus import HostBus, Timer
+from blinkcan.host.device import Device, in_thread
+from blinkcan.host.events import EventSource
+from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.frame import Frame
+
+PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
+SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
+_KEY_MASK = (1 << KEY_COUNT) - 1
+J1939_RETURN = Frame(0x18EF2100, bytes.fromhex("041B8000FFFFFFFF"), extended=True)  # PKP §44
+
+
+@dataclass(frozen=True)
+class KeyEvent:
+    key: int
+    action: str  # "press", "release" or "long press"
+    time: float
+
+
+def _word(channels_by_key: Mapping[int, int]) -> int:
+    """The 36-bit LED word of PKP §11: red bits 0-11, green 12-23, blue 24-35."""
+    word = 0
+    for key, channels in channels_by_key.items():
+        bit = 1 << (key - 1)
+        if channels & Channel.RED:
+            word |= bit
+        if channels & Channel.GREEN:
+            word |= bit << KEY_COUNT
+        if channels & Channel.BLUE:
+            word |= bit << (2 * KEY_COUNT)
+    return word
+
+
+class Keypad(Device):
+    """Drive a PKP-2600-SI at ``node_id`` on ``bus`` (a python-can bus or a :class:`HostBus`).
+
+    ``start``: send NMT start now and after every boot-up. ``long_press``: seconds a key is
+    held before a "long press" event. ``restore``: re-send the LED picture after a boot-up.
+    """
+
+    def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
+                 long_press: float = 0.8, restore: bool = True, generation: str = "1.1",
+                 sdo_timeout: float = 0.5) -> None:
+        super().__init__(bus, node_id, describe_keypad(generation, "cia301", node_id),
+                         sdo_timeout=sdo_timeout)
+        self.keys = EventSource[KeyEvent]()
+        self.long_press = long_press
+        self.auto_start = start
+        self.restore = restore
+        self.pressed: frozenset[int] = frozenset()
+        self._long_timers: dict[int, Timer] = {}
+        self._steady: dict[int, int] = {}  # key -> channels lit steadily / in phase A
+        self._blink: dict[int, int] = {}  # key -> channels that blink
+        self._sent: tuple[int, int] | None = None
+        self._batching = 0
+        self._indicator: int | None = None
+        self._backlight_level: int | None = None
+        self._backlight_colour: int | None = None
+        key_pdo = self.description.pdo("key_state")
+        self._pdo = {p.name: p.cob_id(node_id) for p in self.description.pdos}
+        self._unsubscribe.append(self.host.subscribe(key_pdo.cob_id(node_id), self._on_keys))
+        if start:
+            self.start()
+
+    # -- keys -------------------------------------------------------------------------------------
+
+    def on_key(self, callback: Callable[[KeyEvent], object]) -> Callable[[], None]:
+        """Call ``callback(event)`` on the bus thread for every key event; returns the remover."""
+        return self.keys.subscribe(callback)
+
+    def events(self, timeout: float | None = None) -> Iterator[KeyEvent]:
+        """Key events from now on, in this thread; stops after ``timeout`` s without one."""
+        return self.keys.iterate(timeout)
+
+    def _on_keys(self, frame: Frame, now: float) -> None:
+        if len(frame.data) < 2:  # errata P8: accept DLC >= 2
+            return
+        mask = int.from_bytes(frame.data[:2], "little") & _KEY_MASK
+        pressed = frozenset(k for k in range(1, KEY_COUNT + 1) if mask >> (k - 1) & 1)
+        before, self.pressed = self.pressed, pressed
+        for key in sorted(pressed - before):
+            self.keys.emit(KeyEvent(key, PRESS, now))
+            self._long_timers[key] = self.host.call_later(
+                self.long_press, functools.partial(self._long, key))
+        for key in sorted(before - pressed):
+            timer = self._long_timers.pop(key, None)
+            if timer is not None:
+                timer.cancel()
+            self.keys.emit(KeyEvent(key, RELEASE, now))
+
+    def _long(self, key: int) -> None:
+        if self._long_timers.pop(key, None) is not None and key in self.pressed:
+            self.keys.emit(KeyEvent(key, LONG_PRESS, self.host.clock()))
+
+    # -- LEDs -------------------------------------------------------------------------------------
+
+    def set_led(self, key: int, colour: str = "off", blink: str | None = None) -> None:
+        """Light ``key`` (1..12) in ``colour``; with ``blink`` it blinks in that colour, and with
+        both it alternates between them (PKP §12 alternate mode).
+
+        Colours: off, red, green, blue, yellow/amber, cyan, magenta, white.
+        """
+        check_range("key", key, 1, KEY_COUNT)
+        steady = led_colour(colour)
+        blinking = led_colour(blink) if blink is not None else Channel.NONE
+        # the twin's phase model: phase A shows the "on" channels, phase B the on-and-not-
+        # blinking plus the blinking-and-not-on ones; so on = colour, blink = colour ^ blink.
+        self._steady[key] = int(steady)
+        self._blink[key] = int(steady ^ blinking) if blink is not None else 0
+        self._flush()
+
+    def set_leds(self, colours: Mapping[int, str], blink: Mapping[int, str] | None = None) -> None:
+        """Several keys at once, in at most two PDOs."""
+        with self.batch():
+            for key in set(colours) | set(blink or {}):
+                self.set_led(key, colours.get(key, "off"), (blink or {}).get(key))
+
+    def clear_leds(self) -> None:
+        with self.batch():
+            for key in range(1, KEY_COUNT + 1):
+                self.set_led(key, "off")
+
+    @contextlib.contextmanager
+    def batch(self) -> Iterator[None]:
+        """LED changes inside are sent together when the block ends."""
+        self._batching += 1
+        try:
+            yield
+        finally:
+            self._batching -= 1
+            self._flush()
+
+    def _flush(self, force: bool = False) -> None:
+        if self._batching:
+            return
+        on, blink = _word(self._steady), _word(self._blink)
+        sent = self._sent
+        if force or sent is None or sent[0] != on:
+            self.host.send(Frame(self._pdo["led_on"], on.to_bytes(5, "little") + bytes(3)))
+        if force or sent is None or sent[1] != blink:
+            self.host.send(Frame(self._pdo["led_blink"], blink.to_bytes(5, "little") + bytes(3)))
+        self._sent = (on, blink)
+
+    # -- brightness and backlight -----------------------------------------------------------------
+
+    def set_brightness(self, level: int) -> None:
+        """Indicator LED brightness 0..63 (PKP §13; 0 is the minimum, not off)."""
+        check_range("brightness", level, 0, LEVEL_MAX)
+        self._indicator = level
+        self.host.send(Frame(self._pdo["indicator_brightness"], bytes((level,)) + bytes(7)))
+
+    def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
+        """Backlight colour (by name, PKP §18c) and level 0..63 (0 = off, PKP §14)."""
+        code = BacklightColour.from_name(colour) if colour is not None else None
+        if level is not None:
+            check_range("backlight level", level, 0, LEVEL_MAX)
+        if code is not None:
+            self.write("backlight_colour", int(code))
+            self._backlight_colour = int(code)
+        if level is not None:
+            self._backlight_level = level
+            self.host.send(Frame(self._pdo["backlight_brightness"], bytes((level,)) + bytes(7)))
+
+    def set_default_backlight_colour(self, colour: str) -> None:
+        self.write("default_backlight_colour", int(BacklightColour.from_name(colour)))
+
+    def set_startup_levels(self, brightness: int | None = None, backlight: int | None = None
+                           ) -> None:
+        """Levels applied at power-on (2003h/05, /06)."""
+        if brightness is not None:
+            self.write("startup_indicator_brightness", brightness)
+        if backlight is not None:
+            self.write("startup_backlight_brightness", backlight)
+
+    # -- configuration ----------------------------------------------------------------------------
+
+    def set_startup_show(self, show: str) -> None:
+        """"complete", "fast flash" or "off" (PKP §23)."""
+        if show not in SHOWS:
+            raise ValueError(f"startup show must be one of {', '.join(SHOWS)}, not {show!r}")
+        self.write("startup_led_show", SHOWS[show])
+
+    def set_demo_mode(self, enabled: bool) -> None:
+        """DEMO mode starts at the next power-on (PKP §24)."""
+        self.write("demo_mode", int(enabled))
+
+    def set_periodic_key_state(self, period: float) -> None:
+        """Send the key state every ``period`` s as well as on change; 0 = only on change."""
+        self.write("tpdo1_event_timer", round(period * 1000))
+
+    def switch_to_j1939(self, *, confirm: bool = False) -> None:
+        """The keypad leaves CANopen (PKP §44); :meth:`switch_to_canopen` brings it back."""
+        if not confirm:
+            raise ValueError("the keypad will stop speaking CANopen: pass confirm=True")
+        self.write("can_protocol", 1)
+
+    def switch_to_canopen(self) -> None:
+        """The documented way back from J1939 (PKP §44), to CANopen factory settings."""
+        self.host.send(J1939_RETURN)
+
+    # -- recovery ---------------------------------------------------------------------------------
+
+    def _on_boot_up(self, now: float) -> None:
+        for timer in self._long_timers.values():
+            timer.cancel()
+        self._long_timers.clear()
+        self.pressed = frozenset()
+        if self.auto_start:
+            self.start()
+        if not self.restore:
+            self._sent = None
+            return
+        self._flush(force=True)  # errata field report: a rebooted keypad forgot its LEDs
+        if self._indicator is not None:
+            self.host.send(Frame(self._pdo["indicator_brightness"],
+                                 bytes((self._indicator,)) + bytes(7)))
+        if self._backlight_level is not None:
+            self.host.send(Frame(self._pdo["backlight_brightness"],
+                                 bytes((self._backlight_level,)) + bytes(7)))
+        if self._backlight_colour is not None:
+            colour = self._backlight_colour
+            in_thread(lambda: self.write("backlight_colour", colour))

@@ -1,0 +1,161 @@
+"""SDO client: one transfer at a time as a pure state machine (CiA 301 §7.2.4.3).
+
+Our own, not python-canopen's ``SdoClient``: the stock client rejects the Keybox's 43h download
+acknowledge (errata K3) and needs a network object. Bytes in, bytes out; the host layer sends
+them and waits. Lenient exactly where the manuals show device quirks, strict everywhere else:
+- a download acknowledged with 43h instead of 60h succeeds (errata K3, G5);
+- an expedited upload may state another size than the object's type (errata P3: 4Fh for a
+  16-bit value); the bytes are returned as sent and the caller decodes them by type.
+A reply for another object, a wrong toggle bit or an unknown command is an error.
+"""
+
+from __future__ import annotations
+
+from blinkcan.protocol.abort import describe_abort
+from blinkcan.protocol.sdo import (
+    EXPEDITED_DOWNLOAD_COMMAND,
+    TOGGLE,
+    ZEROS,
+    multiplexer,
+    split_multiplexer,
+)
+
+QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowledges with 43h
+
+
+class SdoError(Exception):
+    """An SDO transfer failed; names the node, object and sub-index."""
+
+    def __init__(self, message: str, node_id: int | None = None, index: int = 0,
+                 subindex: int = 0) -> None:
+        self.node_id = node_id
+        self.index = index
+        self.subindex = subindex
+        where = f"{index:04X}h/{subindex:02X}"
+        who = f"node {node_id:02X}h " if node_id is not None else ""
+        super().__init__(f"{who}{where}: {message}")
+
+
+class SdoAbortError(SdoError):
+    """The device refused the transfer with an abort code."""
+
+    def __init__(self, code: int, node_id: int | None = None, index: int = 0,
+                 subindex: int = 0) -> None:
+        self.code = code
+        super().__init__(f"aborted {code:08X}h, {describe_abort(code)}", node_id, index,
+                         subindex)
+
+
+class SdoTimeoutError(SdoError):
+    """No reply within the timeout, after the retries."""
+
+
+class SdoProtocolError(SdoError):
+    """A reply that does not fit the transfer."""
+
+
+class _Transfer:
+    def __init__(self, index: int, subindex: int) -> None:
+        self.index = index
+        self.subindex = subindex
+        self.mux = multiplexer(index, subindex)
+        self.done = False
+
+    def _fail(self, message: str) -> SdoProtocolError:
+        return SdoProtocolError(message, None, self.index, self.subindex)
+
+    def _check_common(self, data: bytes) -> None:
+        if len(data) < 8:
+            raise self._fail(f"reply of {len(data)} bytes, SDO frames have 8")
+        if data[0] == 0x80:
+            if data[1:4] != self.mux and data[1:4] != b"\x00\x00\x00":
+                raise self._fail("abort for another object")
+            raise SdoAbortError(int.from_bytes(data[4:8], "little"), None, self.index,
+                                self.subindex)
+
+    def abort_request(self, code: int) -> bytes:
+        """The frame that tells the server to give up this transfer."""
+        return b"\x80" + self.mux + code.to_bytes(4, "little")
+
+
+class UploadTransfer(_Transfer):
+    """Read one object: :meth:`start`, then feed replies to :meth:`on_reply` until ``done``."""
+
+    def __init__(self, index: int, subindex: int) -> None:
+        super().__init__(index, subindex)
+        self.value = b""
+        self._size: int | None = None
+        self._toggle = 0
+        self._buffer = bytearray()
+
+    def start(self) -> bytes:
+        return b"\x40" + self.mux + b"\x00\x00\x00\x00"
+
+    def on_reply(self, data: bytes) -> bytes | None:
+        """The next request, or None when the value is complete (then ``done``)."""
+        self._check_common(data)
+        command = data[0]
+        if self._size is None and not self._buffer and command >> 5 == 2:
+            if data[1:4] != self.mux:
+                raise self._fail(f"reply for {split_multiplexer(data[1:4])}")
+            if command & 0x02:  # expedited; size stated or all four bytes
+                size = 4 - ((command >> 2) & 3) if command & 0x01 else 4
+                self.value = bytes(data[4 : 4 + size])
+                self.done = True
+                return None
+            self._size = int.from_bytes(data[4:8], "little") if command & 0x01 else -1
+            return b"\x60" + ZEROS[:7]
+        if command >> 5 != 0:
+            raise self._fail(f"unexpected reply {command:02X}h")
+        if command & TOGGLE != self._toggle:
+            raise self._fail("toggle bit not alternated")
+        self._buffer += data[1 : 8 - ((command >> 1) & 0x07)]
+        if command & 0x01:  # last segment (errata B6: strings of any length)
+            if self._size not in (None, -1) and len(self._buffer) != self._size:
+                raise self._fail(f"{len(self._buffer)} bytes, {self._size} announced")
+            self.value = bytes(self._buffer)
+            self.done = True
+            return None
+        self._toggle ^= TOGGLE
+        return bytes((0x60 | self._toggle,)) + ZEROS[:7]
+
+
+class DownloadTransfer(_Transfer):
+    """Write one object, expedited for up to 4 bytes, segmented above."""
+
+    def __init__(self, index: int, subindex: int, data: bytes) -> None:
+        super().__init__(index, subindex)
+        self.data = bytes(data)
+        self._position = 0
+        self._toggle = 0
+        self._segmented = len(self.data) > 4 or not self.data
+
+    def start(self) -> bytes:
+        data = self.data
+        if not self._segmented:
+            command = EXPEDITED_DOWNLOAD_COMMAND[len(data)]
+            return bytes((command,)) + self.mux + data + ZEROS[len(data) : 4]
+        return b"\x21" + self.mux + len(data).to_bytes(4, "little")
+
+    def on_reply(self, data: bytes) -> bytes | None:
+        self._check_common(data)
+        command = data[0]
+        if self._position == 0 and command in QUIRK_ACKNOWLEDGES and data[1:4] == self.mux:
+            if not self._segmented:
+                self.done = True
+                return None
+            return self._next_segment()
+        if self._segmented and command >> 5 == 1 and command & TOGGLE == self._toggle ^ TOGGLE:
+            if self._position >= len(self.data):
+                self.done = True
+                return None
+            return self._next_segment()
+        raise self._fail(f"unexpected reply {command:02X}h")
+
+    def _next_segment(self) -> bytes:
+        chunk = self.data[self._position : self._position + 7]
+        self._position += len(chunk)
+        last = self._position >= len(self.data)
+        command = self._toggle | ((7 - len(chunk)) << 1) | last
+        self._toggle ^= TOGGLE
+        return bytes((command,)) + chunk + ZEROS[len(chunk) : 7]

@@ -1,0 +1,164 @@
+"""The Keypad driver against the keypad twin, in both quirk profiles."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from blinkcan.host import KeyEvent, Keypad, SdoAbortError
+from tests.host.conftest import Rig, wait_until
+
+
+def keys(rig: Rig) -> list[dict[str, object]]:
+    return rig.emulator.snapshot(rig.keypad)["keys"]  # type: ignore[no-any-return]
+
+
+def test_identity_reads_versions_the_right_way_round(rig: Rig) -> None:
+    identity = Keypad(rig.host).identity()
+    assert (identity.hardware_version, identity.software_version) == ("V_01", "V2.2")
+    assert (identity.vendor_id, identity.model_id, identity.device_type) == (
+        0x3E2, "PKP2600SI", 0x000B0191)
+
+
+def test_key_events_by_callback_and_iterator(rig: Rig) -> None:
+    keypad = Keypad(rig.host, long_press=0.1)
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+    seen: list[KeyEvent] = []
+    keypad.on_key(seen.append)
+    received: list[tuple[int, str]] = []
+    reader = threading.Thread(target=lambda: received.extend(
+        (e.key, e.action) for e in keypad.events(timeout=0.5)))
+    reader.start()
+    time.sleep(0.02)
+    rig.emulator.press(rig.keypad, 5)
+    time.sleep(0.2)
+    rig.emulator.release(rig.keypad, 5)
+    rig.emulator.press(rig.keypad, 12)
+    rig.emulator.release(rig.keypad, 12)
+    reader.join()
+    expected = [(5, "press"), (5, "long press"), (5, "release"), (12, "press"), (12, "release")]
+    assert [(e.key, e.action) for e in seen] == expected
+    assert received == expected
+
+
+def test_leds_steady_blinking_and_alternating(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_leds({1: "red", 2: "amber", 3: "white"}, blink={4: "blue"})
+    keypad.set_led(5, "red", blink="green")
+    wait_until(lambda: keys(rig)[4]["alternate"])
+    shown = keys(rig)
+    assert [k["phases"] for k in shown[:5]] == [
+        ["red", "red"], ["yellow", "yellow"], ["white", "white"], ["off", "blue"],
+        ["red", "green"]]
+    assert shown[5]["phases"] == ["off", "off"]
+
+
+def test_led_changes_are_batched_into_the_fewest_pdos(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    rig.sniffed()  # the NMT start
+    keypad.clear_leds()  # the first picture goes out whole: the keypad's state is unknown
+    assert [f.can_id for f in rig.sniffed()] == [0x215, 0x315]
+    with keypad.batch():
+        for key in range(1, 13):
+            keypad.set_led(key, "green")
+    assert [f.can_id for f in rig.sniffed()] == [0x215]  # one PDO, blink unchanged
+    keypad.set_led(1, "green")
+    assert rig.sniffed() == []  # nothing changed, nothing sent
+
+
+def test_brightness_and_backlight(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_brightness(20)
+    keypad.set_backlight("cyan", 40)
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "cyan",
+                                                                         "level": 40})
+    assert rig.emulator.snapshot(rig.keypad)["indicator_brightness"] == 20
+
+
+def test_leds_come_back_after_a_power_cycle(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_led(7, "magenta")
+    keypad.set_backlight(level=30)
+    wait_until(lambda: keys(rig)[6]["colour"] == "magenta")
+    rig.emulator.power_cycle(rig.keypad)
+    wait_until(lambda: keys(rig)[6]["colour"] == "magenta")
+    snapshot = rig.emulator.snapshot(rig.keypad)
+    assert snapshot["nmt_state"] == "operational"
+    assert snapshot["backlight"]["level"] == 30
+
+
+def test_heartbeat_lost_and_back(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.monitor_heartbeat(0.05)
+    events = keypad.health_events(timeout=1.0)
+    rig.emulator.power_off(rig.keypad)
+    assert next(events).kind == "lost"
+    rig.emulator.power_on(rig.keypad)
+    assert [next(events).kind, next(events).kind] == ["back", "boot-up"]
+
+
+def test_settings_through_the_keypads_own_objects(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_startup_show("fast flash")
+    keypad.set_periodic_key_state(0.5)
+    keypad.set_default_backlight_colour("violet")  # errata P22: violet is magenta
+    keypad.set_bitrate(250_000, confirm=True)  # errata B1: keypad code 03h
+    settings = rig.emulator.snapshot(rig.keypad)["settings"]
+    assert (settings["startup_led_show"], settings["tpdo1_event_timer"],
+            settings["default_backlight_colour"], settings["baud_rate"]) == (2, 500, 6, 3)
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda k: k.set_led(13, "red"), r"key 13 outside 1..12"),
+    (lambda k: k.set_led(1, "purple"), r"unknown LED colour 'purple'"),
+    (lambda k: k.set_brightness(64), r"brightness 64 outside 0..63"),
+    (lambda k: k.set_backlight("pink"), r"unknown backlight colour 'pink'"),
+    (lambda k: k.set_node_id(0x80, confirm=True), r"node id 0x80 outside"),
+    (lambda k: k.set_node_id(0x20), r"confirm=True"),
+    (lambda k: k.set_bitrate(800_000, confirm=True), r"does not run at 800000"),
+    (lambda k: k.write("producer_heartbeat_time", 5), r"takes 0x0, 0xa..0xfeff"),
+    (lambda k: k.set_startup_show("disco"), r"startup show must be one of"),
+    (lambda k: k.switch_to_j1939(), r"confirm=True"),
+])
+def test_misuse_raises_and_sends_nothing(rig: Rig, call: object, message: str) -> None:
+    keypad = Keypad(rig.host, start=False)
+    rig.sniffed()
+    with pytest.raises(ValueError, match=message):
+        call(keypad)  # type: ignore[operator]
+    assert rig.sniffed() == []
+
+
+def test_an_abort_names_node_object_and_meaning(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    with pytest.raises(SdoAbortError, match=r"node 15h 1001h/00: aborted 06020000h"):
+        keypad.sdo.upload(0x1001, 0)
+
+
+def test_overlapping_requests_never_lose_an_answer(rig: Rig) -> None:
+    rig.emulator.response_delay = 0.01  # the keypad now drops overlapping requests
+    keypad = Keypad(rig.host)
+    results: list[object] = []
+
+    def reader(name: str) -> None:
+        results.extend(keypad.read(name) for _ in range(5))
+
+    threads = [threading.Thread(target=reader, args=(name,))
+               for name in ("device_type", "vendor_id", "node_id")]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert sorted(map(str, results)) == sorted(
+        ["721297"] * 5 + ["994"] * 5 + ["21"] * 5)
+
+
+def test_j1939_and_back(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.switch_to_j1939(confirm=True)
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["protocol"] == "j1939")
+    events = keypad.health_events(timeout=1.0)
+    keypad.switch_to_canopen()
+    assert next(events).kind == "boot-up"
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")

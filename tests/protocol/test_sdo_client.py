@@ -1,0 +1,90 @@
+"""The SDO client transfers against the twin's SDO server bytes, and their quirk leniency."""
+
+from __future__ import annotations
+
+import pytest
+
+from blinkcan.protocol import Frame
+from blinkcan.protocol.sdo_client import (
+    DownloadTransfer,
+    SdoAbortError,
+    SdoProtocolError,
+    UploadTransfer,
+)
+from blinkcan.twin import KeyboxTwin, KeypadTwin
+from blinkcan.twin.base import CanopenTwin
+
+
+def run(twin: CanopenTwin, transfer: UploadTransfer | DownloadTransfer) -> None:
+    request: bytes | None = transfer.start()
+    while request is not None:
+        replies = twin.receive(Frame(0x600 + twin.node_id, request), 0.0)
+        request = transfer.on_reply(replies[0].data)
+    assert transfer.done
+
+
+def keypad() -> KeypadTwin:
+    twin = KeypadTwin()
+    twin.power_on(0.0)
+    return twin
+
+
+def test_expedited_and_segmented_uploads() -> None:
+    twin = keypad()
+    upload = UploadTransfer(0x1000, 0)
+    run(twin, upload)
+    assert upload.value == bytes.fromhex("91010B00")
+    for index, text in ((0x1008, b"BlinkMarine"), (0x100B, b"PKP2600SI"), (0x2200, b"FFFFFFFF")):
+        upload = UploadTransfer(index, 0)
+        run(twin, upload)
+        assert upload.value == text
+
+
+def test_downloads_and_the_43h_acknowledge() -> None:
+    twin = keypad()
+    run(twin, DownloadTransfer(0x1017, 0, (100).to_bytes(2, "little")))
+    assert twin.objects["producer_heartbeat_time"] == 100
+    keybox = KeyboxTwin(quirks="firmware")
+    keybox.power_on(0.0)
+    run(keybox, DownloadTransfer(0x1011, 1, b"load"))  # 43h accepted (errata K3)
+
+
+def test_abort_names_node_object_and_meaning() -> None:
+    transfer = DownloadTransfer(0x1017, 0, (5).to_bytes(2, "little"))
+    with pytest.raises(SdoAbortError, match=r"1017h/00: aborted 06090030h, invalid value") as error:
+        run(keypad(), transfer)
+    assert error.value.code == 0x06090030
+
+
+def test_segmented_download_against_the_server() -> None:
+    from blinkcan.protocol.sdo_server import SdoServer
+    from tests.protocol.test_sdo_server import FakeDictionary
+
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    transfer = DownloadTransfer(0x3000, 0, b"a twenty byte string")
+    request: bytes | None = transfer.start()
+    while request is not None:
+        reply = server.on_request(request)
+        assert reply is not None
+        request = transfer.on_reply(reply)
+    assert fake.values[bytes.fromhex("003000")] == b"a twenty byte string"
+
+
+@pytest.mark.parametrize("reply", [
+    "43 01 10 00 00 00 00 00",  # another object
+    "60 00 10 00 00 00 00 00",  # a download acknowledge to an upload
+    "43 00 10",                 # too short
+])
+def test_replies_that_do_not_fit_are_errors(reply: str) -> None:
+    upload = UploadTransfer(0x1000, 0)
+    upload.start()
+    with pytest.raises(SdoProtocolError):
+        upload.on_reply(bytes.fromhex(reply.replace(" ", "")))
+
+
+def test_a_4f_reply_for_a_16_bit_value_is_accepted() -> None:
+    upload = UploadTransfer(0x1800, 5)  # errata P3: rev 1.1 prints 4Fh
+    upload.start()
+    assert upload.on_reply(bytes.fromhex("4F00180532000000")) is None
+    assert upload.value == b"\x32"
