@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from benchmarks import emulator_capacity, sdo_twin
+from benchmarks import emulator_capacity, sdo_roundtrip, sdo_twin
 
 
 def main() -> None:
@@ -12,6 +12,7 @@ def main() -> None:
     parser.add_argument("--smoke", action="store_true", help="short run, to check they still work")
     args = parser.parse_args()
     sdo_twin.main(smoke=args.smoke)
+    sdo_roundtrip.main(smoke=args.smoke)
     emulator_capacity.main(smoke=args.smoke)
 
 

@@ -4,7 +4,8 @@ The PKP-2600-SI keypad and the Keybox power module, on any python-can bus. The p
 (``protocol``, ``devices``, ``twin``) does no I/O; ``runtime`` puts twins on a bus.
 """
 
+from blinkcan.host import Keybox, Keypad, scan
 from blinkcan.protocol import Frame
 
-__all__ = ["Frame", "__version__"]
+__all__ = ["Frame", "Keybox", "Keypad", "__version__", "scan"]
 __version__ = "0.1.0"

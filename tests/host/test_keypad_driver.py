@@ -162,3 +162,12 @@ def test_j1939_and_back(rig: Rig) -> None:
     keypad.switch_to_canopen()
     assert next(events).kind == "boot-up"
     wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+
+
+def test_an_event_iterator_sees_events_from_its_creation_on(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+    events = keypad.events(timeout=1.0)  # not iterated yet
+    rig.emulator.press(rig.keypad, 2)
+    time.sleep(0.05)
+    assert next(events).key == 2

@@ -63,3 +63,41 @@ def test_keypad_emulated_in_another_process_answers() -> None:
         except subprocess.TimeoutExpired:
             child.kill()
         host.shutdown()
+
+
+def test_drivers_in_this_process_twins_in_another() -> None:
+    from blinkcan.host import Keybox, Keypad
+
+    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    host_bus = _multicast_bus(channel)
+    child = subprocess.Popen(
+        [sys.executable, "-m", "blinkcan", "emulate", "keypad", "keybox", "-q",
+         "-i", "udp_multicast", "-c", channel],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env={**os.environ},
+    )
+    try:
+        end = time.monotonic() + 20
+        booted: set[int] = set()
+        while time.monotonic() < end and booted != {0x70C, 0x715}:
+            message = host_bus.recv(0.5)
+            if message is not None and bytes(message.data) == b"\x00":
+                booted.add(message.arbitration_id)
+        assert booted == {0x70C, 0x715}, "the twins did not boot in the child process"
+        keypad = Keypad(host_bus, sdo_timeout=1.0)
+        keybox = Keybox(keypad.host, sdo_timeout=1.0)
+        try:
+            assert keypad.identity().software_version == "V2.2"
+            keypad.write("led_on_red", 0x081)
+            assert keypad.read("led_on_red") == 0x081
+            keybox.on(7)
+            assert keybox.state(7) == "high"
+        finally:
+            keybox.close()
+            keypad.close()
+    finally:
+        child.terminate()
+        try:
+            child.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            child.kill()
+        host_bus.shutdown()

@@ -1,13 +1,18 @@
 """Drivers for controller applications: Keypad and Keybox on any python-can bus."""
 
+from blinkcan.host.aio import AsyncKeybox, AsyncKeypad, async_scan
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import HealthEvent, Identity
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
+from blinkcan.host.scan import Found, scan
 from blinkcan.protocol.sdo_client import SdoAbortError, SdoError, SdoTimeoutError
 
 __all__ = [
+    "AsyncKeybox",
+    "AsyncKeypad",
     "FaultEvent",
+    "Found",
     "HealthEvent",
     "HostBus",
     "Identity",
@@ -17,4 +22,6 @@ __all__ = [
     "SdoAbortError",
     "SdoError",
     "SdoTimeoutError",
+    "async_scan",
+    "scan",
 ]

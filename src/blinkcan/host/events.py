@@ -30,10 +30,14 @@ class EventSource(Generic[E]):
                 waiting.put(event)
 
     def iterate(self, timeout: float | None = None) -> Iterator[E]:
-        """Events from now on; ends after ``timeout`` seconds without one (None: never)."""
+        """Events from the moment of this call (not of the first ``next``); the iterator ends
+        after ``timeout`` seconds without one (None: never)."""
         waiting: queue.SimpleQueue[E] = queue.SimpleQueue()
         with self._lock:
             self._queues.append(waiting)
+        return self._drain(waiting, timeout)
+
+    def _drain(self, waiting: queue.SimpleQueue[E], timeout: float | None) -> Iterator[E]:
         try:
             while True:
                 try:

@@ -1,7 +1,10 @@
 """Run twins on a python-can bus: the only place where twins meet threads and clocks.
 
-One owning thread calls every twin; a python-can ``Notifier`` reads the bus and queues frames
-for it. Rules:
+A python-can ``Notifier`` reads the bus and hands each frame to the twins at once, on its own
+thread; the emulator's thread runs the timers and the actions of other threads. A lock makes
+them take turns, so twins are only ever called one at a time. (Handing frames over to the
+emulator's thread instead would add a thread switch to every request; see the benchmarks.)
+Rules:
 - Frames a twin sends go on the bus and, because a bus does not echo its own frames, are also
   delivered to the other twins of this emulator that listen to that COB-ID.
 - Timers come from ``twin.next_deadline()``, kept in a heap; lateness is recorded.
@@ -35,6 +38,7 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 
 _STOP = object()
+_WAKE = object()
 _MAX_IDLE_WAIT = 0.5
 
 
@@ -50,11 +54,11 @@ class EmulatorStats:
 
 
 class _Listener(can.Listener):
-    def __init__(self, inbox: queue.SimpleQueue[Any]) -> None:
-        self._inbox = inbox
+    def __init__(self, emulator: Emulator) -> None:
+        self._emulator = emulator
 
     def on_message_received(self, msg: can.Message) -> None:
-        self._inbox.put(msg)
+        self._emulator._from_reader(msg)
 
     def on_error(self, exc: Exception) -> None:
         log.error("bus read failed: %s", exc)
@@ -81,7 +85,9 @@ class Emulator:
         self._given_notifier = notifier
         self._notifier: can.Notifier | None = None
         self._inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
-        self._listener = _Listener(self._inbox)
+        self._listener = _Listener(self)
+        self._lock = threading.RLock()
+        self._planned_wakeup: float | None = None
         self._thread: threading.Thread | None = None
         self._running = False
         self._timers: list[tuple[float, int, int]] = []  # (deadline, seq, twin index)
@@ -137,7 +143,8 @@ class Emulator:
         if self._thread is None:
             raise RuntimeError("emulator not started")
         if threading.current_thread() is self._thread:
-            return self._perform(action)
+            with self._lock:
+                return self._perform(action)
         future: Future[T] = Future()
         self._inbox.put((action, future))
         return future.result(timeout)
@@ -172,10 +179,28 @@ class Emulator:
             self._emit(i, frames, now)
         return []
 
+    def _from_reader(self, message: can.Message) -> None:
+        """A frame from the bus, on the notifier's thread: straight to the twins."""
+        frame = to_frame(message)
+        if frame is None:
+            return
+        with self._lock:
+            now = self._clock()
+            self.stats.frames_received += 1
+            if self.on_frame is not None:
+                self.on_frame(frame, False, now)
+            self._deliver(frame, None, now)
+            wake = self._next_wakeup()
+        planned = self._planned_wakeup
+        if wake is not None and (planned is None or wake < planned):
+            self._inbox.put(_WAKE)  # a timer now comes earlier than the loop planned for
+
     def _run(self) -> None:
         inbox = self._inbox
         while self._running:
-            wake = self._next_wakeup()
+            with self._lock:
+                wake = self._next_wakeup()
+                self._planned_wakeup = wake
             wait = _MAX_IDLE_WAIT if wake is None else wake - self._clock()
             item: Any = None
             if wait > 0:
@@ -183,27 +208,19 @@ class Emulator:
                     item = inbox.get(timeout=min(wait, _MAX_IDLE_WAIT))
                 except queue.Empty:
                     item = None
-            while True:
-                if item is _STOP:
-                    return
-                if item is not None:
-                    self._handle(item)
-                try:
-                    item = inbox.get_nowait()
-                except queue.Empty:
-                    break
-            self._run_timers(self._clock())
+            with self._lock:
+                while True:
+                    if item is _STOP:
+                        return
+                    if item is not None and item is not _WAKE:
+                        self._handle(item)
+                    try:
+                        item = inbox.get_nowait()
+                    except queue.Empty:
+                        break
+                self._run_timers(self._clock())
 
     def _handle(self, item: Any) -> None:
-        now = self._clock()
-        if isinstance(item, can.Message):
-            frame = to_frame(item)
-            if frame is not None:
-                self.stats.frames_received += 1
-                if self.on_frame is not None:
-                    self.on_frame(frame, False, now)
-                self._deliver(frame, None, now)
-            return
         action, future = item
         try:
             result = self._perform(action)

@@ -1,0 +1,133 @@
+"""SDO round trips on one virtual bus: the blinkcan driver against a twin in the Emulator,
+beside python-canopen's RemoteNode against its LocalNode, same object dictionary, same run.
+
+Expedited reads (1000h) and 20-byte segmented uploads (a string object added for the benchmark
+to the keypad table, so both servers hold it). Target (DESIGN.md): >= 2x the anchor on both.
+Also the latency from a key-state frame on the bus to the application's callback.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import statistics
+import threading
+import time
+import uuid
+from collections.abc import Callable
+
+import can
+import canopen
+
+from blinkcan.devices import describe_keypad
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.objects import text, var
+from blinkcan.formats.canopen_od import object_dictionary
+from blinkcan.host import HostBus, Keypad
+from blinkcan.runtime import Emulator
+from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.keypad import KeypadTwin
+
+NODE = 0x15
+TWENTY = "twenty bytes of text"  # 20 characters
+
+
+def _description() -> DeviceDescription:
+    base = describe_keypad()
+    extra = var(0x2300, "Benchmark text", text(0, "benchmark_text", "Benchmark text", TWENTY))
+    return dataclasses.replace(base, table=base.table.with_objects(extra))
+
+
+def _timed(call: Callable[[], object], count: int) -> tuple[float, list[float]]:
+    latencies = []
+    start = time.perf_counter()
+    for _ in range(count):
+        begin = time.perf_counter()
+        call()
+        latencies.append(time.perf_counter() - begin)
+    return count / (time.perf_counter() - start), latencies
+
+
+def _summary(rate: float, latencies: list[float]) -> str:
+    ordered = sorted(latencies)
+    p99 = ordered[int(len(ordered) * 0.99)]
+    return (f"{rate:>8,.0f}/s  p50 {statistics.median(ordered) * 1e6:5.0f} us  "
+            f"p99 {p99 * 1e6:5.0f} us")
+
+
+def measure(count: int) -> dict[str, tuple[float, list[float]]]:
+    description = _description()
+    results: dict[str, tuple[float, list[float]]] = {}
+
+    channel = f"rt-ours-{uuid.uuid4().hex}"
+    device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    twin = CanopenTwin(description, NODE)
+    with Emulator(device_bus, [twin]), HostBus(host_bus) as host:
+        sdo = host.sdo(NODE)
+        sdo.upload(0x1000, 0)
+        assert sdo.upload(0x2300, 0) == TWENTY.encode()
+        results["ours expedited"] = _timed(lambda: sdo.upload(0x1000, 0), count)
+        results["ours segmented"] = _timed(lambda: sdo.upload(0x2300, 0), count // 2)
+    device_bus.shutdown()
+    host_bus.shutdown()
+
+    channel = f"rt-anchor-{uuid.uuid4().hex}"
+    server, client = canopen.Network(), canopen.Network()
+    server.connect(interface="virtual", channel=channel)
+    client.connect(interface="virtual", channel=channel)
+    try:
+        server.add_node(canopen.LocalNode(NODE, object_dictionary(description, NODE)))
+        remote = canopen.RemoteNode(NODE, object_dictionary(description, NODE))
+        client.add_node(remote)
+        remote.sdo.upload(0x1000, 0)
+        assert remote.sdo.upload(0x2300, 0) == TWENTY.encode()
+        results["anchor expedited"] = _timed(lambda: remote.sdo.upload(0x1000, 0), count)
+        results["anchor segmented"] = _timed(lambda: remote.sdo.upload(0x2300, 0), count // 2)
+    finally:
+        client.disconnect()
+        server.disconnect()
+    return results
+
+
+def key_latency(presses: int) -> list[float]:
+    """Seconds from the key-state frame on the bus to the Keypad driver's callback."""
+    channel = f"keys-{uuid.uuid4().hex}"
+    device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    twin = KeypadTwin()
+    sent: list[float] = []
+    seen: list[float] = []
+    done = threading.Event()
+    with Emulator(device_bus, [twin]) as emulator, HostBus(host_bus) as host:
+        emulator.on_frame = lambda frame, out, now: sent.append(time.perf_counter()) if (
+            out and frame.can_id == 0x195) else None
+        keypad = Keypad(host)
+        time.sleep(0.05)
+
+        def callback(event: object) -> None:
+            seen.append(time.perf_counter())
+            if len(seen) >= 2 * presses:
+                done.set()
+
+        keypad.on_key(callback)
+        for _ in range(presses):
+            emulator.press(twin, 1)
+            emulator.release(twin, 1)
+            time.sleep(0.001)
+        done.wait(5)
+    device_bus.shutdown()
+    host_bus.shutdown()
+    return [b - a for a, b in zip(sent, seen, strict=False)]
+
+
+def main(smoke: bool = False) -> None:
+    count = 300 if smoke else 5000
+    results = measure(count)
+    print("SDO round trips on a virtual bus (target >= 2x the anchor)")
+    for kind in ("expedited", "segmented"):
+        ours, anchor = results[f"ours {kind}"], results[f"anchor {kind}"]
+        label = "expedited 1000h" if kind == "expedited" else "20-byte segmented"
+        print(f"  {label:<18} blinkcan {_summary(*ours)}")
+        print(f"  {'':<18} canopen  {_summary(*anchor)}   ratio {ours[0] / anchor[0]:.2f}x")
+    latencies = sorted(key_latency(50 if smoke else 500))
+    if latencies:
+        print(f"  key-state frame to callback: p50 {statistics.median(latencies) * 1e6:.0f} us, "
+              f"p99 {latencies[int(len(latencies) * 0.99)] * 1e6:.0f} us")

@@ -1,0 +1,86 @@
+"""Find Blink devices on a bus: boot-up and heartbeat frames heard, then an SDO read of 1000h
+on every node id at once, and identity (1018h vendor 3E2h, 100Bh model, versions) of those that
+answer. Models are recognised from the device descriptions' own 1000h values.
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import can
+
+from blinkcan.devices.keybox import describe_keybox
+from blinkcan.devices.keypad import VENDOR_ID, describe_keypad
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.host.bus import HostBus
+from blinkcan.host.device import unreversed
+from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.sdo_client import SdoError
+
+_MODELS: tuple[DeviceDescription, ...] = (describe_keypad(), describe_keybox())
+
+
+@dataclass(frozen=True)
+class Found:
+    """A device that answered. ``kind`` is "keypad", "keybox" or None for a foreign device."""
+
+    node_id: int
+    kind: str | None
+    device_type: int
+    vendor_id: int | None = None
+    model_id: str | None = None
+    hardware_version: str | None = None
+    software_version: str | None = None
+    heard: bool = False  # a boot-up or heartbeat was seen during the scan
+
+
+def _text(channel: object, index: int) -> str | None:
+    try:
+        return channel.upload(index, 0).decode("ascii", "replace")  # type: ignore[attr-defined]
+    except SdoError:
+        return None
+
+
+def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
+         node_ids: range = range(NODE_ID_MIN, NODE_ID_MAX + 1)) -> list[Found]:
+    """Blink (and other CANopen) devices on ``bus``, by node id."""
+    host = bus if isinstance(bus, HostBus) else HostBus(bus)
+    owned = not isinstance(bus, HostBus)
+    host.start()
+    heard: set[int] = set()
+
+    def hear(frame: Frame, now: float) -> None:
+        heard.add(frame.can_id - HEARTBEAT)
+
+    removers = [host.subscribe(HEARTBEAT + node, hear) for node in node_ids]
+    try:
+        time.sleep(listen)
+
+        def probe(node: int) -> Found | None:
+            channel = host.sdo(node, timeout=timeout, retries=0)
+            try:
+                device_type = int.from_bytes(channel.upload(0x1000, 0), "little")
+            except SdoError:
+                return None
+            kinds = {d.table["device_type"].default: d.kind for d in _MODELS}
+            try:
+                vendor = int.from_bytes(channel.upload(0x1018, 1), "little")
+            except SdoError:
+                vendor = None
+            kind = kinds.get(device_type) if vendor == VENDOR_ID else None
+            hardware, software = _text(channel, 0x1009), _text(channel, 0x100A)
+            return Found(node, kind, device_type, vendor, _text(channel, 0x100B),
+                         unreversed(hardware) if hardware else None,
+                         unreversed(software) if software else None, node in heard)
+
+        with ThreadPoolExecutor(max_workers=32) as pool:
+            found = [f for f in pool.map(probe, node_ids) if f is not None]
+    finally:
+        for remove in removers:
+            remove()
+        if owned:
+            host.stop()
+    return sorted(found, key=lambda f: f.node_id)
