@@ -88,6 +88,44 @@ def measure(count: int) -> dict[str, tuple[float, list[float]]]:
     return results
 
 
+def transport_floor(count: int) -> float:
+    """Round trips/s of a bare echo between two threads on virtual buses, the caller waiting
+    through a Notifier and an Event as both SDO clients do: no SDO work at all. Neither
+    blinkcan nor python-canopen can beat it; it shows how much of a round trip is ours."""
+    channel = f"floor-{uuid.uuid4().hex}"
+    caller, echo = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    arrived = threading.Event()
+    running = True
+
+    def echo_loop() -> None:
+        while running:
+            message = echo.recv(0.1)
+            if message is not None:
+                echo.send(can.Message(arbitration_id=0x595, data=message.data,
+                                      is_extended_id=False))
+
+    class Waker(can.Listener):
+        def on_message_received(self, msg: can.Message) -> None:
+            arrived.set()
+
+    thread = threading.Thread(target=echo_loop, daemon=True)
+    thread.start()
+    notifier = can.Notifier(caller, [Waker()], timeout=0.1)
+    request = can.Message(arbitration_id=0x615, data=bytes(8), is_extended_id=False)
+    start = time.perf_counter()
+    for _ in range(count):
+        arrived.clear()
+        caller.send(request)
+        arrived.wait(1)
+    rate = count / (time.perf_counter() - start)
+    running = False
+    thread.join()
+    notifier.stop()
+    caller.shutdown()
+    echo.shutdown()
+    return rate
+
+
 def key_latency(presses: int) -> list[float]:
     """Seconds from the key-state frame on the bus to the Keypad driver's callback."""
     channel = f"keys-{uuid.uuid4().hex}"
@@ -127,6 +165,11 @@ def main(smoke: bool = False) -> None:
         label = "expedited 1000h" if kind == "expedited" else "20-byte segmented"
         print(f"  {label:<18} blinkcan {_summary(*ours)}")
         print(f"  {'':<18} canopen  {_summary(*anchor)}   ratio {ours[0] / anchor[0]:.2f}x")
+    floor = transport_floor(count)
+    ours = results["ours expedited"][0]
+    print(f"  transport floor (bare echo, same thread shape, no SDO): {floor:,.0f}/s; blinkcan "
+          f"reaches {ours / floor:.0%} of it, 2x the anchor would need "
+          f"{2 * results['anchor expedited'][0]:,.0f}/s")
     latencies = sorted(key_latency(50 if smoke else 500))
     if latencies:
         print(f"  key-state frame to callback: p50 {statistics.median(latencies) * 1e6:.0f} us, "

@@ -11,7 +11,7 @@ import canopen
 import blinkcan
 from blinkcan.host import AsyncKeybox, AsyncKeypad, HostBus, Keypad, async_scan, scan
 from blinkcan.runtime import Emulator
-from blinkcan.twin import KeyboxTwin, KeypadTwin
+from blinkcan.twin import KeyboxTwin
 from tests.host.conftest import Rig, quiet_keypad
 
 
