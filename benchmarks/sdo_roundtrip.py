@@ -171,9 +171,9 @@ def main(smoke: bool = False) -> None:
         print(f"  {label:<18} blinkcan {_summary(*ours)}")
         print(f"  {'':<18} canopen  {_summary(*anchor)}   ratio {ours[0] / anchor[0]:.2f}x")
     floor = transport_floor(count)
-    ours = results["ours expedited"][0]
+    expedited = results["ours expedited"][0]
     print(f"  transport floor (bare echo, same thread shape, no SDO): {floor:,.0f}/s; blinkcan "
-          f"reaches {ours / floor:.0%} of it, 2x the anchor would need "
+          f"reaches {expedited / floor:.0%} of it, 2x the anchor would need "
           f"{2 * results['anchor expedited'][0]:,.0f}/s")
     latencies = sorted(key_latency(50 if smoke else 500))
     if latencies:

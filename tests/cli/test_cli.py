@@ -10,13 +10,11 @@ from click.testing import CliRunner
 from blinkcan.cli.main import cli
 
 
-def test_demo_shows_the_manual_frames_and_their_meaning() -> None:
-    result = CliRunner().invoke(cli, ["demo"], env={"COLUMNS": "160"})
+def test_demo_runs_the_controller_and_shows_outputs_and_frames() -> None:
+    result = CliRunner().invoke(cli, ["demo", "--pause", "0"], env={"COLUMNS": "160"})
     assert result.exit_code == 0, result.output
-    for text in ("715", "boot-up", "43 00 10 00 91 01 0B 00", "'BlinkMa'", "keys pressed: 4",
-                 "LEDs on: red 2, 7; green 5", "object does not exist", "backlight blue at 32/63",
-                 "NMT stopped", "70C", "'Keybox3'", "outputs OFF: none; HIGH: 1, 4",
-                 "pins in FAULT: 4", "4:OFF", "1:OFF"):
+    for text in ("firmware V2.2", "Keybox Keybox3", "4:HIGH", "1:OFF", "7:HIGH", "operational",
+                 "outputs HIGH at the end: [4, 7]", "keypad 15h: LEDs on"):
         assert text in result.output, text
 
 

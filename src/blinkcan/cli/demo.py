@@ -1,178 +1,216 @@
-"""``blinkcan demo``: a keypad and a Keybox twin on a virtual bus, driven by a scripted host.
+"""``blinkcan demo``: a small controller on twins, shown live.
 
-Every step sends the frames the manual prints and shows what came back, with its meaning.
+A keypad (15h) and a Keybox (0Ch) twin run in an Emulator on a virtual bus; the controller uses
+the host drivers only, as an application would: key N toggles output N, and the key's LED shows
+the output (green on, off when off, red blinking on FAULT). A script presses keys, blows a fuse
+and power-cycles the keypad; the live view shows the keypad, the outputs and the frames.
 """
 
 from __future__ import annotations
 
+import functools
+import queue
+import threading
 import time
 import uuid
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import can
 import click
-from rich.console import Console
+from rich.console import Console, Group
+from rich.live import Live
+from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
 from blinkcan.decode import FrameDescriber
+from blinkcan.host import HostBus, Keybox, Keypad, Toggle
+from blinkcan.host.keybox import FaultEvent
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime import Emulator, to_frame, to_message
+from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
-SETTLE_S = 0.03
 _STYLE = {"off": "grey35", "red": "red", "green": "green", "blue": "blue", "yellow": "yellow",
           "cyan": "cyan", "magenta": "magenta", "white": "white"}
+_PIN_STYLE = {"off": "grey50", "high": "bold green", "fault": "bold red"}
+
+
+class Controller:
+    """Key N toggles output N; faults show as a red blinking LED. SDO work runs on a worker
+    thread, because driver callbacks run on the bus thread."""
+
+    def __init__(self, keypad: Keypad, keybox: Keybox) -> None:
+        self.keypad, self.keybox = keypad, keybox
+        self._work: queue.SimpleQueue[tuple[str, int, int] | threading.Event] = queue.SimpleQueue()
+        self.toggles = {
+            key: Toggle(keypad, key, on="green", on_change=functools.partial(self._pressed, key))
+            for key in range(1, 13)
+        }
+        keybox.on_fault(self._on_fault)
+        self._worker = threading.Thread(target=self._run, name="demo-controller", daemon=True)
+        self._worker.start()
+
+    def _pressed(self, key: int, state: int) -> None:
+        self._work.put(("key", key, state))
+
+    def _on_fault(self, event: FaultEvent) -> None:
+        if event.fault and event.pin in self.toggles:
+            self._work.put(("fault", event.pin, 1))
+
+    def _run(self) -> None:
+        while True:
+            item = self._work.get()
+            if isinstance(item, threading.Event):  # idle(): all earlier work is done
+                item.set()
+                continue
+            kind, key, state = item
+            if kind == "stop":
+                return
+            if kind == "fault":
+                self.toggles[key].set_state(0)
+                self.keypad.set_led(key, "off", blink="red")
+            elif key in self.keybox.fault_pins:
+                self.keybox.reset(key)  # a press on a faulted output resets it (OFF)
+                self.keybox.fault_pins -= {key}
+                self.toggles[key].set_state(0)
+            elif state:
+                self.keybox.on(key)
+            else:
+                self.keybox.off(key)
+
+    def idle(self, timeout: float = 5.0) -> None:
+        """Wait until the worker has done what was asked so far."""
+        done = threading.Event()
+        self._work.put(done)
+        done.wait(timeout)
+
+    def stop(self) -> None:
+        self._work.put(("stop", 0, 0))
+        self._worker.join(timeout=2)
 
 
 @dataclass(frozen=True)
 class Step:
     title: str
-    frames: tuple[str, ...] = ()  # "615 40 00 10 00 00 00 00 00"
-    action: Callable[[Emulator, KeypadTwin, KeyboxTwin], object] | None = None
-    wait: float = SETTLE_S
+    act: Callable[[Emulator, KeypadTwin, KeyboxTwin], object]
 
 
-def _f(text: str) -> Frame:
-    ident, *data = text.split()
-    return Frame(int(ident, 16), bytes(int(b, 16) for b in data))
+def _press(key: int) -> Callable[[Emulator, KeypadTwin, KeyboxTwin], object]:
+    def act(emulator: Emulator, keypad: KeypadTwin, keybox: KeyboxTwin) -> None:
+        emulator.press(keypad, key)
+        emulator.release(keypad, key)
+
+    return act
 
 
 SCRIPT = (
-    Step("Read the device type (PKP §26)", ("615 40 00 10 00 00 00 00 00",)),
-    Step("Read the device name, segmented (PKP §28)",
-         ("615 40 08 10 00 00 00 00 00", "615 60 00 00 00 00 00 00 00",
-          "615 70 00 00 00 00 00 00 00")),
-    Step("Read the firmware version: this firmware sends it reversed (errata P6)",
-         ("615 40 0A 10 00 00 00 00 00",)),
-    Step("Read the vendor id (PKP §32)", ("615 40 18 10 01 00 00 00 00",)),
-    Step("Switch the startup LED show off, stored (PKP §23)", ("615 2F 14 20 00 00 00 00 00",)),
-    Step("Heartbeat every 200 ms, stored (PKP §25)", ("615 2B 17 10 00 C8 00 00 00",)),
-    Step("Reset the node: boot-up, no show this time (PKP §6)", ("000 81 15",), wait=0.25),
-    Step("Start the keypad (PKP §4)", ("000 01 15",), wait=0.22),
-    Step("Press key 4 (PKP §10)", action=lambda emu, kp, kb: emu.press(kp, 4)),
-    Step("Release key 4", action=lambda emu, kp, kb: emu.release(kp, 4)),
-    Step("Red LEDs 2 and 7, green LED 5 on (PKP §11)", ("215 42 00 01 00 00 00 00 00",)),
-    Step("Key 1 red, then blinking red/green alternately (errata P9)",
-         ("215 43 00 01 00 00 00 00 00", "315 01 10 00 00 00 00 00 00")),
-    Step("Blue backlight at 50 % (PKP §18c, §14)",
-         ("615 2F 03 20 03 03 00 00 00", "515 20 00 00 00 00 00 00 00")),
-    Step("Hold key 12 and read the keys by SDO (PKP §15)",
-         ("615 40 00 20 01 00 00 00 00",), action=lambda emu, kp, kb: emu.press(kp, 12)),
-    Step("Ask for object 1001h, which this keypad lacks (PKP §27)",
-         ("615 40 01 10 00 00 00 00 00",)),
-    Step("Keybox: read the model, one segment (KBX §35)",
-         ("60C 40 0B 10 00 00 00 00 00", "60C 60 00 00 00 00 00 00 00")),
-    Step("Keybox: start it, then outputs 1 and 4 HIGH (KBX §11, §17)",
-         ("000 01 0C", "20C 00 00 09 00 00 00 00 00")),
-    Step("Keybox: the fuse of output 4 blows, the Keybox reports it (KBX §18)",
-         action=lambda emu, kp, kb: emu.run(lambda now: kb.blow_fuse(4, now))),
-    Step("Keybox: OFF does not clear the FAULT; who is in FAULT? (KBX §21, errata K12)",
-         ("20C 08 00 00 00 00 00 00 00", "60C 40 08 20 03 00 00 00 00")),
-    Step("Keybox: new fuse, RESET output 4 (KBX §19)",
-         ("60C 2F 01 20 04 02 00 00 00",),
-         action=lambda emu, kp, kb: emu.run(lambda now: kb.replace_fuse(4, now))),
-    Step("Stop both devices: they stay silent (PKP §7, KBX §14)",
-         ("000 02 00", "615 40 00 10 00 00 00 00 00", "60C 40 00 10 00 00 00 00 00"),
-         wait=0.05),
+    Step("Press key 1: output 1 on", _press(1)),
+    Step("Press key 4: output 4 on", _press(4)),
+    Step("Press key 7: output 7 on", _press(7)),
+    Step("The fuse of output 4 blows: FAULT, key 4 blinks red",
+         lambda emu, kp, kb: emu.run(lambda now: kb.blow_fuse(4, now))),
+    Step("Press key 1: output 1 off", _press(1)),
+    Step("New fuse; press key 4: RESET, output 4 off",
+         lambda emu, kp, kb: (emu.run(lambda now: kb.replace_fuse(4, now)),
+                              _press(4)(emu, kp, kb))),
+    Step("Press key 4: output 4 on again", _press(4)),
+    Step("Power-cycle the keypad: the driver restarts it and restores its LEDs",
+         lambda emu, kp, kb: emu.power_cycle(kp)),
 )
 
 
-def _collect(host: can.BusABC, until: float) -> list[tuple[Frame, float]]:
-    """Frames the host receives until ``until``, each with the time it arrived."""
-    frames = []
-    while (left := until - time.monotonic()) > 0:
-        message = host.recv(left)
-        if message is not None and (frame := to_frame(message)) is not None:
-            frames.append((frame, time.monotonic()))
-    return frames
+def _key_cell(key: dict[str, object]) -> Text:
+    """"[ 4 green]", "[ 4 ~red]" for blinking: colour by name too, for plain terminals."""
+    lit, blink = str(key["colour"]), str(key["blink_colour"])
+    if blink != "off":
+        label, style = f"~{blink}", _STYLE[blink]
+    else:
+        label, style = ("" if lit == "off" else lit), _STYLE[lit]
+    return Text(f"[{key['key']:>2} {label:<6}]", style=f"bold {style}")
 
 
-def _keypad_grid(snapshot: dict[str, object]) -> Table:
-    grid = Table(show_header=False, box=None, padding=(0, 1))
-    keys = snapshot["keys"]
+def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, object],
+          log: deque[str]) -> Group:
+    grid = Table.grid(padding=(0, 1))
+    keys = keypad["keys"]
     assert isinstance(keys, list)
     for row in (keys[:6], keys[6:]):
-        cells = []
-        for key in row:
-            colour, blink = key["colour"], key["blink_colour"]
-            label = Text(f"[{key['key']:>2}]", style=f"bold {_STYLE[colour]}")
-            if blink != "off":
-                label.append("~", style=_STYLE[blink])
-            cells.append(label)
-        grid.add_row(*cells)
-    return grid
+        grid.add_row(*(_key_cell(key) for key in row))
+    outputs = Text()
+    pins = keybox["pins"]
+    assert isinstance(pins, list)
+    for pin in pins:
+        outputs.append(f" {pin['pin']}:{pin['state'].upper()}", style=_PIN_STYLE[pin["state"]])
+        if pin["fuse"] == "blown":
+            outputs.append("(fuse blown)", style="red")
+    frames = Text("\n".join(log), style="grey70")
+    return Group(
+        Text(header, style="cyan"),
+        Text(title, style="bold"),
+        Panel(grid, title=f"keypad 15h, {keypad['nmt_state']} (~ blinking)", expand=False),
+        Panel(outputs, title=f"Keybox 0Ch, {keybox['nmt_state']}", expand=False),
+        Panel(frames, title="last frames on the bus", expand=False),
+    )
 
 
-def run_demo(console: Console) -> int:
+def run_demo(console: Console, pause: float = 0.6) -> int:
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
-    device_bus = can.Bus(interface="virtual", channel=channel)
-    host = can.Bus(interface="virtual", channel=channel)
-    keypad, keybox = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
-    describer = FrameDescriber({t.node_id: t.description for t in (keypad, keybox)})
-    table = Table(title="PKP-2600-SI keypad (15h) and Keybox (0Ch) twins on a virtual CAN bus",
-                  title_justify="left")
-    for column in ("t ms", "", "id", "data", "meaning"):
-        table.add_column(column, no_wrap=column != "meaning")
-    start = time.monotonic()
+    device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    keypad_twin, keybox_twin = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
+    describer = FrameDescriber({t.node_id: t.description for t in (keypad_twin, keybox_twin)})
+    log: deque[str] = deque(maxlen=10)
+    seen = {"frames": 0}
 
-    def show(frame: Frame, sent_by_host: bool, at: float | None = None) -> None:
-        arrow = Text("host ->", style="cyan") if sent_by_host else Text("   <- ", style="yellow")
-        at = time.monotonic() if at is None else at
-        table.add_row(f"{(at - start) * 1000:6.0f}", arrow, f"{frame.can_id:03X}",
-                      frame.data.hex(" ").upper(), describer.describe(frame))
+    def record(frame: Frame, sent: bool, now: float) -> None:
+        seen["frames"] += 1
+        if frame.can_id != 0x77F:  # the controller's own heartbeat would fill the log
+            log.append(f"{frame.can_id:03X} {frame.data.hex(' ').upper():<23} "
+                       f"{describer.describe(frame)}")
 
+    emulator = Emulator(device_bus, [keypad_twin, keybox_twin])
+    emulator.on_frame = record
     try:
-        with Emulator(device_bus, [keypad, keybox]) as emulator:
-            table.add_section()
-            table.add_row("", "", "", "", Text("Power on", style="bold"))
-            for frame, at in _collect(host, time.monotonic() + SETTLE_S):
-                show(frame, False, at)
+        with emulator, HostBus(host_bus) as host, Live(console=console, auto_refresh=False) as live:
+            keypad = Keypad(host)
+            keybox = Keybox(host, watchdog=0.2)  # outputs off if this controller dies
+            identity = keypad.identity()
+            header = (f"Controller: keypad {identity.model_id} firmware "
+                      f"{identity.software_version}, Keybox {keybox.identity().model_id} "
+                      "watching the controller's heartbeat. Key N toggles output N.")
+
+            def show(title: str) -> None:
+                live.update(_view(header, title, emulator.snapshot(keypad_twin),
+                                  emulator.snapshot(keybox_twin), log), refresh=True)
+
+            controller = Controller(keypad, keybox)
+            show("The keypad plays its startup LED show")
+            time.sleep(max(pause * 4, 0.05))
             for step in SCRIPT:
-                table.add_section()
-                table.add_row("", "", "", "", Text(step.title, style="bold"))
-                if step.action is not None:
-                    step.action(emulator, keypad, keybox)
-                for text in step.frames:
-                    frame = _f(text)
-                    host.send(to_message(frame))
-                    show(frame, True)
-                    for reply, at in _collect(host, time.monotonic() + step.wait):
-                        show(reply, False, at)
-                if not step.frames:
-                    for frame, at in _collect(host, time.monotonic() + step.wait):
-                        show(frame, False, at)
-            snapshot = emulator.snapshot(keypad)
-            keybox_snapshot = emulator.snapshot(keybox)
+                step.act(emulator, keypad_twin, keybox_twin)
+                time.sleep(0.05)
+                controller.idle()
+                time.sleep(max(pause, 0.05))
+                show(step.title)
+            if pause:  # the keypad plays its show again after the power cycle, then the LEDs
+                time.sleep(2.6)
+                show(SCRIPT[-1].title)
+            controller.stop()
+            states = keybox.states()
+            keypad.close()
+            keybox.close()
     finally:
-        host.shutdown()
+        host_bus.shutdown()
         device_bus.shutdown()
-    console.print(table)
-    console.print("\n[bold]What the keypad shows now[/] (~ = blinking in that colour):")
-    console.print(_keypad_grid(snapshot))
-    backlight = snapshot["backlight"]
-    console.print(f"backlight {backlight['colour']} at {backlight['level']}/63, "
-                  f"NMT {snapshot['nmt_state']}, node {snapshot['node_id']:02X}h, "
-                  f"{snapshot['bitrate'] // 1000} kbit/s")
-    console.print("\n[bold]Keybox outputs[/] (stopped: fail-safe OFF; FAULT stays latched):")
-    console.print(_keybox_row(keybox_snapshot))
+    high = sorted(pin for pin, state in states.items() if state == "high")
+    console.print(f"\n{seen['frames']} frames on the bus; outputs HIGH at the end: {high}")
     return 0
 
 
-def _keybox_row(snapshot: dict[str, object]) -> Text:
-    row = Text()
-    pins = snapshot["pins"]
-    assert isinstance(pins, list)
-    styles = {"off": "grey50", "high": "bold green", "fault": "bold red"}
-    for pin in pins:
-        row.append(f" {pin['pin']}:{pin['state'].upper()}", style=styles[pin["state"]])
-        if pin["fuse"] == "blown":
-            row.append("(fuse blown)", style="red")
-    return row
-
-
 @click.command("demo")
-def command() -> None:
-    """A keypad and a Keybox twin on a virtual bus, driven by a scripted host."""
-    raise SystemExit(run_demo(Console(highlight=False)))
+@click.option("--pause", type=float, default=0.6, show_default=True,
+              help="Seconds between the scripted steps.")
+def command(pause: float) -> None:
+    """A controller on a keypad and a Keybox twin: key N toggles output N, shown live."""
+    raise SystemExit(run_demo(Console(highlight=False), pause))

@@ -1,6 +1,7 @@
 """Drivers for controller applications: Keypad and Keybox on any python-can bus."""
 
 from blinkcan.host.aio import AsyncKeybox, AsyncKeypad, async_scan
+from blinkcan.host.behaviours import Cycle, Momentary, Toggle
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import HealthEvent, Identity
 from blinkcan.host.keybox import FaultEvent, Keybox
@@ -11,6 +12,7 @@ from blinkcan.protocol.sdo_client import SdoAbortError, SdoError, SdoTimeoutErro
 __all__ = [
     "AsyncKeybox",
     "AsyncKeypad",
+    "Cycle",
     "FaultEvent",
     "Found",
     "HealthEvent",
@@ -19,9 +21,11 @@ __all__ = [
     "KeyEvent",
     "Keybox",
     "Keypad",
+    "Momentary",
     "SdoAbortError",
     "SdoError",
     "SdoTimeoutError",
+    "Toggle",
     "async_scan",
     "scan",
 ]

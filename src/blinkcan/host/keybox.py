@@ -63,16 +63,21 @@ class Keybox(Device):
     ``watchdog``: seconds between host heartbeats; the Keybox is told (1016h) to switch its
     outputs off when they stop for two periods. ``host_node_id`` names the host's heartbeat.
     ``fault_poll``: seconds between polls of the FAULT mask (None: the fault PDO only).
+    ``restore_outputs``: after the Keybox reboots, switch back on the outputs this driver had
+    switched on (off by default: a rebooted power module should not re-energise loads unasked).
     """
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x0C, *, start: bool = True,
                  watchdog: float | None = None, host_node_id: int = 0x7F,
-                 fault_poll: float | None = None, sdo_timeout: float = 0.5) -> None:
+                 fault_poll: float | None = None, restore_outputs: bool = False,
+                 sdo_timeout: float = 0.5) -> None:
         super().__init__(bus, node_id, describe_keybox("cia301", node_id),
                          sdo_timeout=sdo_timeout)
         self.faults = EventSource[FaultEvent]()
         self.fault_pins: frozenset[int] = frozenset()
         self.auto_start = start
+        self.restore_outputs = restore_outputs
+        self.commanded_high: set[int] = set()
         self.host_node_id = check_node_id(host_node_id)
         self._producer: Timer | None = None
         self._poller: Timer | None = None
@@ -105,6 +110,10 @@ class Keybox(Device):
     def _pin(self, pin: int, code: int) -> None:
         check_range("pin", pin, 1, PIN_COUNT)
         self.write(f"pin_{pin}_state", code)
+        if code == PIN_HIGH:
+            self.commanded_high.add(pin)
+        else:
+            self.commanded_high.discard(pin)
 
     def set_outputs(self, high: Iterable[int] = (), off: Iterable[int] = ()) -> None:
         """Pins in ``high`` HIGH, pins in ``off`` OFF, the others unchanged (KBX §21)."""
@@ -113,8 +122,10 @@ class Keybox(Device):
             raise ValueError(f"pins {sorted(_pins(high_mask & off_mask))} asked HIGH and OFF")
         if off_mask:
             self.write("output_off_mask", off_mask)
+            self.commanded_high -= _pins(off_mask)
         if high_mask:
             self.write("output_high_mask", high_mask)
+            self.commanded_high |= _pins(high_mask)
 
     def set_pwm(self, pins: Iterable[int], duty: int) -> None:
         """PWM on pins 12 and/or 13 at ``duty`` 0..10 (x 10 %); pins not named leave PWM."""
@@ -217,6 +228,9 @@ class Keybox(Device):
         self.fault_pins = frozenset()  # a reset clears FAULT latches; outputs start OFF
         if self.auto_start:
             self.start()
+        if self.restore_outputs and self.commanded_high:
+            pins = sorted(self.commanded_high)
+            in_thread(lambda: self.set_outputs(high=pins))
 
     def close(self) -> None:
         self.stop_host_heartbeat()

@@ -16,6 +16,7 @@ from blinkcan.devices.keypad import VENDOR_ID, describe_keypad
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import unreversed
+from blinkcan.host.sdo import SdoChannel
 from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.sdo_client import SdoError
@@ -37,9 +38,9 @@ class Found:
     heard: bool = False  # a boot-up or heartbeat was seen during the scan
 
 
-def _text(channel: object, index: int) -> str | None:
+def _text(channel: SdoChannel, index: int) -> str | None:
     try:
-        return channel.upload(index, 0).decode("ascii", "replace")  # type: ignore[attr-defined]
+        return channel.upload(index, 0).decode("ascii", "replace")
     except SdoError:
         return None
 

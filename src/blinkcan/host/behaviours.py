@@ -1,0 +1,97 @@
+"""Key behaviours people build on these keypads, ready made: the LED follows the state.
+
+- :class:`Momentary`: on while the key is held.
+- :class:`Toggle`: each press flips on/off.
+- :class:`Cycle`: each press steps through N states, a colour per state.
+
+They run on the bus thread (sending LED PDOs never blocks); ``on_change(state)`` is called
+there too, so hand blocking work (an SDO to a Keybox) to another thread.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from blinkcan.devices.colours import led_colour
+from blinkcan.host.keypad import PRESS, RELEASE, KeyEvent, Keypad
+from blinkcan.protocol.cob import check_range
+
+
+class _KeyBehaviour:
+    def __init__(self, keypad: Keypad, key: int, colours: Sequence[str],
+                 on_change: Callable[[int], object] | None) -> None:
+        check_range("key", key, 1, 12)
+        for colour in colours:
+            led_colour(colour)  # ValueError naming the valid colours
+        self.keypad = keypad
+        self.key = key
+        self.colours = tuple(colours)
+        self.on_change = on_change
+        self.state = 0
+        self._remove = keypad.on_key(self._on_key)
+        keypad.host.run(self._show)
+
+    def _on_key(self, event: KeyEvent) -> None:
+        if event.key == self.key:
+            self._react(event.action)
+
+    def _react(self, action: str) -> None:
+        raise NotImplementedError
+
+    def set_state(self, state: int) -> None:
+        """Set the state as the application decided (the LED follows; no on_change)."""
+        self.state = state
+        self.keypad.host.run(self._show)
+
+    def _change(self, state: int) -> None:
+        if state != self.state:
+            self.state = state
+            self._show()
+            if self.on_change is not None:
+                self.on_change(state)
+
+    def _show(self) -> None:
+        self.keypad.set_led(self.key, self.colours[self.state])
+
+    def close(self) -> None:
+        self._remove()
+
+
+class Momentary(_KeyBehaviour):
+    """State 1 while held, 0 when released."""
+
+    def __init__(self, keypad: Keypad, key: int, on: str = "green", off: str = "off",
+                 on_change: Callable[[int], object] | None = None) -> None:
+        super().__init__(keypad, key, (off, on), on_change)
+
+    def _react(self, action: str) -> None:
+        if action == PRESS:
+            self._change(1)
+        elif action == RELEASE:
+            self._change(0)
+
+
+class Toggle(_KeyBehaviour):
+    """Each press flips between 0 and 1."""
+
+    def __init__(self, keypad: Keypad, key: int, on: str = "green", off: str = "off",
+                 on_change: Callable[[int], object] | None = None) -> None:
+        super().__init__(keypad, key, (off, on), on_change)
+
+    def _react(self, action: str) -> None:
+        if action == PRESS:
+            self._change(1 - self.state)
+
+
+class Cycle(_KeyBehaviour):
+    """Each press steps to the next of ``len(colours)`` states (0, 1, ..., back to 0)."""
+
+    def __init__(self, keypad: Keypad, key: int, colours: Sequence[str],
+                 on_change: Callable[[int], object] | None = None) -> None:
+        if len(colours) < 2:
+            raise ValueError(f"a cycle needs at least 2 colours, got {len(colours)}")
+        super().__init__(keypad, key, colours, on_change)
+
+    def _react(self, action: str) -> None:
+        if action == PRESS:
+            self._change((self.state + 1) % len(self.colours))
