@@ -18,8 +18,8 @@ def keys(rig: Rig) -> list[dict[str, object]]:
 def test_identity_reads_versions_the_right_way_round(rig: Rig) -> None:
     identity = Keypad(rig.host).identity()
     assert (identity.hardware_version, identity.software_version) == ("V_01", "V2.2")
-    assert (identity.vendor_id, identity.model_id, identity.device_type) == (
-        0x3E2, "PKP2600SI", 0x000B0191)
+    assert (identity.vendor_id, identity.model_id, identity.device_type,
+            identity.serial_number) == (0x3E2, "PKP2600SI", 0x000B0191, "FFFFFFFF")
 
 
 def test_key_events_by_callback_and_iterator(rig: Rig) -> None:

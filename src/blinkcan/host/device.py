@@ -46,6 +46,7 @@ class Identity:
     model_id: str
     hardware_version: str
     software_version: str
+    serial_number: str | None = None  # the keypad's 2200h; the Keybox documents none
 
 
 @dataclass(frozen=True)
@@ -184,6 +185,8 @@ class Device:
             model_id=text("model_id"),
             hardware_version=unreversed(text("manufacturer_hardware_version")),
             software_version=unreversed(text("manufacturer_software_version")),
+            serial_number=(text("serial_number_string")
+                           if "serial_number_string" in self.description.table else None),
         )
 
     # -- settings both devices have -------------------------------------------------------------
