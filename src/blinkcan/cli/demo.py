@@ -25,7 +25,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from blinkcan.decode import FrameDescriber
+from blinkcan.decode import Decoder
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
 from blinkcan.host.keybox import FaultEvent
 from blinkcan.protocol.frame import Frame
@@ -159,7 +159,7 @@ def run_demo(console: Console, pause: float = 0.6) -> int:
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     keypad_twin, keybox_twin = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
-    describer = FrameDescriber({t.node_id: t.description for t in (keypad_twin, keybox_twin)})
+    decoder = Decoder({t.node_id: t.description for t in (keypad_twin, keybox_twin)})
     log: deque[str] = deque(maxlen=10)
     seen = {"frames": 0}
 
@@ -167,7 +167,7 @@ def run_demo(console: Console, pause: float = 0.6) -> int:
         seen["frames"] += 1
         if frame.can_id != 0x77F:  # the controller's own heartbeat would fill the log
             log.append(f"{frame.can_id:03X} {frame.data.hex(' ').upper():<23} "
-                       f"{describer.describe(frame)}")
+                       f"{decoder.decode(frame, now)}")
 
     emulator = Emulator(device_bus, [keypad_twin, keybox_twin])
     emulator.on_frame = record

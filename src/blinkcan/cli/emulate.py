@@ -10,7 +10,7 @@ import click
 from rich.console import Console
 
 from blinkcan.cli.bus_options import bus_options, parse_int
-from blinkcan.decode import FrameDescriber
+from blinkcan.decode import Decoder
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator, open_bus
 from blinkcan.twin import KeyboxTwin
@@ -79,8 +79,8 @@ def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quir
         bus = open_bus(interface, channel, bitrate)
     except (can.CanError, ValueError, ImportError, OSError) as error:
         raise click.ClickException(f"cannot open the bus: {error}") from None
-    describer = FrameDescriber({t.node_id: t.description for t in twins})
-    printer = None if quiet else _FramePrinter(console, describer)
+    decoder = Decoder({t.node_id: t.description for t in twins})
+    printer = None if quiet else _FramePrinter(console, decoder)
     emulator = Emulator(bus, twins, response_delay=response_delay)
     if printer is not None:
         emulator.on_frame = printer
@@ -96,11 +96,11 @@ def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quir
 
 
 class _FramePrinter:
-    def __init__(self, console: Console, describer: FrameDescriber) -> None:
+    def __init__(self, console: Console, decoder: Decoder) -> None:
         self.console = console
-        self.describer = describer
+        self.decoder = decoder
 
     def __call__(self, frame: Frame, sent: bool, now: float) -> Any:
         arrow = "[cyan]->[/]" if sent else "[yellow]<-[/]"
         self.console.print(f"{now:12.3f} {arrow} {frame.can_id:03X} "
-                           f"{frame.data.hex(' ').upper():<24} {self.describer.describe(frame)}")
+                           f"{frame.data.hex(' ').upper():<24} {self.decoder.decode(frame, now)}")

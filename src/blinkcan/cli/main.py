@@ -7,7 +7,7 @@ import logging
 import click
 
 from blinkcan import __version__
-from blinkcan.cli import demo, emulate
+from blinkcan.cli import convert, decode, demo, emulate, export, scan
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -22,6 +22,11 @@ def cli(verbose: int) -> None:
 
 cli.add_command(emulate.command)
 cli.add_command(demo.command)
+cli.add_command(decode.command)
+cli.add_command(export.command)
+cli.add_command(convert.convert)
+cli.add_command(convert.record)
+cli.add_command(scan.command)
 
 
 def main() -> None:

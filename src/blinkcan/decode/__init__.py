@@ -1,5 +1,5 @@
-"""Pure frame -> meaning decoding from the device descriptions."""
+"""Pure frame -> event decoding from the device descriptions."""
 
-from blinkcan.decode.describe import FrameDescriber, bit_list
+from blinkcan.decode.decoder import Decoder, Event, Kind, listing, numbers
 
-__all__ = ["FrameDescriber", "bit_list"]
+__all__ = ["Decoder", "Event", "Kind", "listing", "numbers"]

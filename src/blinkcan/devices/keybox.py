@@ -135,11 +135,11 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
 def _pdos() -> tuple[PdoLayout, ...]:
     return (
         PdoLayout("outputs", "Set output (OFF and HIGH)", RPDO1, Direction.RX, 8, (  # KBX §17
-            PdoSignal("off", "Set OFF", 0, PIN_COUNT, "output_off_mask"),
-            PdoSignal("high", "Set HIGH", 16, PIN_COUNT, "output_high_mask"),
+            PdoSignal("off", "Set OFF", 0, PIN_COUNT, "output_off_mask", item="pin"),
+            PdoSignal("high", "Set HIGH", 16, PIN_COUNT, "output_high_mask", item="pin"),
         ), min_length=4),
         PdoLayout("faults", "Fault message", TPDO1, Direction.TX, 8, (  # KBX §18
-            PdoSignal("faults", "Pins in FAULT", 0, PIN_COUNT, "output_fault_mask"),
+            PdoSignal("faults", "Pins in FAULT", 0, PIN_COUNT, "output_fault_mask", item="pin"),
         ), min_length=2),
     )
 

@@ -179,7 +179,7 @@ def _led_pdo(name: str, label: str, cob_base: int, prefix: str) -> PdoLayout:
     """200h/300h + id (PKP §11/§12, errata P7/P13): red 0-11, green 12-23, blue 24-35."""
     return PdoLayout(name, label, cob_base, Direction.RX, 8, tuple(
         PdoSignal(colour, f"{label} {colour}", shift * LED_BITS_PER_COLOUR, LED_BITS_PER_COLOUR,
-                  f"{prefix}_{colour}")
+                  f"{prefix}_{colour}", item="LED")
         for shift, colour in enumerate(("red", "green", "blue"))
     ), min_length=5)
 
@@ -187,7 +187,7 @@ def _led_pdo(name: str, label: str, cob_base: int, prefix: str) -> PdoLayout:
 def _pdos() -> tuple[PdoLayout, ...]:
     return (
         PdoLayout("key_state", "Keys state", TPDO1, Direction.TX, 5, (  # PKP §10, errata P8
-            PdoSignal("keys", "Keys pressed", 0, 16, "keys_pressed"),
+            PdoSignal("keys", "Keys pressed", 0, KEY_COUNT, "keys_pressed", item="key"),
             PdoSignal("tick", "Tick timer", 32, 8, None),
         ), min_length=2),
         _led_pdo("led_on", "Set LED on", RPDO1, "led_on"),

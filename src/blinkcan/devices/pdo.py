@@ -22,7 +22,8 @@ class PdoSignal:
     """``length`` bits at bit ``start`` (bit 0 = byte 0 bit 0, little-endian across the frame).
 
     ``entry`` names the object entry the bits carry, or None for bits that are not an object
-    (the keypad's tick timer, PKP §10).
+    (the keypad's tick timer, PKP §10). ``item`` says the bits are a mask of numbered things
+    (bit 0 = "key" 1, "LED" 1, "pin" 1), so the decoder and the DBC can name each one.
     """
 
     name: str
@@ -30,6 +31,7 @@ class PdoSignal:
     start: int
     length: int
     entry: str | None
+    item: str | None = None
 
     @property
     def mask(self) -> int:

@@ -13,7 +13,7 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import NodeIdRelative, ObjectEntry, ObjectKind
 
 
-def _variable(entry: ObjectEntry, name: str) -> Any:
+def _variable(entry: ObjectEntry, name: str, node_id: int) -> Any:
     variable: Any = cod.ODVariable(name, entry.index, entry.subindex)
     variable.data_type = int(entry.data_type)
     variable.access_type = entry.access.value
@@ -24,8 +24,10 @@ def _variable(entry: ObjectEntry, name: str) -> Any:
         variable.min, variable.max = entry.valid.low, entry.valid.high
     default = entry.default
     if isinstance(default, NodeIdRelative):
+        # python-canopen keeps the value resolved and the $NODEID form for the EDS text
         variable.relative = True
-        variable.default = default.offset
+        variable.default = default.resolve(node_id)
+        variable.default_raw = f"$NODEID+0x{default.offset:X}"
     else:
         variable.default = default
     variable.storage_location = "PERSIST_COMM" if entry.stored else "RAM"
@@ -44,11 +46,11 @@ def object_dictionary(description: DeviceDescription, node_id: int | None = None
     od.device_information.allowed_baudrates = set(bitrates)
     for obj in description.table.objects:
         if obj.kind is ObjectKind.VAR:
-            od.add_object(_variable(obj.entries[0], obj.label))
+            od.add_object(_variable(obj.entries[0], obj.label, od.node_id))
             continue
         kind = cod.ODArray if obj.kind is ObjectKind.ARRAY else cod.ODRecord
         container: Any = kind(obj.label, obj.index)
         for entry in obj.entries:
-            container.add_member(_variable(entry, entry.label))
+            container.add_member(_variable(entry, entry.label, od.node_id))
         od.add_object(container)
     return od

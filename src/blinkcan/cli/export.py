@@ -1,0 +1,36 @@
+"""``blinkcan export eds|dbc keypad|keybox [-o FILE]``: files for other tools."""
+
+from __future__ import annotations
+
+import click
+
+from blinkcan.cli.bus_options import parse_int
+from blinkcan.devices.registry import describe_device
+from blinkcan.formats.dbc import dbc_text
+from blinkcan.formats.eds import eds_text
+from blinkcan.formats.atomic import write_atomically
+
+
+@click.command("export")
+@click.argument("kind", type=click.Choice(["eds", "dbc"]))
+@click.argument("device", metavar="keypad|keybox")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="File (default: stdout).")
+@click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
+              show_default=True, help="EDS: the profile whose default values to write.")
+@click.option("--node-id", default=None, help="DBC: the node the COB-IDs are for.")
+@click.option("--manual", default=None, help="Keypad generation (manual revision), e.g. 1.1.")
+def command(kind: str, device: str, output: str | None, quirks: str, node_id: str | None,
+            manual: str | None) -> None:
+    """Write the EDS or DBC file of a device, from the same tables the twins run on."""
+    try:
+        description = describe_device(f"{device}@{manual}" if manual else device, quirks)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="DEVICE") from None
+    node = parse_int(node_id) if node_id else None
+    text = eds_text(description) if kind == "eds" else dbc_text(description, node)
+    if output is None:
+        click.echo(text, nl=False)
+    else:
+        write_atomically(output, text.encode("utf-8"))
+        click.echo(f"wrote {output}", err=True)
+

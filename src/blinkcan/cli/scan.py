@@ -1,0 +1,38 @@
+"""``blinkcan scan``: the Blink devices on a bus."""
+
+from __future__ import annotations
+
+import can
+import click
+from rich.console import Console
+from rich.table import Table
+
+from blinkcan.cli.bus_options import bus_options
+from blinkcan.host import scan
+from blinkcan.runtime import open_bus
+
+
+@click.command("scan")
+@click.option("--listen", type=float, default=0.5, show_default=True,
+              help="Seconds to listen for boot-ups and heartbeats first.")
+@bus_options
+def command(listen: float, interface: str | None, channel: str | None,
+            bitrate: int | None) -> None:
+    """Find devices: boot-up and heartbeat heard, SDO read of 1000h, 1018h, 100Bh."""
+    try:
+        bus = open_bus(interface, channel, bitrate)
+    except (can.CanError, ValueError, ImportError, OSError) as error:
+        raise click.ClickException(f"cannot open the bus: {error}") from None
+    try:
+        found = scan(bus, listen=listen)
+    finally:
+        bus.shutdown()
+    if not found:
+        raise click.ClickException("no device answered")
+    table = Table("node", "device", "model", "firmware", "hardware", "device type", "heard")
+    for device in found:
+        table.add_row(f"{device.node_id:02X}h", device.kind or "other CANopen",
+                      device.model_id or "", device.software_version or "",
+                      device.hardware_version or "", f"{device.device_type:08X}h",
+                      "yes" if device.heard else "")
+    Console().print(table)

@@ -1,0 +1,408 @@
+"""Frames -> events for both devices, with a generic CANopen fallback. Pure: no I/O, no clock.
+
+Which node is which device comes from the caller (``{0x15: "keypad"}``) or is learned from the
+bus: an SDO reply of 1000h (device type) or 100Bh (model) names the model. Everything a device
+means is read from its description in ``devices/`` (object names, PDO layouts).
+
+Per node the decoder remembers what it needs to say what changed: the keys held, and the SDO
+transfer in progress (segmented uploads are reassembled into one value).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from blinkcan.devices.keybox import describe_keybox
+from blinkcan.devices.keypad import KEY_COUNT, describe_keypad
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.objects import ObjectEntry
+from blinkcan.devices.pdo import PdoLayout
+from blinkcan.devices.registry import describe_device
+from blinkcan.protocol.abort import describe_abort
+from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.nmt import NmtCommand, NmtState
+from blinkcan.protocol.sdo import EXPEDITED_UPLOAD_COMMAND
+
+_UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
+_NMT_TEXT = {
+    NmtCommand.START: "start", NmtCommand.STOP: "stop",
+    NmtCommand.ENTER_PRE_OPERATIONAL: "enter pre-operational",
+    NmtCommand.RESET_NODE: "reset node", NmtCommand.RESET_COMMUNICATION: "reset communication",
+}
+_STATE_TEXT = {NmtState.STOPPED: "stopped", NmtState.OPERATIONAL: "operational",
+               NmtState.PRE_OPERATIONAL: "pre-operational"}
+J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")  # PKP §44
+
+
+class Kind(str, Enum):
+    NMT = "nmt"
+    SYNC = "sync"
+    BOOT_UP = "boot-up"
+    HEARTBEAT = "heartbeat"
+    PDO = "pdo"
+    SDO_READ = "sdo-read"
+    SDO_WRITE = "sdo-write"
+    SDO_VALUE = "sdo-value"
+    SDO_WRITTEN = "sdo-written"
+    SDO_SEGMENT = "sdo-segment"
+    SDO_ABORT = "sdo-abort"
+    J1939 = "j1939"
+    FRAME = "frame"
+
+
+@dataclass(frozen=True)
+class Event:
+    """What one frame meant. ``text`` is the one-line form, :meth:`to_json` the JSON form."""
+
+    time: float
+    frame: Frame
+    kind: Kind
+    text: str
+    node_id: int | None = None
+    device: str | None = None
+    fields: dict[str, Any] = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        who = f"{self.device or 'node'} {self.node_id:02X}h: " if self.node_id is not None else ""
+        return who + self.text
+
+    def to_json(self) -> dict[str, Any]:
+        frame = self.frame
+        return {
+            "time": self.time,
+            "id": frame.can_id,
+            "extended": frame.extended,
+            "data": frame.data.hex(),
+            "kind": self.kind.value,
+            "node": self.node_id,
+            "device": self.device,
+            "text": str(self),
+            **self.fields,
+        }
+
+
+def numbers(mask: int, offset: int = 1) -> list[int]:
+    """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
+    found = []
+    while mask:
+        lowest = mask & -mask
+        found.append(lowest.bit_length() - 1 + offset)
+        mask ^= lowest
+    return found
+
+
+def listing(items: list[int]) -> str:
+    return ", ".join(map(str, items)) if items else "none"
+
+
+@dataclass
+class _Transfer:
+    index: int
+    subindex: int
+    entry: ObjectEntry | None
+    writing: bool
+    buffer: bytearray = field(default_factory=bytearray)
+
+
+class Decoder:
+    """Decode frames of one bus. ``devices`` maps node ids to "keypad", "keybox" (optionally
+    "keypad@1.1") or descriptions; ``learn`` names unknown nodes from identity traffic."""
+
+    def __init__(self, devices: dict[int, str | DeviceDescription] | None = None,
+                 learn: bool = True) -> None:
+        self.learn = learn
+        self.devices: dict[int, DeviceDescription] = {}
+        for node, device in (devices or {}).items():
+            self.devices[node] = device if isinstance(device, DeviceDescription) else \
+                describe_device(device)
+        self._keys: dict[int, int] = {}
+        self._transfers: dict[int, _Transfer] = {}
+        self._routes: dict[tuple[int, bool], Callable[[Frame, float], Event]] = {}
+        self._device_types = {d.table["device_type"].default: d for d in
+                              (describe_keypad(), describe_keybox())}
+        self._model_ids = {d.table["model_id"].default: d for d in self._device_types.values()}
+
+    def device(self, node_id: int) -> DeviceDescription | None:
+        return self.devices.get(node_id)
+
+    def decode(self, frame: Frame, time: float = 0.0) -> Event:
+        """The event one frame makes (every frame makes one)."""
+        route = self._routes.get((frame.can_id, frame.extended))
+        if route is None:
+            route = self._route(frame)
+            self._routes[frame.can_id, frame.extended] = route
+        return route(frame, time)
+
+    # -- routing ----------------------------------------------------------------------------------
+
+    def _route(self, frame: Frame) -> Callable[[Frame, float], Event]:
+        if frame.extended:
+            return self._extended
+        can_id = frame.can_id
+        if can_id == NMT:
+            return self._nmt
+        if can_id == SYNC:
+            return lambda f, t: Event(t, f, Kind.SYNC, "SYNC")
+        function, node = can_id & 0x780, can_id & 0x7F
+        if function == HEARTBEAT and node:
+            return self._heartbeat
+        if function in (SDO_TX, SDO_RX) and node:
+            return self._sdo
+        device = self.devices.get(node)
+        if device is not None:
+            for layout in device.pdos:
+                if layout.cob_id(node) == can_id:
+                    return self._pdo_route(layout, node, device.kind)
+        return self._unknown
+
+    def _forget_routes(self, node: int) -> None:
+        """A node's model became known: its PDO routes change."""
+        for key in [k for k in self._routes if not k[1] and k[0] & 0x7F == node]:
+            del self._routes[key]
+
+    def _who(self, node: int) -> str | None:
+        device = self.devices.get(node)
+        return device.kind if device is not None else None
+
+    # -- services ---------------------------------------------------------------------------------
+
+    def _nmt(self, frame: Frame, time: float) -> Event:
+        data = frame.data
+        if len(data) < 2:
+            return Event(time, frame, Kind.FRAME, "NMT frame too short")
+        try:
+            command = NmtCommand(data[0])
+            text = _NMT_TEXT[command]
+        except ValueError:
+            text = "stop (legacy 00h)" if data[0] == 0 else f"command {data[0]:02X}h"
+        node = data[1]
+        target = "all nodes" if node == 0 else f"{self._who(node) or 'node'} {node:02X}h"
+        return Event(time, frame, Kind.NMT, f"NMT {text}, {target}",
+                     fields={"command": text, "target": node})
+
+    def _heartbeat(self, frame: Frame, time: float) -> Event:
+        node = frame.can_id & 0x7F
+        device = self._who(node)
+        if not frame.data:
+            return Event(time, frame, Kind.FRAME, "empty heartbeat", node, device)
+        code = frame.data[0]
+        if code == NmtState.BOOT_UP:
+            self._keys.pop(node, None)
+            return Event(time, frame, Kind.BOOT_UP, "boot-up", node, device)
+        state = _STATE_TEXT.get(code, f"state {code:02X}h")  # type: ignore[call-overload]
+        return Event(time, frame, Kind.HEARTBEAT, f"heartbeat, {state}", node, device,
+                     {"state": state})
+
+    def _extended(self, frame: Frame, time: float) -> Event:
+        if (frame.can_id & 0x03FFFF00) == 0x00EF2100 and frame.data == J1939_RETURN_DATA:
+            return Event(time, frame, Kind.J1939, "J1939: keypads return to CANopen (PKP §44)")
+        return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+
+    def _unknown(self, frame: Frame, time: float) -> Event:
+        node = frame.can_id & 0x7F
+        return Event(time, frame, Kind.FRAME, f"frame {frame.can_id:03X}h", node or None,
+                     self._who(node))
+
+    # -- PDOs -------------------------------------------------------------------------------------
+
+    def _pdo_route(self, layout: PdoLayout, node: int, device: str
+                   ) -> Callable[[Frame, float], Event]:
+        describe = _PDO_TEXT.get(layout.name, _generic_pdo)
+
+        def route(frame: Frame, time: float) -> Event:
+            if len(frame.data) < layout.min_length:
+                return Event(time, frame, Kind.FRAME, f"{layout.label}: too short", node, device)
+            values = layout.decode(frame.data)
+            text, fields = describe(self, node, values)
+            return Event(time, frame, Kind.PDO, text, node, device,
+                         {"pdo": layout.name, **fields})
+
+        return route
+
+    def _key_state(self, node: int, values: dict[str, int]) -> tuple[str, dict[str, Any]]:
+        keys = values["keys"] & ((1 << KEY_COUNT) - 1)
+        before = self._keys.get(node, 0)
+        self._keys[node] = keys
+        pressed, released = numbers(keys & ~before), numbers(before & ~keys)
+        held = numbers(keys)
+        parts = []
+        if pressed:
+            parts.append(f"key {listing(pressed)} pressed")
+        if released:
+            parts.append(f"key {listing(released)} released")
+        text = "; ".join(parts) if parts else f"keys held: {listing(held)}"
+        return text, {"pressed": pressed, "released": released, "held": held,
+                      "tick": values["tick"]}
+
+    # -- SDO --------------------------------------------------------------------------------------
+
+    def _sdo(self, frame: Frame, time: float) -> Event:
+        node = frame.can_id & 0x7F
+        data = frame.data
+        device = self.devices.get(node)
+        kind = device.kind if device is not None else None
+        if frame.can_id & 0x780 == SDO_RX:
+            if len(data) < 8:  # read as the devices do: padded with zeros (errata P10)
+                data = data + bytes(8 - len(data))
+            return self._sdo_request(frame, data, time, node, device)
+        if len(data) < 8:
+            return Event(time, frame, Kind.FRAME, "SDO reply shorter than 8 bytes", node, kind)
+        return self._sdo_reply(frame, time, node, device)
+
+    def _entry(self, device: DeviceDescription | None, index: int, sub: int) -> ObjectEntry | None:
+        return device.table.get(index, sub) if device is not None else None
+
+    @staticmethod
+    def _name(index: int, sub: int, entry: ObjectEntry | None) -> str:
+        return f"{index:04X}h/{sub:02X}" + (f" {entry.label}" if entry else "")
+
+    def _sdo_request(self, frame: Frame, data: bytes, time: float, node: int,
+                     device: DeviceDescription | None) -> Event:
+        command, ccs = data[0], data[0] >> 5
+        kind = device.kind if device is not None else None
+        if ccs in (1, 2, 4):
+            index, sub = data[1] | data[2] << 8, data[3]
+            entry = self._entry(device, index, sub)
+            name = self._name(index, sub, entry)
+            fields = {"index": index, "subindex": sub, "object": entry.name if entry else None}
+            if ccs == 2:
+                self._transfers[node] = _Transfer(index, sub, entry, False)
+                return Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
+            if ccs == 4:
+                self._transfers.pop(node, None)
+                code = int.from_bytes(data[4:8], "little")
+                return Event(time, frame, Kind.SDO_ABORT, f"SDO abort {name} by the client: "
+                             f"{describe_abort(code)}", node, kind, {**fields, "code": code})
+            self._transfers[node] = _Transfer(index, sub, entry, True)
+            if not command & 0x02:
+                return Event(time, frame, Kind.SDO_WRITE, f"SDO segmented write {name}", node,
+                             kind, fields)
+            size = 4 - ((command >> 2) & 3) if command & 1 else 4
+            raw = data[4 : 4 + size]
+            value = entry.decode(raw) if entry is not None else int.from_bytes(raw, "little")
+            if index == 0x20FF and sub == 1 and value == 1:
+                text = "switch to J1939 (PKP §44)"
+                return Event(time, frame, Kind.J1939, text, node, kind, {**fields, "value": 1})
+            return Event(time, frame, Kind.SDO_WRITE, f"SDO write {name} = {_show(value)}",
+                         node, kind, {**fields, "value": value})
+        if ccs == 3:
+            return Event(time, frame, Kind.SDO_SEGMENT, "SDO read, next segment", node, kind)
+        if ccs == 0:
+            transfer = self._transfers.get(node)
+            if transfer is not None:
+                transfer.buffer += data[1 : 8 - ((command >> 1) & 7)]
+            return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment", node, kind)
+        return Event(time, frame, Kind.FRAME, f"SDO request {command:02X}h", node, kind)
+
+    def _sdo_reply(self, frame: Frame, time: float, node: int,
+                   device: DeviceDescription | None) -> Event:
+        data = frame.data
+        command = data[0]
+        kind = device.kind if device is not None else None
+        transfer = self._transfers.get(node)
+        if command == 0x80:
+            self._transfers.pop(node, None)
+            index, sub = data[1] | data[2] << 8, data[3]
+            code = int.from_bytes(data[4:8], "little")
+            name = self._name(index, sub, self._entry(device, index, sub))
+            return Event(time, frame, Kind.SDO_ABORT,
+                         f"SDO abort {name}: {code:08X}h {describe_abort(code)}", node, kind,
+                         {"index": index, "subindex": sub, "code": code,
+                          "meaning": describe_abort(code)})
+        if transfer is None:
+            return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+        name = self._name(transfer.index, transfer.subindex, transfer.entry)
+        fields: dict[str, Any] = {"index": transfer.index, "subindex": transfer.subindex,
+                                  "object": transfer.entry.name if transfer.entry else None}
+        if transfer.writing and command in (0x60, 0x43) and data[1:4] == \
+                bytes((transfer.index & 0xFF, transfer.index >> 8, transfer.subindex)):
+            self._transfers.pop(node, None)  # errata K3: 43h acknowledges too
+            return Event(time, frame, Kind.SDO_WRITTEN, f"SDO write {name} done", node, kind,
+                         fields)
+        if command in _UPLOAD_SIZES and not transfer.writing:
+            self._transfers.pop(node, None)
+            return self._value(frame, time, node, kind, transfer,
+                               bytes(data[4 : 4 + _UPLOAD_SIZES[command]]), name, fields)
+        if command == 0x41 and not transfer.writing:
+            size = int.from_bytes(data[4:8], "little")
+            return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: {size} bytes follow",
+                         node, kind, {**fields, "size": size})
+        if command >> 5 == 0 and not transfer.writing:
+            transfer.buffer += data[1 : 8 - ((command >> 1) & 7)]
+            if command & 1:
+                self._transfers.pop(node, None)
+                return self._value(frame, time, node, kind, transfer, bytes(transfer.buffer),
+                                   name, fields)
+            return Event(time, frame, Kind.SDO_SEGMENT,
+                         f"SDO read {name}: segment {bytes(data[1:8])!r}", node, kind, fields)
+        if command >> 5 == 1 and transfer.writing:
+            return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment acknowledged", node,
+                         kind, fields)
+        return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+
+    def _value(self, frame: Frame, time: float, node: int, kind: str | None,
+               transfer: _Transfer, raw: bytes, name: str, fields: dict[str, Any]) -> Event:
+        entry = transfer.entry
+        value: int | str
+        if entry is not None:
+            value = entry.decode(raw)
+        elif transfer.index in (0x1008, 0x1009, 0x100A, 0x100B, 0x2200):
+            value = raw.decode("ascii", "replace")
+        else:
+            value = int.from_bytes(raw, "little")
+        self._learn(node, transfer.index, value)
+        kind = self._who(node)
+        return Event(time, frame, Kind.SDO_VALUE, f"SDO value {name} = {_show(value)}", node,
+                     kind, {**fields, "value": value})
+
+    def _learn(self, node: int, index: int, value: int | str) -> None:
+        if not self.learn or node in self.devices:
+            return
+        device = None
+        if index == 0x1000 and isinstance(value, int):
+            device = self._device_types.get(value)
+        elif index == 0x100B and isinstance(value, str):
+            device = self._model_ids.get(value)
+        if device is not None:
+            self.devices[node] = device
+            self._forget_routes(node)
+
+
+def _show(value: int | str) -> str:
+    return repr(value) if isinstance(value, str) else f"{value:X}h"
+
+
+def _generic_pdo(decoder: Decoder, node: int, values: dict[str, int]
+                 ) -> tuple[str, dict[str, Any]]:
+    return ", ".join(f"{k} {v}" for k, v in values.items()), dict(values)
+
+
+def _leds(verb: str) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
+    def describe(decoder: Decoder, node: int, values: dict[str, int]
+                 ) -> tuple[str, dict[str, Any]]:
+        lit = {colour: numbers(values[colour]) for colour in ("red", "green", "blue")}
+        parts = [f"{colour} {listing(keys)}" for colour, keys in lit.items() if keys]
+        return f"{verb}: {'; '.join(parts) if parts else 'none'}", lit
+
+    return describe
+
+
+_PDO_TEXT: dict[str, Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]] = {
+    "key_state": lambda d, n, v: d._key_state(n, v),
+    "led_on": _leds("LEDs on"),
+    "led_blink": _leds("LEDs blink"),
+    "indicator_brightness": lambda d, n, v: (f"indicator brightness {v['level']}/63",
+                                             {"level": v["level"]}),
+    "backlight_brightness": lambda d, n, v: (f"backlight brightness {v['level']}/63",
+                                             {"level": v["level"]}),
+    "outputs": lambda d, n, v: (
+        f"outputs OFF: {listing(numbers(v['off']))}; HIGH: "
+        f"{listing(numbers(v['high'] & ~v['off']))}",  # KBX §17: OFF wins
+        {"off": numbers(v["off"]), "high": numbers(v["high"] & ~v["off"])}),
+    "faults": lambda d, n, v: (f"outputs in FAULT: {listing(numbers(v['faults']))}",
+                               {"faults": numbers(v["faults"])}),
+}

@@ -1,0 +1,80 @@
+"""Frames from and to files: every log format python-can reads and writes (ASC, BLF, candump,
+TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from types import TracebackType
+
+import can
+
+from blinkcan.formats.atomic import write_atomically
+from blinkcan.formats.pcap import is_pcap, read_pcap, write_pcap
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime.canbus import to_frame, to_message
+
+
+class LogError(ValueError):
+    """A file that cannot be read or written as a CAN log."""
+
+
+def read_frames(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame]]:
+    """(timestamp, frame) pairs of a log file; error and remote frames are skipped."""
+    source = Path(path)
+    if not source.is_file():
+        raise LogError(f"no such file: {source}")
+    if is_pcap(source):
+        with source.open("rb") as stream:
+            yield from read_pcap(stream)
+        return
+    try:
+        reader = can.LogReader(str(source))
+    except ValueError as error:
+        raise LogError(f"{source}: {error}") from None
+    with contextlib.closing(reader):
+        for message in reader:
+            frame = to_frame(message)
+            if frame is not None:
+                yield message.timestamp, frame
+
+
+class FrameWriter:
+    """Write frames to ``path`` in the format its name says (.pcap, or python-can's formats)."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = Path(path)
+        self._pcap: list[tuple[float, Frame]] | None = [] if is_pcap(self.path) else None
+        self._logger: can.Listener | None = None
+        if self._pcap is None:
+            try:
+                self._logger = can.Logger(str(self.path))
+            except ValueError as error:
+                raise LogError(f"{self.path}: {error}") from None
+        self.count = 0
+
+    def write(self, timestamp: float, frame: Frame) -> None:
+        self.count += 1
+        if self._pcap is not None:
+            self._pcap.append((timestamp, frame))
+        else:
+            assert self._logger is not None
+            self._logger.on_message_received(to_message(frame, timestamp))
+
+    def close(self) -> None:
+        if self._pcap is not None:
+            buffer = io.BytesIO()
+            write_pcap(buffer, self._pcap)
+            write_atomically(self.path, buffer.getvalue())
+        elif self._logger is not None:
+            self._logger.stop()
+
+    def __enter__(self) -> FrameWriter:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 trace: TracebackType | None) -> None:
+        self.close()

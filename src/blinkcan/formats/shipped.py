@@ -1,0 +1,13 @@
+"""The EDS files shipped in the package (``blinkcan/data``), one per model, firmware profile."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+from blinkcan.devices.model import DeviceDescription
+
+
+def shipped_eds(description: DeviceDescription) -> Path:
+    """Path of the shipped EDS file of ``description``'s model."""
+    return Path(str(resources.files("blinkcan") / "data" / f"{description.model}.eds"))
