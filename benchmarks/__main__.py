@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from benchmarks import emulator_capacity, sdo_roundtrip, sdo_twin
+from benchmarks import decode_log, emulator_capacity, sdo_roundtrip, sdo_twin
 
 
 def main() -> None:
@@ -14,6 +14,7 @@ def main() -> None:
     sdo_twin.main(smoke=args.smoke)
     sdo_roundtrip.main(smoke=args.smoke)
     emulator_capacity.main(smoke=args.smoke)
+    decode_log.main(smoke=args.smoke)
 
 
 main()

@@ -5,8 +5,11 @@ from __future__ import annotations
 import json
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from blinkcan.decode import Decoder, Kind
+from blinkcan.protocol import Frame
 from tests.conftest import frame
 
 
@@ -122,3 +125,34 @@ def test_json_form_is_one_object_with_the_meaning(decoder: Decoder) -> None:
 def test_unknown_device_names_are_refused(spec: str, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Decoder({1: spec})
+
+
+def test_json_lines_equal_the_event_json_cached_or_not() -> None:
+    from tests.cli.session import session
+
+    fast, plain = Decoder(), Decoder()
+    for _ in range(3):  # the second and third rounds hit the cache for pure frames
+        for timestamp, item in session():
+            assert json.loads(fast.json_line(item, timestamp + 0.5)) == \
+                plain.decode(item, timestamp + 0.5).to_json()
+
+
+_frames = st.one_of(
+    st.builds(lambda keys, tick, short: Frame(0x195, (keys.to_bytes(2, "little") + bytes(2)
+                                                       + bytes((tick,)))[: 1 if short else 5]),
+              st.integers(0, 0x1FFF), st.integers(0, 3), st.booleans()),
+    st.sampled_from([Frame(0x715, b"\x00"), Frame(0x715, b"\x05"), Frame(0x70C, b"\x7f"),
+                     Frame(0x215, bytes.fromhex("4200000000000000")),
+                     Frame(0x615, bytes.fromhex("4000100000000000")),
+                     Frame(0x595, bytes.fromhex("4300100091010B00"))]),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(_frames, max_size=60))
+def test_cached_json_lines_always_equal_the_plain_decoding(frames: list[Frame]) -> None:
+    fast, plain = Decoder({0x15: "keypad", 0x0C: "keybox"}), Decoder({0x15: "keypad",
+                                                                       0x0C: "keybox"})
+    for i, item in enumerate(frames * 2):  # the second pass hits the caches
+        assert json.loads(fast.json_line(item, i / 8)) == json.loads(
+            json.dumps(plain.decode(item, i / 8).to_json()))

@@ -41,7 +41,7 @@ def test_import_od_reads_the_eds_back_identically(device: str, tmp_path: Path) -
     ours, theirs = object_dictionary(description, node), import_od(str(path), node)
 
     def entries(od: canopen.ObjectDictionary) -> dict[tuple[int, int], tuple[object, ...]]:
-        found = {}
+        found: dict[tuple[int, int], tuple[object, ...]] = {}
         for obj in od.values():
             for var in (obj.values() if hasattr(obj, "subindices") else [obj]):
                 found[var.index, var.subindex] = (var.name, var.data_type, var.access_type,
@@ -101,15 +101,23 @@ def test_a_remote_node_from_the_shipped_eds_reads_every_object(device: str,
 ])
 def test_cantools_decodes_the_manual_pdo_examples(device: str, text: str,
                                                   expected: dict[str, int]) -> None:
-    database = cantools.database.load_string(dbc_text(describe_device(device)))
+    database = _load(device)
     example = frame(text)
     decoded = database.decode_message(example.can_id, example.data)
+    assert isinstance(decoded, dict)
     assert {name: value for name, value in decoded.items() if value} == expected
 
 
+def _load(device: str) -> cantools.database.can.Database:
+    database = cantools.database.load_string(dbc_text(describe_device(device)))
+    assert isinstance(database, cantools.database.can.Database)
+    return database
+
+
 def test_dbc_heartbeat_states() -> None:
-    database = cantools.database.load_string(dbc_text(describe_device("keybox")))
-    assert str(database.decode_message(0x70C, b"\x7f")["state"]) == "pre_operational"
+    decoded = _load("keybox").decode_message(0x70C, b"\x7f")
+    assert isinstance(decoded, dict)
+    assert str(decoded["state"]) == "pre_operational"
 
 
 FRAMES = [(1.5, Frame(0x715, b"\x00")), (1.500001, Frame(0x615, bytes.fromhex("4000100000000000"))),

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import sys
 
 import click
@@ -47,10 +46,9 @@ def command(file: str, as_json: bool, devices: tuple[str, ...]) -> None:
                             console=Console(stderr=True), transient=True)
     try:
         if as_json:
-            dumps = json.JSONEncoder(separators=(",", ":")).encode
+            json_line = decoder.json_line
             for timestamp, frame in read_frames(file):
-                write(dumps(decoder.decode(frame, timestamp).to_json()))
-                write("\n")
+                write(json_line(frame, timestamp) + "\n")
             return
         task = progress.add_task("decode") if progress is not None else None
         if progress is not None:

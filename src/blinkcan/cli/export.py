@@ -6,9 +6,9 @@ import click
 
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.devices.registry import describe_device
+from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.dbc import dbc_text
 from blinkcan.formats.eds import eds_text
-from blinkcan.formats.atomic import write_atomically
 
 
 @click.command("export")

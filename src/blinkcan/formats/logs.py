@@ -3,7 +3,6 @@ TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link
 
 from __future__ import annotations
 
-import contextlib
 import io
 import os
 from collections.abc import Iterator
@@ -15,7 +14,7 @@ import can
 from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.pcap import is_pcap, read_pcap, write_pcap
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import to_frame, to_message
+from blinkcan.runtime.canbus import to_message
 
 
 class LogError(ValueError):
@@ -35,11 +34,13 @@ def read_frames(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame]]:
         reader = can.LogReader(str(source))
     except ValueError as error:
         raise LogError(f"{source}: {error}") from None
-    with contextlib.closing(reader):
+    trusted = Frame.trusted  # python-can parsed and checked the frames
+    with reader:
         for message in reader:
-            frame = to_frame(message)
-            if frame is not None:
-                yield message.timestamp, frame
+            if message.is_error_frame or message.is_remote_frame or message.dlc > 8:
+                continue  # as runtime.to_frame: data frames of classic CAN only
+            yield message.timestamp, trusted(message.arbitration_id, bytes(message.data),
+                                             message.is_extended_id)
 
 
 class FrameWriter:

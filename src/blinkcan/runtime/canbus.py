@@ -23,7 +23,11 @@ def to_frame(message: can.Message) -> Frame | None:
     """A data frame as :class:`Frame`; None for remote, error and CAN FD frames over 8 bytes."""
     if message.is_error_frame or message.is_remote_frame or message.dlc > 8:
         return None
-    return Frame(message.arbitration_id, bytes(message.data), message.is_extended_id)
+    data = message.data
+    if len(data) > 8:
+        return None
+    # python-can checked the identifier; Frame.trusted skips checking it again
+    return Frame.trusted(message.arbitration_id, bytes(data), message.is_extended_id)
 
 
 def open_bus(interface: str | None = None, channel: str | None = None,
