@@ -22,19 +22,15 @@ import click
 from rich.console import Console, Group
 from rich.live import Live
 from rich.panel import Panel
-from rich.table import Table
 from rich.text import Text
 
+from blinkcan.cli.render import keybox_panel, keypad_panel
 from blinkcan.decode import Decoder
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
 from blinkcan.host.keybox import FaultEvent
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin, KeypadTwin
-
-_STYLE = {"off": "grey35", "red": "red", "green": "green", "blue": "blue", "yellow": "yellow",
-          "cyan": "cyan", "magenta": "magenta", "white": "white"}
-_PIN_STYLE = {"off": "grey50", "high": "bold green", "fault": "bold red"}
 
 
 class Controller:
@@ -121,37 +117,20 @@ SCRIPT = (
 )
 
 
-def _key_cell(key: dict[str, object]) -> Text:
-    """"[ 4 green]", "[ 4 ~red]" for blinking: colour by name too, for plain terminals."""
-    lit, blink = str(key["colour"]), str(key["blink_colour"])
-    if blink != "off":
-        label, style = f"~{blink}", _STYLE[blink]
-    else:
-        label, style = ("" if lit == "off" else lit), _STYLE[lit]
-    return Text(f"[{key['key']:>2} {label:<6}]", style=f"bold {style}")
-
-
 def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, object],
           log: deque[str]) -> Group:
-    grid = Table.grid(padding=(0, 1))
     keys = keypad["keys"]
-    assert isinstance(keys, list)
-    for row in (keys[:6], keys[6:]):
-        grid.add_row(*(_key_cell(key) for key in row))
-    outputs = Text()
     pins = keybox["pins"]
+    assert isinstance(keys, list)
     assert isinstance(pins, list)
-    for pin in pins:
-        outputs.append(f" {pin['pin']}:{pin['state'].upper()}", style=_PIN_STYLE[pin["state"]])
-        if pin["fuse"] == "blown":
-            outputs.append("(fuse blown)", style="red")
-    frames = Text("\n".join(log), style="grey70")
     return Group(
         Text(header, style="cyan"),
         Text(title, style="bold"),
-        Panel(grid, title=f"keypad 15h, {keypad['nmt_state']} (~ blinking)", expand=False),
-        Panel(outputs, title=f"Keybox 0Ch, {keybox['nmt_state']}", expand=False),
-        Panel(frames, title="last frames on the bus", expand=False),
+        keypad_panel(((k["key"], k["colour"], k["blink_colour"], k["pressed"]) for k in keys),
+                     f"keypad 15h, {keypad['nmt_state']} (~ blinking)"),
+        keybox_panel(((p["pin"], p["state"], p["fuse"] == "blown") for p in pins),
+                     f"Keybox 0Ch, {keybox['nmt_state']}"),
+        Panel(Text("\n".join(log), style="grey70"), title="last frames on the bus", expand=False),
     )
 
 

@@ -7,7 +7,7 @@ import logging
 import click
 
 from blinkcan import __version__
-from blinkcan.cli import convert, decode, demo, emulate, export, scan
+from blinkcan.cli import control, convert, decode, demo, emulate, export, monitor, scan
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -27,6 +27,9 @@ cli.add_command(export.command)
 cli.add_command(convert.convert)
 cli.add_command(convert.record)
 cli.add_command(scan.command)
+cli.add_command(monitor.command)
+cli.add_command(control.keypad)
+cli.add_command(control.keybox)
 
 
 def main() -> None:

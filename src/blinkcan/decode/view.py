@@ -1,0 +1,110 @@
+"""What the bus says about each device, followed event by event (for ``blinkcan monitor``).
+
+Only what traffic shows: NMT state from heartbeats, the keypad's LED picture from its LED
+PDOs, the keys held from its key-state PDOs, the Keybox's outputs as commanded (RPDO, 2001h and
+2008h writes) and as reported (the fault PDO, 2008h reads).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from blinkcan.decode.decoder import Event, Kind
+from blinkcan.devices.colours import channel_name
+
+KEYS, PINS = 12, 13
+_NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
+               "enter pre-operational": "pre-operational"}
+
+
+@dataclass
+class NodeView:
+    node_id: int
+    device: str | None = None
+    state: str = "unknown"
+    leds: dict[str, list[int]] = field(default_factory=dict)  # colour -> keys lit
+    blink: dict[str, list[int]] = field(default_factory=dict)
+    held: list[int] = field(default_factory=list)
+    outputs: dict[int, str] = field(default_factory=lambda: dict.fromkeys(range(1, PINS + 1),
+                                                                           "off"))
+
+    def key_colours(self) -> list[tuple[int, str, str]]:
+        """(key, steady colour, blink colour) for keys 1..12."""
+        def colour(picture: dict[str, list[int]], key: int) -> str:
+            channels = sum(bit for name, bit in (("red", 1), ("green", 2), ("blue", 4))
+                           if key in picture.get(name, []))
+            return channel_name(channels)
+
+        return [(key, colour(self.leds, key), colour(self.blink, key))
+                for key in range(1, KEYS + 1)]
+
+
+class BusView:
+    def __init__(self) -> None:
+        self.nodes: dict[int, NodeView] = {}
+
+    def node(self, node_id: int) -> NodeView:
+        view = self.nodes.get(node_id)
+        if view is None:
+            view = self.nodes[node_id] = NodeView(node_id)
+        return view
+
+    def update(self, event: Event) -> None:
+        if event.kind is Kind.NMT:
+            state = _NMT_STATES.get(event.fields.get("command", ""))
+            target = event.fields.get("target", 0)
+            targets = self.nodes.values() if target == 0 else [self.node(target)]
+            if state is not None:
+                for view in targets:
+                    view.state = state
+            return
+        if event.node_id is None:
+            return
+        view = self.node(event.node_id)
+        view.device = event.device or view.device
+        fields = event.fields
+        if event.kind is Kind.BOOT_UP:
+            view.state, view.leds, view.blink, view.held = "pre-operational", {}, {}, []
+            view.outputs = dict.fromkeys(range(1, PINS + 1), "off")
+        elif event.kind is Kind.HEARTBEAT:
+            view.state = fields.get("state", view.state)
+        elif event.kind is Kind.PDO:
+            self._pdo(view, fields)
+        elif event.kind in (Kind.SDO_WRITE, Kind.SDO_VALUE):
+            self._object(view, event.kind, fields)
+
+    @staticmethod
+    def _pdo(view: NodeView, fields: dict[str, object]) -> None:
+        name = fields.get("pdo")
+        if name == "led_on":
+            view.leds = {c: list(fields[c]) for c in ("red", "green", "blue")}  # type: ignore[call-overload]
+        elif name == "led_blink":
+            view.blink = {c: list(fields[c]) for c in ("red", "green", "blue")}  # type: ignore[call-overload]
+        elif name == "key_state":
+            view.held = list(fields["held"])  # type: ignore[call-overload]
+        elif name == "outputs":
+            for pin in fields["off"]:  # type: ignore[attr-defined]
+                if view.outputs[pin] != "fault":
+                    view.outputs[pin] = "off"
+            for pin in fields["high"]:  # type: ignore[attr-defined]
+                if view.outputs[pin] != "fault":
+                    view.outputs[pin] = "high"
+        elif name == "faults":
+            for pin in range(1, PINS + 1):
+                if pin in fields["faults"]:  # type: ignore[operator]
+                    view.outputs[pin] = "fault"
+                elif view.outputs[pin] == "fault":
+                    view.outputs[pin] = "off"
+
+    @staticmethod
+    def _object(view: NodeView, kind: Kind, fields: dict[str, object]) -> None:
+        index, sub, value = fields.get("index"), fields.get("subindex"), fields.get("value")
+        if view.device != "keybox" or not isinstance(value, int) or not isinstance(sub, int):
+            return
+        if index == 0x2001 and 1 <= sub <= PINS and kind is Kind.SDO_WRITE:
+            view.outputs[sub] = {0: "off", 1: "high", 2: "off"}.get(value, view.outputs[sub])
+        elif index == 0x2008 and sub in (1, 2, 3):
+            state = {1: "off", 2: "high", 3: "fault"}[sub]
+            for pin in range(1, PINS + 1):
+                if value >> (pin - 1) & 1:
+                    view.outputs[pin] = state
