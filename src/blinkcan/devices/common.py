@@ -19,6 +19,8 @@ from blinkcan.devices.objects import (
 
 #: 1017h and periodic timers (errata P1, P2, K17): 0 = off; upper bound FEFFh = 65279 ms.
 TIMER_MS_MAX = 0xFEFF
+#: 1011h sub 01h signature "load" (KBX §36, PKP rev 1.5 §34): UNSIGNED32 of 6C 6F 61 64
+RESTORE_SIGNATURE = int.from_bytes(b"load", "little")
 
 
 def device_type(value: int) -> ObjectDef:

@@ -45,8 +45,6 @@ FAULT_PERIOD_UNIT_S = 0.01  # errata K4: 2012h counts 10 ms
 
 #: 2001h pin state codes (KBX §19)
 PIN_OFF, PIN_HIGH, PIN_RESET, PIN_FAULT = 0x00, 0x01, 0x02, 0x03
-#: 1011h sub 01h signature "load" (KBX §36), as the little-endian UNSIGNED32 of 6C 6F 61 64
-RESTORE_SIGNATURE = int.from_bytes(b"load", "little")
 
 #: 2010h codes (KBX §23, errata B1)
 BITRATES = {0x00: 125_000, 0x01: 250_000, 0x02: 500_000}

@@ -6,6 +6,8 @@ contradicts itself the errata.md decision is applied and cited.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from blinkcan.devices.common import (
     TIMER_MS_MAX,
     device_type,
@@ -36,7 +38,7 @@ from blinkcan.protocol.nmt import NmtCommand
 
 MODEL = "pkp-2600-si"
 KIND = "keypad"
-GENERATIONS = ("1.1",)
+GENERATIONS = ("1.1", "1.5")
 KEY_COUNT = 12
 DEFAULT_NODE_ID = 0x15  # PKP §3
 VENDOR_ID = 0x000003E2  # PKP §32
@@ -66,7 +68,6 @@ PROTOCOL_CANOPEN, PROTOCOL_J1939 = 0, 1
 _LEVEL = values((0, LEVEL_MAX))
 _COLOUR = values((0x01, 0x09))  # PKP §18c/d: 01h red .. 09h yellow/green
 _FLAG = values(0, 1)
-_LED_MASK = values((0, (1 << KEY_COUNT) - 1))
 _TIMER = values(0, (10, TIMER_MS_MAX))  # errata P1/P2: 0 = off, 10..65279 ms
 
 
@@ -87,12 +88,36 @@ def _mapping(index: int, label: str, prefix: str, targets: tuple[int, ...]) -> O
     ))
 
 
-def _led_masks(index: int, prefix: str, label: str, what: str) -> ObjectDef:
-    """2001h LED on / 2002h LED blink (PKP §16, §17): one 12-bit mask per colour."""
+@dataclass(frozen=True)
+class LedField:
+    """One sub-index of 2001h/2002h as a bit field of the 36-bit LED word (PKP §11)."""
+
+    subindex: int
+    suffix: str
+    label: str
+    shift: int
+    width: int
+
+
+#: rev 1.1 §16/§17: one 12-bit mask per colour. rev 1.5 §17/§18 (rev 1.3 history): the
+#: sub-indices follow the PDO bytes: red 1-12 + green 1-4, green 5-12, blue 1-12.
+LED_FIELDS: dict[str, tuple[LedField, ...]] = {
+    "1.1": (LedField(1, "red", "red", 0, 12), LedField(2, "green", "green", 12, 12),
+            LedField(3, "blue", "blue", 24, 12)),
+    "1.5": (LedField(1, "red_green", "red 1-12, green 1-4", 0, 16),
+            LedField(2, "green", "green 5-12", 16, 8),
+            LedField(3, "blue", "blue 1-12", 24, 12)),
+}
+
+
+def _led_masks(index: int, prefix: str, label: str, what: str,
+               fields: tuple[LedField, ...]) -> ObjectDef:
+    """2001h LED on / 2002h LED blink: each sub-index a field of the LED word."""
     return record(index, prefix, label, tuple(
-        u16(sub, f"{prefix}_{colour}", f"{what} {colour}", Access.RW, 0, valid=_LED_MASK,
-            pdo_mappable=True)
-        for sub, colour in ((1, "red"), (2, "green"), (3, "blue"))
+        (u16 if f.width > 8 else u8)(f.subindex, f"{prefix}_{f.suffix}", f"{what} {f.label}",
+                                     Access.RW, 0, valid=values((0, (1 << f.width) - 1)),
+                                     pdo_mappable=True)
+        for f in fields
     ))
 
 
@@ -138,8 +163,10 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
         record(0x2000, "digital_inputs", "Digital input module, keys states", (  # PKP §15
             u16(1, "keys_pressed", "Keys pressed", Access.RO, 0, pdo_mappable=True),
         )),
-        _led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on"),
-        _led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink"),
+        _led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on",
+                   LED_FIELDS["1.1"]),
+        _led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
+                   LED_FIELDS["1.1"]),
         record(0x2003, "brightness", "Brightness level", (  # PKP §18
             u8(1, "indicator_brightness", "Indicator LED brightness", Access.RW, LEVEL_MAX,
                valid=_LEVEL, power_on_from="startup_indicator_brightness", pdo_mappable=True),
@@ -176,10 +203,11 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
 
 
 def _led_pdo(name: str, label: str, cob_base: int, prefix: str) -> PdoLayout:
-    """200h/300h + id (PKP §11/§12, errata P7/P13): red 0-11, green 12-23, blue 24-35."""
+    """200h/300h + id (PKP §11/§12, errata P7/P13): red 0-11, green 12-23, blue 24-35, the
+    same in both generations. The twin keeps this 36-bit word; 2001h/2002h are its views."""
     return PdoLayout(name, label, cob_base, Direction.RX, 8, tuple(
         PdoSignal(colour, f"{label} {colour}", shift * LED_BITS_PER_COLOUR, LED_BITS_PER_COLOUR,
-                  f"{prefix}_{colour}", item="LED")
+                  None, item="LED")
         for shift, colour in enumerate(("red", "green", "blue"))
     ), min_length=5)
 
@@ -201,6 +229,54 @@ def _pdos() -> tuple[PdoLayout, ...]:
     )
 
 
+def _rev15_table(base: ObjectTable, factory_node_id: int, quirks: Quirks) -> ObjectTable:
+    """Manual rev 1.5 (firmware V2.8) as a delta over rev 1.1 (pkp-rev1.1-vs-rev1.5.md §1)."""
+    sync_rpdo = values((0x00, 0xF0), 0xFE)  # rev 1.5 §36/§37, errata G3
+    sync_tpdo = values((0x01, 0xF0), 0xFE)  # rev 1.5 §44a: 00h not listed
+    restore_ack = 0x43 if quirks == "firmware" else 0x60  # errata G5
+    table = base.with_entries(
+        # rev 1.5 §31/§32: sent in order in both profiles (diff item 19)
+        manufacturer_hardware_version={"default": "V_01"},
+        manufacturer_software_version={"default": "V2.8"},
+        # writable, live (not stored: rev 1.5 is silent, errata lists no PDO types as stored)
+        rpdo1_transmission_type={"access": Access.RW, "valid": sync_rpdo},
+        rpdo2_transmission_type={"access": Access.RW, "valid": sync_rpdo},
+        tpdo1_transmission_type={"access": Access.RW, "valid": sync_tpdo},
+    )
+    fields = LED_FIELDS["1.5"]
+    return table.with_objects(
+        _led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on", fields),
+        _led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
+                   fields),
+        _mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", (  # rev 1.5 §40
+            mapping_value(0x2001, 1, 16), mapping_value(0x2001, 2, 8),
+            mapping_value(0x2001, 3, 16))),
+        _mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", (  # rev 1.5 §41
+            mapping_value(0x2002, 1, 16), mapping_value(0x2002, 2, 8),
+            mapping_value(0x2002, 3, 16))),
+        _mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping", (  # rev 1.5 §43
+            mapping_value(0x2003, 2, 8), mapping_value(0x2003, 3, 8))),
+        record(0x1016, "consumer_heartbeat", "Consumer heartbeat time", (  # rev 1.5 §26, G4
+            # bits 0-15 time in ms (0 = off, 10..65535), bits 16-23 node 01h-7Fh, 24-31 zero
+            u32(1, "consumer_heartbeat_time", "Consumer heartbeat time", Access.RW,
+                0x0001_0000, stored=True),
+        )),
+        record(0x1011, "restore_default_parameters", "Restore default parameters", (  # §34
+            u32(1, "restore_all_parameters", "Restore all default parameters", Access.RW, 1,
+                acknowledge=restore_ack),
+        )),
+    )
+
+
+def _rev15_pdos(pdos: tuple[PdoLayout, ...]) -> tuple[PdoLayout, ...]:
+    """rev 1.5 §15: the backlight PDO carries the colour in byte 1 (errata G2)."""
+    backlight = PdoLayout("backlight_brightness", "Backlight setting", RPDO4, Direction.RX, 8, (
+        PdoSignal("level", "Brightness level", 0, 8, "backlight_brightness"),
+        PdoSignal("colour", "Colour (00h: the default colour)", 8, 8, None),
+    ), min_length=1)
+    return tuple(backlight if p.name == "backlight_brightness" else p for p in pdos)
+
+
 def describe_keypad(
     generation: str = "1.1",
     quirks: Quirks = "firmware",
@@ -211,13 +287,16 @@ def describe_keypad(
         valid = ", ".join(GENERATIONS)
         raise ValueError(f"keypad manual must be one of {valid}, not {generation!r}")
     check_quirks(quirks)
+    table, pdos = _table(factory_node_id, quirks), _pdos()
+    if generation == "1.5":
+        table, pdos = _rev15_table(table, factory_node_id, quirks), _rev15_pdos(pdos)
     return DeviceDescription(
         model=MODEL,
         kind=KIND,
         generation=generation,
         quirks=quirks,
-        table=_table(factory_node_id, quirks),
-        pdos=_pdos(),
+        table=table,
+        pdos=pdos,
         default_node_id=DEFAULT_NODE_ID,
         bitrates=BITRATES,
         nmt_aliases={0x00: NmtCommand.STOP},  # PKP §7 "old PKP sw compatibility", errata P12

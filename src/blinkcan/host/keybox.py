@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import can
 
+from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.keybox import (
     FAULT_PERIOD_UNIT_S,
     PIN_COUNT,
@@ -23,7 +24,6 @@ from blinkcan.devices.keybox import (
     PIN_RESET,
     PWM_LEVEL_MAX,
     PWM_PINS,
-    RESTORE_SIGNATURE,
     describe_keybox,
 )
 from blinkcan.host.bus import HostBus, Timer

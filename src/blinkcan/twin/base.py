@@ -13,13 +13,15 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterable, Mapping
+from enum import Enum
 from typing import Any
 
+from blinkcan.devices.common import RESTORE_SIGNATURE, TIMER_MS_MAX
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import NMT, SDO_RX, SDO_TX, check_node_id
+from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, check_node_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import (
     PDO_ALLOWED,
@@ -60,8 +62,26 @@ def next_due(due: float, period: float, now: float) -> float:
     return due if due > now else now + period
 
 
+class ConsumerState(Enum):
+    """Heartbeat consumer (KBX §28, PKP rev 1.5 §26): monitoring starts at the first heartbeat."""
+
+    OFF = "off"
+    WAITING = "waiting"
+    ACTIVE = "active"
+    LOST = "lost"
+
+
+def split_consumer_entry(value: int) -> tuple[int, int, int]:
+    """1016h/01 (errata K8, G4): (time ms, node id, reserved byte)."""
+    return value & 0xFFFF, (value >> 16) & 0xFF, value >> 24
+
+
 class CanopenTwin:
     """The CANopen side of a Blink device; see the module docstring."""
+
+    #: 1016h: the longest consumer time in ms, and whether the device's own id may be watched
+    CONSUMER_TIME_MAX = TIMER_MS_MAX
+    CONSUMER_MAY_WATCH_ITSELF = True
 
     def __init__(self, description: DeviceDescription, node_id: int,
                  nvm: str | os.PathLike[str] | Nvm | None = None) -> None:
@@ -89,6 +109,12 @@ class CanopenTwin:
         self._heartbeat_next: float | None = None
         self._heartbeat_period = 0.0
         self._store.set_hook("producer_heartbeat_time", self._on_heartbeat_time)
+        self._consumer = ConsumerState.OFF
+        self._consumer_deadline: float | None = None
+        if "consumer_heartbeat_time" in description.table:
+            self._store.set_hook("consumer_heartbeat_time", self._on_consumer_time)
+        if "restore_all_parameters" in description.table:
+            self._store.set_hook("restore_all_parameters", self._on_restore, keeps_value=False)
 
     # -- public contract --------------------------------------------------------------------
 
@@ -144,6 +170,8 @@ class CanopenTwin:
         self._nmt = NmtState.BOOT_UP
         self._routes = {}
         self._heartbeat_next = None
+        self._consumer = ConsumerState.OFF
+        self._consumer_deadline = None
         self._sdo.reset()
         self._on_power_off()
 
@@ -169,6 +197,9 @@ class CanopenTwin:
         if due is not None and now >= due:
             frames.append(self._heartbeat_frames[self._nmt])
             self._heartbeat_next = next_due(due, self._heartbeat_period, now)
+        deadline = self._consumer_deadline
+        if deadline is not None and now >= deadline:
+            frames += self._heartbeat_lost(now)
         frames += self._on_advance(now)
         return frames
 
@@ -179,6 +210,8 @@ class CanopenTwin:
         deadlines = [d for d in self._deadlines() if d is not None]
         if self._heartbeat_next is not None:
             deadlines.append(self._heartbeat_next)
+        if self._consumer_deadline is not None:
+            deadlines.append(self._consumer_deadline)
         return min(deadlines) if deadlines else None
 
     def is_sdo_request(self, frame: Frame) -> bool:
@@ -198,6 +231,7 @@ class CanopenTwin:
             "bitrate": self.bitrate,
             "heartbeat_ms": self._store.get_int("producer_heartbeat_time"),
             "settings": self._store.stored_values(),
+            **self._consumer_snapshot(),
             **self._snapshot(),
         }
 
@@ -239,6 +273,7 @@ class CanopenTwin:
             frames.append(heartbeat_frame(self._node_id, NmtState.BOOT_UP))
         # PKP §25: "the boot-up message is regarded as first heartbeat message"
         self._schedule_heartbeat(self._store.get_int("producer_heartbeat_time"), now)
+        self._start_consumer()
         frames += self._on_boot(now, application)
         if self._store.get_int("active_on_startup"):  # PKP §21, KBX §26
             frames += self._enter(NmtState.OPERATIONAL, now)
@@ -248,6 +283,10 @@ class CanopenTwin:
         routes: dict[int, _Route] = {NMT: self._on_nmt, SDO_RX + self._node_id: self._on_sdo}
         for layout in self.description.rx_pdos:
             routes[layout.cob_id(self._node_id)] = self._rpdo_route(layout)
+        if "consumer_heartbeat_time" in self.description.table:
+            period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+            if period:
+                routes[HEARTBEAT + node] = self._on_heartbeat
         return routes
 
     def _on_nmt(self, frame: Frame, now: float) -> list[Frame]:
@@ -295,6 +334,58 @@ class CanopenTwin:
         defaults) without taking effect until the next reset."""
         self._heartbeat_period = period_ms / 1000
         self._heartbeat_next = now + self._heartbeat_period if period_ms else None
+
+    # -- consumer heartbeat and restore defaults (KBX §28/§36, PKP rev 1.5 §26/§34) ----------
+
+    def _on_consumer_time(self, value: int) -> AbortCode | None:
+        period, node, reserved = split_consumer_entry(value)
+        own = node == self._node_id and not self.CONSUMER_MAY_WATCH_ITSELF
+        if reserved or own or not 1 <= node <= 0x7F or not (
+                period == 0 or 10 <= period <= self.CONSUMER_TIME_MAX):
+            return AbortCode.INVALID_VALUE  # errata K8, G4
+        self._store.set("consumer_heartbeat_time", value)
+        self._start_consumer()
+        self._routes = self._build_routes()  # listen to the newly monitored node
+        return None
+
+    def _start_consumer(self) -> None:
+        self._consumer, self._consumer_deadline = ConsumerState.OFF, None
+        if "consumer_heartbeat_time" in self.description.table:
+            period, _, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+            if period:
+                self._consumer = ConsumerState.WAITING
+
+    def _on_heartbeat(self, frame: Frame, now: float) -> list[Frame]:
+        if self._consumer is ConsumerState.OFF or not frame.data:
+            return []
+        period, _, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+        self._consumer = ConsumerState.ACTIVE
+        self._consumer_deadline = now + period / 1000
+        return []
+
+    def _heartbeat_lost(self, now: float) -> list[Frame]:
+        # KBX §28 / PKP rev 1.5 §26 note 2: switch off, pre-operational until an NMT start,
+        # even if the producer comes back
+        self._consumer = ConsumerState.LOST
+        self._consumer_deadline = None
+        self._on_consumer_lost(now)
+        return self._enter(NmtState.PRE_OPERATIONAL, now)
+
+    def _consumer_snapshot(self) -> dict[str, Any]:
+        if "consumer_heartbeat_time" not in self.description.table:
+            return {}
+        period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
+        return {"heartbeat_consumer": {"node_id": node, "time_ms": period,
+                                       "state": self._consumer.value}}
+
+    def _on_restore(self, value: int) -> AbortCode | None:
+        if value != RESTORE_SIGNATURE:  # errata: a wrong signature aborts 0800 0020h
+            return AbortCode.CANNOT_TRANSFER
+        self._restore_factory_settings()  # applied at the next reset (errata K18, G5)
+        return None
+
+    def _on_consumer_lost(self, now: float) -> None:
+        """What the device switches off when the watched heartbeat is lost."""
 
     # -- PDO ----------------------------------------------------------------------------------
 

@@ -12,23 +12,19 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable
-from enum import Enum
 from typing import Any
 
-from blinkcan.devices.common import TIMER_MS_MAX
 from blinkcan.devices.keybox import (
     DEFAULT_NODE_ID,
     FAULT_PERIOD_UNIT_S,
     LOW_SIDE_CAPABLE,
     PIN_COUNT,
     PWM_LEVEL_MAX,
-    RESTORE_SIGNATURE,
     describe_keybox,
 )
 from blinkcan.devices.model import Quirks
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import HEARTBEAT
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState
 from blinkcan.twin.base import CanopenTwin, next_due
@@ -37,20 +33,6 @@ from blinkcan.twin.nvm import Nvm
 
 _STATE_NAMES = {PinState.OFF: "off", PinState.HIGH: "high", PinState.FAULT: "fault"}
 _PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in range(1, PIN_COUNT + 1))
-
-
-class ConsumerState(Enum):
-    """Heartbeat consumer (KBX §28): monitoring starts at the first heartbeat received."""
-
-    OFF = "off"
-    WAITING = "waiting"
-    ACTIVE = "active"
-    LOST = "lost"
-
-
-def split_consumer_entry(value: int) -> tuple[int, int, int]:
-    """1016h/01 (errata K8): (time ms, node id, reserved byte)."""
-    return value & 0xFFFF, (value >> 16) & 0xFF, value >> 24
 
 
 class KeyboxTwin(CanopenTwin):
@@ -80,16 +62,12 @@ class KeyboxTwin(CanopenTwin):
         self._fault_next: float | None = None
         self._fault_period = 0.0
         self._fault_frame_cache: Frame | None = None
-        self._consumer = ConsumerState.OFF
-        self._consumer_deadline: float | None = None
         store = self._store
         for pin in range(1, PIN_COUNT + 1):
             store.set_hook(f"pin_{pin}_state", self._pin_hook(pin), keeps_value=False)
         store.set_hook("output_off_mask", self._on_off_mask, keeps_value=False)
         store.set_hook("output_high_mask", self._on_high_mask, keeps_value=False)
         store.set_hook("pwm", self._on_pwm, keeps_value=False)
-        store.set_hook("restore_all_parameters", self._on_restore, keeps_value=False)
-        store.set_hook("consumer_heartbeat_time", self._on_consumer_time)
         store.set_hook("fault_period", self._on_fault_period)
 
     # -- fault injection and physical side ----------------------------------------------------
@@ -189,41 +167,9 @@ class KeyboxTwin(CanopenTwin):
 
     # -- restore defaults, consumer heartbeat, periodic faults -------------------------------------
 
-    def _on_restore(self, value: int) -> AbortCode | None:
-        if value != RESTORE_SIGNATURE:  # errata: a wrong signature aborts 0800 0020h
-            return AbortCode.CANNOT_TRANSFER
-        self._restore_factory_settings()  # applied at the next reset (errata K18)
-        return None
-
-    def _on_consumer_time(self, value: int) -> AbortCode | None:
-        period, node, reserved = split_consumer_entry(value)
-        if reserved or not 1 <= node <= 0x7F or not (period == 0 or 10 <= period <= TIMER_MS_MAX):
-            return AbortCode.INVALID_VALUE  # errata K8
-        self._store.set("consumer_heartbeat_time", value)
-        self._start_consumer()
-        self._routes = self._build_routes()  # listen to the newly monitored node
-        return None
-
-    def _start_consumer(self) -> None:
-        period, _, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
-        self._consumer = ConsumerState.WAITING if period else ConsumerState.OFF
-        self._consumer_deadline = None
-
-    def _on_heartbeat(self, frame: Frame, now: float) -> list[Frame]:
-        if self._consumer is ConsumerState.OFF or not frame.data:
-            return []
-        period, _, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
-        self._consumer = ConsumerState.ACTIVE
-        self._consumer_deadline = now + period / 1000
-        return []
-
-    def _heartbeat_lost(self, now: float) -> list[Frame]:
-        # KBX §28 note 2: outputs off, pre-operational until a new NMT start
-        self._consumer = ConsumerState.LOST
-        self._consumer_deadline = None
-        self.outputs.all_off()
+    def _on_consumer_lost(self, now: float) -> None:
+        self.outputs.all_off()  # KBX §28 note 2: all outputs off
         self._refresh()
-        return self._enter(NmtState.PRE_OPERATIONAL, now)
 
     def _on_fault_period(self, value: int) -> AbortCode | None:
         self._schedule_faults(value, self._now)
@@ -236,25 +182,15 @@ class KeyboxTwin(CanopenTwin):
 
     # -- CanopenTwin hooks ------------------------------------------------------------------
 
-    def _build_routes(self) -> dict[int, Any]:
-        routes = super()._build_routes()
-        period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
-        if period:
-            routes[HEARTBEAT + node] = self._on_heartbeat
-        return routes
-
     def _on_boot(self, now: float, application: bool) -> list[Frame]:
         self._fault_cob_id = self._fault_pdo.cob_id(self._node_id)
         self.outputs.power_on()  # fail-safe: every reset starts with outputs OFF
         self._refresh()
-        self._start_consumer()
         self._fault_next = None
         return []
 
     def _on_power_off(self) -> None:
         self.outputs.power_on()
-        self._consumer = ConsumerState.OFF
-        self._consumer_deadline = None
         self._fault_next = None
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
@@ -266,9 +202,6 @@ class KeyboxTwin(CanopenTwin):
 
     def _on_advance(self, now: float) -> list[Frame]:
         frames: list[Frame] = []
-        deadline = self._consumer_deadline
-        if deadline is not None and now >= deadline:
-            frames += self._heartbeat_lost(now)
         due = self._fault_next
         if due is not None and now >= due:
             frames.append(self._fault_frame())  # KBX §25 periodic fault message
@@ -276,7 +209,7 @@ class KeyboxTwin(CanopenTwin):
         return frames
 
     def _deadlines(self) -> Iterable[float | None]:
-        return (self._consumer_deadline, self._fault_next)
+        return (self._fault_next,)
 
     def next_deadline(self) -> float | None:
         # the emulator asks after every call; two timers plus the heartbeat, without lists
@@ -302,10 +235,7 @@ class KeyboxTwin(CanopenTwin):
                 "input": bool(inputs >> (pin - 1) & 1),
                 "low_side": pin in outputs.low_side,
             })
-        period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
         return {
             "pins": pins,
-            "heartbeat_consumer": {"node_id": node, "time_ms": period,
-                                   "state": self._consumer.value},
             "fault_period_ms": self._store.get_int("fault_period") * 10,
         }

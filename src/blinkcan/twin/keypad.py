@@ -1,28 +1,35 @@
-"""The PKP-2600-SI keypad twin (manual rev 1.1, `pkp-2600-si-canopen-manual.txt`).
+"""The PKP-2600-SI keypad twin: manual rev 1.1 by default, ``manual="1.5"`` for the newer
+firmware (rev 1.5, V2.8), as a small delta (pkp-rev1.1-vs-rev1.5.md, errata G1-G6).
 
-On top of :class:`CanopenTwin`: the key-state TPDO with its tick timer, LED and brightness
-objects and RPDOs, the startup LED show, DEMO mode, and the switch to J1939 and back.
+On top of :class:`CanopenTwin`: the key-state TPDO with its tick timer, the LED picture with
+2001h/2002h as views of it (their sub-index layout differs by generation), brightness and
+backlight, the startup LED show, DEMO mode, the switch to J1939 and back; generation 2 adds
+SYNC (held RPDOs, cyclic TPDO), the backlight colour in the PDO, the node id in use at once,
+and, from the base, the consumer heartbeat and restore defaults.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keypad import (
     KEY_COUNT,
+    LED_FIELDS,
+    LEVEL_MAX,
     PROTOCOL_CANOPEN,
     PROTOCOL_J1939,
     TICK_PERIOD_S,
     describe_keypad,
 )
 from blinkcan.devices.model import Quirks
+from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import NMT, check_range
+from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.nmt import NmtState, parse_nmt
+from blinkcan.protocol.nmt import NmtState, heartbeat_frame, parse_nmt
 from blinkcan.twin.base import CanopenTwin, next_due
 from blinkcan.twin.keypad_display import (
     BLINK_PERIOD_S,
@@ -30,7 +37,6 @@ from blinkcan.twin.keypad_display import (
     STARTUP_SHOWS,
     DemoMode,
     ShowPlayer,
-    led_word,
     render_key,
 )
 from blinkcan.twin.nvm import Nvm
@@ -49,8 +55,11 @@ class KeypadTwin(CanopenTwin):
     """A PKP-2600-SI that behaves on the bus as the manual describes.
 
     ``node_id`` is the unit's factory node id; ``nvm`` a path to keep its stored settings in
-    (or None for memory). ``manual`` selects the firmware generation.
+    (or None for memory). ``manual`` selects the firmware generation ("1.1" or "1.5").
     """
+
+    CONSUMER_TIME_MAX = 0xFFFF  # errata G4: 10..65535 ms (the Keybox stops at 65279)
+    CONSUMER_MAY_WATCH_ITSELF = False  # errata G4: not the keypad's own id
 
     def __init__(
         self,
@@ -70,9 +79,22 @@ class KeypadTwin(CanopenTwin):
         self._show_mode = 0
         self._demo: DemoMode | None = None
         self._j1939 = False
+        self._generation2 = manual == "1.5"
+        #: the LED picture (PKP §11 word: red 0-11, green 12-23, blue 24-35), on and blink
+        self._words = {"led_on": 0, "led_blink": 0}
+        self._held: dict[str, int] = {}  # RPDO words waiting for the next SYNC (errata G3)
+        self._syncs = 0
+        self._last_rpdo_length = 8
+        self._led_views = {f"{prefix}_{f.suffix}": (prefix, f.shift, (1 << f.width) - 1)
+                           for prefix in self._words for f in LED_FIELDS[manual]}
         store = self._store
         store.set_hook("tpdo1_event_timer", self._on_event_timer)
         store.set_hook("can_protocol", self._on_can_protocol)
+        for name in self._led_views:
+            store.set_hook(name, self._led_view_hook(name), keeps_value=False)
+        if self._generation2:
+            store.set_hook("node_id", self._on_node_id)
+            store.set_hook("tpdo1_transmission_type", self._on_tpdo_type)
 
     # -- physical side ------------------------------------------------------------------------
 
@@ -100,8 +122,9 @@ class KeypadTwin(CanopenTwin):
         self._store.set("keys_pressed", keys)
         if down and self._demo is not None:
             self._demo.press(key, now)
-        # PKP §10: sent on every change while operational (event-driven FEh)
-        if self._j1939 or self._nmt is not NmtState.OPERATIONAL:
+        # PKP §10: sent on every change while operational (event-driven FEh); in SYNC mode
+        # only at the SYNCs (rev 1.5 §44a, errata G3)
+        if self._j1939 or self._nmt is not NmtState.OPERATIONAL or self._tpdo_synchronous():
             return []
         return [self._key_state_frame(now)]
 
@@ -111,27 +134,128 @@ class KeypadTwin(CanopenTwin):
         data = self._keys.to_bytes(2, "little") + b"\x00\x00" + bytes((tick,))
         return Frame(self._key_cob_id, data)
 
+    # -- the LED picture and its object views -------------------------------------------------
+
+    def _led_view_hook(self, name: str) -> Any:
+        prefix, shift, mask = self._led_views[name]
+
+        def on_write(value: int) -> AbortCode | None:
+            word = self._words[prefix]
+            self._words[prefix] = (word & ~(mask << shift)) | (value << shift)
+            self._refresh_led_views()
+            return None
+
+        return on_write
+
+    def _refresh_led_views(self) -> None:
+        for name, (prefix, shift, mask) in self._led_views.items():
+            self._store.set(name, (self._words[prefix] >> shift) & mask)
+
+    def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
+        if layout.name in self._words:  # PKP §11/§12: the whole picture in one frame
+            word = sum(signals[s.name] << s.start for s in layout.signals)
+            if self._rpdo_synchronous(layout.name):
+                self._held[layout.name] = word  # applied at the next SYNC (rev 1.5 §36/§37)
+            else:
+                self._words[layout.name] = word
+                self._refresh_led_views()
+            return []
+        if layout.name == "backlight_brightness" and self._generation2:
+            return self._on_backlight_pdo(signals, layout.min_length)
+        return super()._on_rpdo(layout, signals, now)
+
+    def _on_backlight_pdo(self, signals: dict[str, int], length: int) -> list[Frame]:
+        # rev 1.5 §15, errata G2: byte 1 is the colour; 00h or out of range = the default
+        # colour; a level over 3Fh ignores the whole frame; DLC 1 changes only the level
+        level = signals["level"]
+        if level > LEVEL_MAX:
+            return []
+        self._store.set("backlight_brightness", level)
+        if self._last_rpdo_length > 1:
+            colour = signals["colour"]
+            if not 1 <= colour <= 9:
+                colour = self._store.get_int("default_backlight_colour")
+            self._store.set("backlight_colour", colour)
+        return []
+
+    def _rpdo_route(self, layout: PdoLayout) -> Callable[[Frame, float], list[Frame]]:
+        route: Callable[[Frame, float], list[Frame]] = super()._rpdo_route(layout)
+
+        def remember_length(frame: Frame, now: float) -> list[Frame]:
+            self._last_rpdo_length = len(frame.data)
+            return route(frame, now)
+
+        return remember_length if layout.name == "backlight_brightness" else route
+
+    # -- generation 2: SYNC, node id at once, consumer heartbeat ------------------------------
+
+    def _rpdo_synchronous(self, name: str) -> bool:
+        entry = {"led_on": "rpdo1_transmission_type", "led_blink": "rpdo2_transmission_type"}
+        return self._generation2 and self._store.get_int(entry[name]) <= 0xF0
+
+    def _tpdo_synchronous(self) -> bool:
+        return self._generation2 and self._store.get_int("tpdo1_transmission_type") <= 0xF0
+
+    def _on_tpdo_type(self, value: int) -> AbortCode | None:
+        self._syncs = 0  # errata G3: every n-th SYNC counted from the first after the write
+        return None
+
+    def _on_sync(self, frame: Frame, now: float) -> list[Frame]:
+        if self._nmt is not NmtState.OPERATIONAL:
+            return []
+        for name, word in self._held.items():  # the last RPDO before this SYNC wins
+            self._words[name] = word
+        if self._held:
+            self._held = {}
+            self._refresh_led_views()
+        if not self._tpdo_synchronous():
+            return []
+        self._syncs += 1
+        if self._syncs % self._store.get_int("tpdo1_transmission_type"):
+            return []
+        return [self._key_state_frame(now)]  # sampled at this SYNC (rev 1.5 §44a)
+
+    def _on_node_id(self, value: int) -> AbortCode | None:
+        # errata G1 (rev 1.5 §23): the new id is in use at once; the acknowledge comes from it
+        self._store.set("node_id", value)
+        self._node_id = value
+        self._sdo_tx = SDO_TX + value
+        self._key_cob_id = self._key_pdo.cob_id(value)
+        self._heartbeat_frames = {state: heartbeat_frame(value, state) for state in NmtState}
+        self._routes = self._build_routes()
+        return None
+
+    def _on_consumer_lost(self, now: float) -> None:
+        # rev 1.5 §26 note 2: all LEDs (indicators and backlight) off
+        self._words = {"led_on": 0, "led_blink": 0}
+        self._held = {}
+        self._refresh_led_views()
+        self._store.set("backlight_brightness", 0)
+
     # -- CANopen hooks ------------------------------------------------------------------------
 
     def _build_routes(self) -> dict[int, Any]:
         if self._j1939:
             return {}
         routes = super()._build_routes()
+        if self._generation2:
+            routes[SYNC] = self._on_sync  # rev 1.5 §10
         if self._demo is None:
             return routes
         # PKP §24: "another command message" leaves DEMO mode. Only while DEMO mode is on do
         # the routes carry this check, so normal traffic pays nothing for it.
         return {can_id: self._leaving_demo(route) for can_id, route in routes.items()}
 
-    def _leaving_demo(self, route: Any) -> Any:
+    def _leaving_demo(self, route: Callable[[Frame, float], list[Frame]]
+                      ) -> Callable[[Frame, float], list[Frame]]:
         def leave_then_route(frame: Frame, now: float) -> list[Frame]:
             if frame.can_id == NMT:
                 request = parse_nmt(frame, self.description.nmt_aliases)
                 if request is None or request.node_id not in (0, self._node_id):
-                    return route(frame, now)  # type: ignore[no-any-return]
+                    return route(frame, now)
             self._demo = None
             self._routes = self._build_routes()
-            return route(frame, now)  # type: ignore[no-any-return]
+            return route(frame, now)
 
         return leave_then_route
 
@@ -151,6 +275,9 @@ class KeypadTwin(CanopenTwin):
         return []
 
     def _on_power_off(self) -> None:
+        self._words = {"led_on": 0, "led_blink": 0}
+        self._held = {}
+        self._syncs = 0
         self._keys = 0
         self._store.set("keys_pressed", 0)
         self._show = None
@@ -166,7 +293,8 @@ class KeypadTwin(CanopenTwin):
         return None
 
     def _schedule_periodic(self, period_ms: int, now: float) -> None:
-        operational = self._nmt is NmtState.OPERATIONAL
+        # the event timer runs in event-driven mode only (rev 1.5 silent; blinkcan decision)
+        operational = self._nmt is NmtState.OPERATIONAL and not self._tpdo_synchronous()
         self._periodic_period = period_ms / 1000
         self._periodic_next = now + self._periodic_period if operational and period_ms else None
 
@@ -241,12 +369,7 @@ class KeypadTwin(CanopenTwin):
                 return step.on, step.blink
         if self._demo is not None:
             return self._demo.leds(now)
-        store = self._store
-        on = led_word(store.get_int("led_on_red"), store.get_int("led_on_green"),
-                      store.get_int("led_on_blue"))
-        blink = led_word(store.get_int("led_blink_red"), store.get_int("led_blink_green"),
-                         store.get_int("led_blink_blue"))
-        return on, blink
+        return self._words["led_on"], self._words["led_blink"]
 
     def _backlight(self) -> dict[str, object]:
         if self._demo is not None:
@@ -281,4 +404,5 @@ class KeypadTwin(CanopenTwin):
             "startup_show": show,
             "demo": self._demo.describe() if self._demo is not None else None,
             "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
+            "leds": dict(self._words),
         }
