@@ -31,7 +31,7 @@ def started(bench: Bench) -> Bench:
     return bench
 
 
-# -- unchanged sections: the rev 1.1 traces pass on generation 2 --------------------------------
+# -- unchanged sections: the rev 1.1 traces pass on generation 2 ----------------------------------
 
 @pytest.mark.parametrize("trace", [
     rev11.test_s10_key_state_examples, rev11.test_s12_alternate_blink_follows_the_bit_table,
@@ -53,7 +53,7 @@ def test_s16_keys(bench: Bench, keys: tuple[int, ...], reply: str) -> None:
     rev11.test_s15_read_keys(bench, keys, reply)
 
 
-# -- §15 backlight setting: byte 1 is the colour (errata G2) ----------------------------------------
+# -- §15 backlight setting: byte 1 is the colour (errata G2) --------------------------------------
 
 def test_s15_backlight_pdo_with_colour(started: Bench) -> None:
     started.replay("> 515 20 03 00 00 00 00 00 00\n< -")  # 50 % with blue colour
@@ -77,7 +77,7 @@ def test_s15_colour_00_or_out_of_range_is_the_default_colour(started: Bench) -> 
     assert started.twin.snapshot()["backlight"] == {"colour": "green", "level": 0x18}
 
 
-# -- §17/§18: 2001h/2002h follow the PDO bytes -------------------------------------------------------
+# -- §17/§18: 2001h/2002h follow the PDO bytes ----------------------------------------------------
 
 def test_s17_led_on_new_layout(bench: Bench) -> None:
     bench.replay("""
@@ -161,7 +161,7 @@ def test_setting_red_by_sdo_carries_green_1_to_4(started: Bench) -> None:
     assert rev11.colours(started) == {1: "yellow", 2: "green", 3: "green", 4: "green"}
 
 
-# -- §19-§24: settings read back with 4Fh -------------------------------------------------------------
+# -- §19-§24: settings read back with 4Fh ---------------------------------------------------------
 
 @pytest.mark.parametrize(("index_sub", "value"), [
     ("03 20 01", "09"), ("03 20 02", "0D"),
@@ -196,7 +196,7 @@ def test_s25_demo_mode(bench: Bench) -> None:
     bench.replay("> 615 2F 00 21 00 01 00 00 00\n< 595 60 00 21 00 00 00 00 00")
 
 
-# -- §26 1016h consumer heartbeat (errata G4) ---------------------------------------------------------
+# -- §26 1016h consumer heartbeat (errata G4) -----------------------------------------------------
 
 def test_s26_consumer_heartbeat_time(bench: Bench) -> None:
     bench.replay("""
@@ -243,7 +243,7 @@ def test_s26_heartbeat_loss_switches_leds_off_until_an_nmt_start(started: Bench)
     assert started.twin.snapshot()["nmt_state"] == "operational"
 
 
-# -- §31/§32 versions in order; §34 restore defaults ---------------------------------------------------
+# -- §31/§32 versions in order; §34 restore defaults ----------------------------------------------
 
 @pytest.mark.parametrize("quirks", ["firmware", "cia301"])
 def test_s31_s32_versions_in_order(quirks: str) -> None:
@@ -279,7 +279,7 @@ def test_s34_restore_defaults(quirks: str, ack: str) -> None:
     assert bench.twin.snapshot()["bitrate"] == 125_000
 
 
-# -- §36-§44: PDO parameters, SYNC ---------------------------------------------------------------------
+# -- §36-§44: PDO parameters, SYNC ----------------------------------------------------------------
 
 def test_s36_synchronous_led_on(started: Bench) -> None:
     started.replay("""
