@@ -156,3 +156,20 @@ def test_cached_json_lines_always_equal_the_plain_decoding(frames: list[Frame]) 
     for i, item in enumerate(frames * 2):  # the second pass hits the caches
         assert json.loads(fast.json_line(item, i / 8)) == json.loads(
             json.dumps(plain.decode(item, i / 8).to_json()))
+
+
+def test_generation_2_backlight_frames() -> None:
+    decoder = Decoder({0x15: "keypad@1.5"})
+    assert decoded(decoder, "515 20 03 00 00 00 00 00 00", "515 10 00", "515 10",
+                   "515 40 03") == [
+        "keypad 15h: backlight 32/63 in blue",  # rev 1.5 §15: 50 % with blue colour
+        "keypad 15h: backlight 16/63 in the default colour",
+        "keypad 15h: backlight brightness 16/63",  # DLC 1: the colour is unchanged (G2)
+        "keypad 15h: backlight level 40h over 3Fh: ignored",
+    ]
+
+
+def test_a_key_state_frame_without_its_tick_byte(decoder: Decoder) -> None:
+    event = decoder.decode(frame("195 01 00"))  # errata P8: DLC >= 2 is a key state
+    assert str(event) == "keypad 15h: key 1 pressed"
+    assert event.fields["tick"] is None

@@ -26,13 +26,13 @@ from blinkcan.twin import KeyboxTwin, KeypadTwin
 from tests.conftest import frame
 
 
-@pytest.mark.parametrize("device", ["keypad", "keybox"])
+@pytest.mark.parametrize("device", ["keypad", "keybox", "keypad@1.5"])
 def test_shipped_eds_files_match_a_fresh_export(device: str) -> None:
     description = describe_device(device)
     assert shipped_eds(description).read_text() == eds_text(description)
 
 
-@pytest.mark.parametrize("device", ["keypad", "keybox"])
+@pytest.mark.parametrize("device", ["keypad", "keybox", "keypad@1.5"])
 def test_import_od_reads_the_eds_back_identically(device: str, tmp_path: Path) -> None:
     description = describe_device(device)
     path = tmp_path / "device.eds"

@@ -16,9 +16,10 @@ from blinkcan.runtime import Emulator, to_frame
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
 
-def quiet_keypad(quirks: str = "firmware", node_id: int = 0x15) -> KeypadTwin:
+def quiet_keypad(quirks: str = "firmware", node_id: int = 0x15, manual: str = "1.1"
+                 ) -> KeypadTwin:
     """A keypad whose stored startup show is off, so LEDs show what was commanded."""
-    twin = KeypadTwin(node_id=node_id, quirks=quirks)  # type: ignore[arg-type]
+    twin = KeypadTwin(node_id=node_id, quirks=quirks, manual=manual)  # type: ignore[arg-type]
     twin.power_on(0.0)
     twin.receive(Frame(0x600 + node_id, bytes.fromhex("2F14200000000000")), 0.0)
     twin.power_off()
@@ -32,6 +33,11 @@ class Rig:
     keypad: KeypadTwin
     keybox: KeyboxTwin
     sniffer: can.BusABC
+    generation: str = "1.1"
+
+    @property
+    def firmware(self) -> str:
+        return "V2.8" if self.generation == "1.5" else "V2.2"
 
     def sniffed(self, settle: float = 0.05) -> list[Frame]:
         """Frames seen on the bus since the last call."""
@@ -52,16 +58,19 @@ def wait_until(condition: Callable[[], object], timeout: float = 2.0) -> None:
         time.sleep(0.005)
 
 
-@pytest.fixture(params=["firmware", "cia301"])
+@pytest.fixture(params=[("firmware", "1.1"), ("cia301", "1.1"), ("firmware", "1.5")],
+                ids=["firmware", "cia301", "generation2"])
 def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    """Every driver test runs against both quirk profiles and both keypad generations."""
+    quirks, generation = request.param
     channel = f"host-{uuid.uuid4().hex}"
     buses = [can.Bus(interface="virtual", channel=channel) for _ in range(3)]
-    keypad = quiet_keypad(request.param)
-    keybox = KeyboxTwin(quirks=request.param)
+    keypad = quiet_keypad(quirks, manual=generation)
+    keybox = KeyboxTwin(quirks=quirks)
     emulator = Emulator(buses[0], [keypad, keybox])
     host = HostBus(buses[1])
     with emulator, host:
-        rig = Rig(emulator, host, keypad, keybox, buses[2])
+        rig = Rig(emulator, host, keypad, keybox, buses[2], generation)
         rig.sniffed()
         yield rig
     for bus in buses:

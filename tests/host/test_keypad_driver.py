@@ -17,7 +17,7 @@ def keys(rig: Rig) -> list[dict[str, object]]:
 
 def test_identity_reads_versions_the_right_way_round(rig: Rig) -> None:
     identity = Keypad(rig.host).identity()
-    assert (identity.hardware_version, identity.software_version) == ("V_01", "V2.2")
+    assert (identity.hardware_version, identity.software_version) == ("V_01", rig.firmware)
     assert (identity.vendor_id, identity.model_id, identity.device_type,
             identity.serial_number) == (0x3E2, "PKP2600SI", 0x000B0191, "FFFFFFFF")
 
@@ -152,6 +152,50 @@ def test_overlapping_requests_never_lose_an_answer(rig: Rig) -> None:
         thread.join()
     assert sorted(map(str, results)) == sorted(
         ["721297"] * 5 + ["994"] * 5 + ["21"] * 5)
+
+
+def test_the_driver_finds_the_generation(rig: Rig) -> None:
+    assert Keypad(rig.host).generation == rig.generation
+
+
+def test_a_backlight_level_keeps_the_colour_on_both_generations(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_backlight("blue", 10)
+    keypad.set_backlight(level=40)  # generation 2 would fall back to the default colour
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "blue",
+                                                                         "level": 40})
+
+
+def test_setting_red_leds_never_clears_green_1_to_4(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_leds({1: "green", 2: "green"})
+    keypad.set_led(3, "red")
+    wait_until(lambda: keys(rig)[2]["colour"] == "red")
+    assert [k["colour"] for k in keys(rig)[:3]] == ["green", "green", "red"]
+
+
+def test_generation_2_watchdog_and_sync(rig: Rig) -> None:
+    keypad = Keypad(rig.host)
+    if rig.generation == "1.1":
+        with pytest.raises(ValueError, match="no consumer heartbeat"):
+            keypad.watch_host(0.05)
+        with pytest.raises(ValueError, match="no synchronous PDOs"):
+            keypad.set_synchronous()
+        return
+    keypad.set_synchronous(leds=True, key_state_every=1)
+    keypad.set_led(6, "cyan")
+    time.sleep(0.05)
+    assert keys(rig)[5]["colour"] == "off"  # held until a SYNC
+    sync = rig.host.produce_sync(0.02)
+    wait_until(lambda: keys(rig)[5]["colour"] == "cyan")
+    sync.cancel()
+    keypad.set_synchronous(leds=False, key_state_every=None)
+    keypad.watch_host(0.05)
+    keypad.set_led(7, "red")
+    wait_until(lambda: keys(rig)[6]["colour"] == "red")
+    keypad.stop_host_heartbeat()
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "pre-operational")
+    assert keys(rig)[6]["colour"] == "off"
 
 
 def test_j1939_and_back(rig: Rig) -> None:

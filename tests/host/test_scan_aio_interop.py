@@ -18,7 +18,7 @@ from tests.host.conftest import Rig, quiet_keypad
 def test_scan_finds_both_models_with_their_versions(rig: Rig) -> None:
     found = scan(rig.host, listen=0.05, timeout=0.1, node_ids=range(1, 32))
     assert [(f.node_id, f.kind, f.model_id, f.software_version) for f in found] == [
-        (0x0C, "keybox", "Keybox3", "1.00"), (0x15, "keypad", "PKP2600SI", "V2.2")]
+        (0x0C, "keybox", "Keybox3", "1.00"), (0x15, "keypad", "PKP2600SI", rig.firmware)]
 
 
 def test_scan_hears_boot_ups_on_its_own_bus() -> None:
@@ -42,7 +42,7 @@ def test_asyncio_api_has_the_same_names(rig: Rig) -> None:
         keypad = AsyncKeypad(rig.host)
         keybox = AsyncKeybox(rig.host)
         identity = await keypad.identity()
-        assert identity.software_version == "V2.2"
+        assert identity.software_version == rig.firmware
         await keybox.on(2)
         assert await keybox.state(2) == "high"
         events = keypad.events(timeout=1.0)

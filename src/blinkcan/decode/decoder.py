@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import orjson
 
+from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keybox import describe_keybox
 from blinkcan.devices.keypad import KEY_COUNT, describe_keypad
 from blinkcan.devices.model import DeviceDescription
@@ -281,6 +282,9 @@ class Decoder:
             if len(frame.data) < layout.min_length:
                 return Event(time, frame, Kind.FRAME, f"{layout.label}: too short", node, device)
             values = layout.decode(frame.data)
+            if len(frame.data) < layout.length:  # signals the frame does not carry are absent
+                bits = 8 * len(frame.data)
+                values = {s.name: values[s.name] for s in layout.signals if s.start < bits}
             text, fields = describe(self, node, values)
             return Event(time, frame, Kind.PDO, text, node, device,
                          {"pdo": layout.name, **fields})
@@ -300,7 +304,7 @@ class Decoder:
             parts.append(f"key {listing(released)} released")
         text = "; ".join(parts) if parts else f"keys held: {listing(held)}"
         return text, {"pressed": pressed, "released": released, "held": held,
-                      "tick": values["tick"]}
+                      "tick": values.get("tick")}  # errata P8: frames of 2-4 bytes have none
 
     # -- SDO --------------------------------------------------------------------------------------
 
@@ -445,6 +449,17 @@ def _show(value: int | str) -> str:
     return repr(value) if isinstance(value, str) else f"{value:X}h"
 
 
+def _backlight(values: dict[str, int]) -> tuple[str, dict[str, Any]]:
+    level = values["level"]
+    if level > 0x3F:
+        return f"backlight level {level:02X}h over 3Fh: ignored", {"level": level}
+    if "colour" not in values:  # rev 1.1 §14
+        return f"backlight brightness {level}/63", {"level": level}
+    code = values["colour"]  # rev 1.5 §15: byte 1 is the colour, 00h the default one
+    colour = BacklightColour(code).label if 1 <= code <= 9 else "the default colour"
+    return f"backlight {level}/63 in {colour}", {"level": level, "colour": colour}
+
+
 def _generic_pdo(decoder: Decoder, node: int, values: dict[str, int]
                  ) -> tuple[str, dict[str, Any]]:
     return ", ".join(f"{k} {v}" for k, v in values.items()), dict(values)
@@ -466,8 +481,7 @@ _PDO_TEXT: dict[str, Callable[[Decoder, int, dict[str, int]], tuple[str, dict[st
     "led_blink": _leds("LEDs blink"),
     "indicator_brightness": lambda d, n, v: (f"indicator brightness {v['level']}/63",
                                              {"level": v["level"]}),
-    "backlight_brightness": lambda d, n, v: (f"backlight brightness {v['level']}/63",
-                                             {"level": v["level"]}),
+    "backlight_brightness": lambda d, n, v: _backlight(v),
     "outputs": lambda d, n, v: (
         f"outputs OFF: {listing(numbers(v['off']))}; HIGH: "
         f"{listing(numbers(v['high'] & ~v['off']))}",  # KBX §17: OFF wins

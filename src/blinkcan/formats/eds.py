@@ -14,16 +14,18 @@ from canopen.objectdictionary import eds as canopen_eds
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.canopen_od import object_dictionary
+from blinkcan.formats.shipped import shipped_eds
 
-#: manual revision dates (PKP revision history, KBX §42), month-day-year as EDS writes them
-_DATES = {"pkp-2600-si": "02-05-2018", "keybox": "04-18-2019"}
+#: manual revision dates (revision histories), month-day-year as EDS writes them
+_DATES = {("pkp-2600-si", "1.1"): "02-05-2018", ("pkp-2600-si", "1.5"): "10-25-2021",
+          ("keybox", "1.0"): "04-18-2019"}
 
 
 def eds_text(description: DeviceDescription) -> str:
     od = object_dictionary(description)
-    date = _DATES.get(description.model, "01-01-2024")
+    date = _DATES.get((description.model, description.generation), "01-01-2024")
     file_info = {
-        "FileName": f"{description.model}.eds",
+        "FileName": shipped_eds(description).name,
         "FileVersion": 1,
         "FileRevision": 1,
         "EdsVersion": "4.0",

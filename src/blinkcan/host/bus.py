@@ -22,6 +22,7 @@ from typing import Any, TypeVar
 import can
 
 from blinkcan.host.sdo import SdoChannel
+from blinkcan.protocol.cob import SYNC
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 
@@ -157,6 +158,12 @@ class HostBus:
         if channel is None:
             channel = self._sdo[node_id] = SdoChannel(self, node_id, timeout, retries)
         return channel
+
+    def produce_sync(self, period: float) -> Timer:
+        """Send SYNC (COB-ID 80h, no data) every ``period`` s, for devices in synchronous mode
+        (PKP rev 1.5 §10); ``cancel()`` the returned timer to stop."""
+        sync = Frame(SYNC, b"")
+        return self.call_every(period, lambda: self.send(sync))
 
     # -- timers and calls on the bus thread ----------------------------------------------------
 

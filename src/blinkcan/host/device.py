@@ -14,11 +14,12 @@ from typing import Any
 
 import can
 
+from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry, Value
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.events import EventSource
-from blinkcan.protocol.cob import HEARTBEAT, check_node_id
+from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
 
@@ -75,6 +76,8 @@ class Device:
         self.alive: bool | None = None
         self._heartbeat_timeout: float | None = None
         self._watch: Timer | None = None
+        self._producer: Timer | None = None
+        self.host_node_id = 0x7F
         self._unsubscribe: list[Callable[[], None]] = [
             self.host.subscribe(HEARTBEAT + node_id, self._on_heartbeat),
         ]
@@ -217,9 +220,51 @@ class Device:
         """Producer heartbeat every ``period`` seconds; 0 switches it off."""
         self.write("producer_heartbeat_time", round(period * 1000))
 
+    # -- the device watching the controller (KBX §28, PKP rev 1.5 §26) ----------------------------
+
+    def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
+        """Watch ``node_id``'s heartbeat; missing it for ``period`` s switches the device off
+        (Keybox: outputs; keypad generation 2: LEDs). ``period`` 0 stops watching."""
+        check_node_id(node_id)
+        if "consumer_heartbeat_time" not in self.description.table:
+            raise ValueError(f"this {self.description.kind} (manual {self.description.generation}"
+                             ") has no consumer heartbeat (1016h)")
+        ms = round(period * 1000)
+        if ms and not 10 <= ms <= 0xFEFF:
+            raise ValueError(f"consumer heartbeat period must be 0 or 0.01..65.279 s, not {period}")
+        self.write("consumer_heartbeat_time", ms | node_id << 16)
+
+    def restore_factory_defaults(self, *, confirm: bool = False) -> None:
+        """Every stored setting back to factory values at the next reset (1011h "load"; the
+        firmware's 43h acknowledge is accepted, errata K3/G5)."""
+        if "restore_all_parameters" not in self.description.table:
+            raise ValueError(f"this {self.description.kind} (manual "
+                             f"{self.description.generation}) cannot restore defaults (1011h)")
+        if not confirm:
+            raise ValueError("this erases every stored setting at the next reset: pass "
+                             "confirm=True")
+        self.write("restore_all_parameters", RESTORE_SIGNATURE)
+
+    def watch_host(self, period: float) -> None:
+        """Send a host heartbeat every ``period`` s and have the device switch off when it
+        misses two (KBX §28 note 1: consumer time about twice the producer's)."""
+        check_range("watchdog period in ms", round(period * 1000), 10, 0xFEFF // 2)
+        self.set_consumer_heartbeat(self.host_node_id, 2 * period)
+        if self._producer is not None:
+            self._producer.cancel()
+        frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
+        self._producer = self.host.call_every(period, lambda: self.host.send(frame))
+
+    def stop_host_heartbeat(self) -> None:
+        """Stop the host heartbeat (as a crashed application would): the device reacts."""
+        if self._producer is not None:
+            self._producer.cancel()
+            self._producer = None
+
     # -- lifecycle --------------------------------------------------------------------------------
 
     def close(self) -> None:
+        self.stop_host_heartbeat()
         for unsubscribe in self._unsubscribe:
             unsubscribe()
         if self._watch is not None:

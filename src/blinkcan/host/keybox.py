@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import can
 
-from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.keybox import (
     FAULT_PERIOD_UNIT_S,
     PIN_COUNT,
@@ -29,9 +28,8 @@ from blinkcan.devices.keybox import (
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import Device, in_thread
 from blinkcan.host.events import EventSource
-from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_range
+from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.nmt import NmtState
 from blinkcan.protocol.sdo_client import SdoError
 
 log = logging.getLogger(__name__)
@@ -79,7 +77,6 @@ class Keybox(Device):
         self.restore_outputs = restore_outputs
         self.commanded_high: set[int] = set()
         self.host_node_id = check_node_id(host_node_id)
-        self._producer: Timer | None = None
         self._poller: Timer | None = None
         fault_pdo = self.description.pdo("faults")
         self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
@@ -187,41 +184,6 @@ class Keybox(Device):
         """Send the fault PDO every ``period`` s as well (2012h, 10 ms units); 0 = on change."""
         self.write("fault_period", round(period / FAULT_PERIOD_UNIT_S))
 
-    def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
-        """Watch ``node_id``'s heartbeat; missing it for ``period`` s switches outputs off
-        (KBX §28). ``period`` 0 stops watching."""
-        check_node_id(node_id)
-        ms = round(period * 1000)
-        if ms and not 10 <= ms <= 0xFEFF:
-            raise ValueError(f"consumer heartbeat period must be 0 or 0.01..65.279 s, not {period}")
-        self.write("consumer_heartbeat_time", ms | node_id << 16)
-
-    def restore_factory_defaults(self, *, confirm: bool = False) -> None:
-        """Every stored setting back to factory values at the next reset (KBX §36)."""
-        if not confirm:
-            raise ValueError("this erases every stored setting at the next reset: pass "
-                             "confirm=True")
-        self.write("restore_all_parameters", RESTORE_SIGNATURE)
-
-    def watch_host(self, period: float) -> None:
-        """Send a host heartbeat every ``period`` s and have the Keybox switch its outputs off
-        when it misses two (KBX §28 note 1: consumer time about twice the producer's)."""
-        check_range("watchdog period in ms", round(period * 1000), 10, 0xFEFF // 2)
-        self.set_consumer_heartbeat(self.host_node_id, 2 * period)
-        self._start_producer(period)
-
-    def _start_producer(self, period: float) -> None:
-        if self._producer is not None:
-            self._producer.cancel()
-        frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
-        self._producer = self.host.call_every(period, lambda: self.host.send(frame))
-
-    def stop_host_heartbeat(self) -> None:
-        """Stop the host heartbeat (as a crashed application would): the Keybox reacts."""
-        if self._producer is not None:
-            self._producer.cancel()
-            self._producer = None
-
     # -- recovery and lifecycle -------------------------------------------------------------------
 
     def _on_boot_up(self, now: float) -> None:
@@ -233,7 +195,6 @@ class Keybox(Device):
             in_thread(lambda: self.set_outputs(high=pins))
 
     def close(self) -> None:
-        self.stop_host_heartbeat()
         if self._poller is not None:
             self._poller.cancel()
         super().close()

@@ -27,8 +27,9 @@ from blinkcan.devices.keypad import (
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import Device, in_thread
 from blinkcan.host.events import EventSource
-from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.sdo_client import SdoAbortError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
@@ -65,10 +66,13 @@ class Keypad(Device):
     """
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
-                 long_press: float = 0.8, restore: bool = True, generation: str = "1.1",
+                 long_press: float = 0.8, restore: bool = True, generation: str | None = None,
+                 watchdog: float | None = None, host_node_id: int = 0x7F,
                  sdo_timeout: float = 0.5) -> None:
-        super().__init__(bus, node_id, describe_keypad(generation, "cia301", node_id),
+        super().__init__(bus, node_id, describe_keypad(generation or "1.1", "cia301", node_id),
                          sdo_timeout=sdo_timeout)
+        self._generation = generation
+        self.host_node_id = check_node_id(host_node_id)
         self.keys = EventSource[KeyEvent]()
         self.long_press = long_press
         self.auto_start = start
@@ -85,8 +89,44 @@ class Keypad(Device):
         key_pdo = self.description.pdo("key_state")
         self._pdo = {p.name: p.cob_id(node_id) for p in self.description.pdos}
         self._unsubscribe.append(self.host.subscribe(key_pdo.cob_id(node_id), self._on_keys))
+        if watchdog is not None:
+            self.watch_host(watchdog)
         if start:
             self.start()
+
+    # -- firmware generation --------------------------------------------------------------------
+
+    @property
+    def generation(self) -> str:
+        """"1.1" or "1.5": given, or found by probing 1016h, which only generation 2 has
+        (pkp-rev1.1-vs-rev1.5.md); the LED objects and the backlight PDO differ."""
+        if self._generation is None:
+            try:
+                self.sdo.upload(0x1016, 0)
+                found = "1.5"
+            except SdoAbortError:
+                found = "1.1"
+            self._generation = found
+            self.description = describe_keypad(found, "cia301", self.node_id)
+        return self._generation
+
+    def watch_host(self, period: float) -> None:
+        """Generation 2 only: the keypad switches its LEDs off when the controller's
+        heartbeat stops (rev 1.5 §26)."""
+        if self.generation != "1.5":
+            raise ValueError("this keypad (manual 1.1) has no consumer heartbeat (1016h)")
+        super().watch_host(period)
+
+    def set_synchronous(self, leds: bool = True, key_state_every: int | None = 1) -> None:
+        """Generation 2: LED PDOs applied at the next SYNC and the key state sent every n-th
+        SYNC (rev 1.5 §36/§37/§44a); run a SYNC producer (``host.produce_sync``). With
+        ``leds=False`` and ``key_state_every=None`` the keypad is event-driven again."""
+        if self.generation != "1.5":
+            raise ValueError("this keypad (manual 1.1) has no synchronous PDOs")
+        led_type = 0x00 if leds else 0xFE
+        self.write("rpdo1_transmission_type", led_type)
+        self.write("rpdo2_transmission_type", led_type)
+        self.write("tpdo1_transmission_type", key_state_every or 0xFE)
 
     # -- keys -------------------------------------------------------------------------------------
 
@@ -185,7 +225,19 @@ class Keypad(Device):
             self._backlight_colour = int(code)
         if level is not None:
             self._backlight_level = level
-            self.host.send(Frame(self._pdo["backlight_brightness"], bytes((level,)) + bytes(7)))
+            self.host.send(self._backlight_frame(level))
+
+    def _restore_backlight(self) -> None:
+        if self._backlight_colour is not None:
+            self.write("backlight_colour", self._backlight_colour)
+        if self._backlight_level is not None:
+            self.host.send(self._backlight_frame(self._backlight_level))
+
+    def _backlight_frame(self, level: int) -> Frame:
+        # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
+        # a rev 1.1-style frame would undo a colour set before; send the colour along.
+        colour = (self._backlight_colour or 0) if self.generation == "1.5" else 0
+        return Frame(self._pdo["backlight_brightness"], bytes((level, colour)) + bytes(6))
 
     def set_default_backlight_colour(self, colour: str) -> None:
         self.write("default_backlight_colour", int(BacklightColour.from_name(colour)))
@@ -240,9 +292,7 @@ class Keypad(Device):
         if self._indicator is not None:
             self.host.send(Frame(self._pdo["indicator_brightness"],
                                  bytes((self._indicator,)) + bytes(7)))
-        if self._backlight_level is not None:
-            self.host.send(Frame(self._pdo["backlight_brightness"],
-                                 bytes((self._backlight_level,)) + bytes(7)))
         if self._backlight_colour is not None:
-            colour = self._backlight_colour
-            in_thread(lambda: self.write("backlight_colour", colour))
+            in_thread(self._restore_backlight)  # the colour goes by SDO: off this thread
+        elif self._backlight_level is not None:
+            self.host.send(self._backlight_frame(self._backlight_level))
