@@ -355,3 +355,38 @@ def test_s44a_synchronous_key_state(started: Bench) -> None:
 
 def test_s44b_periodic_state_transmission(started: Bench) -> None:
     rev11.test_s41b_periodic_state_transmission(started)
+
+
+@pytest.mark.parametrize(("data", "expected"), [  # rev 1.5 §12
+    ("00 00 00 00 00 00 00 00", {}), ("01 00 00 00 00 00 00 00", {1: "red"}),
+    ("42 00 00 00 00 00 00 00", {2: "red", 7: "red"}),
+    ("00 00 01 00 00 00 00 00", {5: "green"}),
+])
+def test_s12_led_on(started: Bench, data: str, expected: dict[int, str]) -> None:
+    rev11.test_s11_led_on_examples(started, data, expected)
+
+
+@pytest.mark.parametrize(("data", "expected"), [  # rev 1.5 §13
+    ("00 00 00 00 00 00 00 00", {}), ("01 00 00 00 00 00 00 00", {1: "red"}),
+    ("09 00 00 00 00 00 00 00", {1: "red", 4: "red"}),
+    ("00 00 11 00 00 00 00 00", {5: "green", 9: "green"}),
+    ("00 00 00 01 00 00 00 00", {1: "blue"}),
+    ("00 00 CC 00 03 00 00 00", {7: "green", 8: "green", 11: "green", 12: "green",
+                                 9: "blue", 10: "blue"}),
+])
+def test_s13_led_blink(started: Bench, data: str, expected: dict[int, str]) -> None:
+    rev11.test_s12_led_blink_examples(started, data, expected)
+
+
+@pytest.mark.parametrize("level", [0x08, 0x10])  # rev 1.5 §14
+def test_s14_indicator_brightness(started: Bench, level: int) -> None:
+    rev11.test_s13_s14_brightness(started, "415", "indicator_brightness", level)
+
+
+@pytest.mark.parametrize("command", ["01 15", "80 15", "02 15"])  # rev 1.5 §4, §5, §7
+def test_s4_to_s7_nmt(bench: Bench, command: str) -> None:
+    bench.replay(f"> 000 {command}\n< -")
+
+
+def test_s6_s8_reset_and_boot_up(bench: Bench) -> None:
+    bench.replay("> 000 81 15\n< 715 00")
