@@ -8,6 +8,7 @@ and power-cycles the keypad; the live view shows the keypad, the outputs and the
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import queue
 import threading
@@ -24,6 +25,7 @@ from rich.live import Live
 from rich.panel import Panel
 from rich.text import Text
 
+from blinkcan.cli.emulate import panel
 from blinkcan.cli.render import keybox_panel, keypad_panel
 from blinkcan.decode import Decoder
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
@@ -134,7 +136,7 @@ def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, 
     )
 
 
-def run_demo(console: Console, pause: float = 0.6) -> int:
+def run_demo(console: Console, pause: float = 0.6, web: str | None = None) -> int:
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     keypad_twin, keybox_twin = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
@@ -151,7 +153,8 @@ def run_demo(console: Console, pause: float = 0.6) -> int:
     emulator = Emulator(device_bus, [keypad_twin, keybox_twin])
     emulator.on_frame = record
     try:
-        with emulator, HostBus(host_bus) as host, Live(console=console, auto_refresh=False) as live:
+        with emulator, panel(emulator, web, console), HostBus(host_bus) as host, \
+                Live(console=console, auto_refresh=False) as live:
             keypad = Keypad(host)
             keybox = Keybox(host, watchdog=0.2)  # outputs off if this controller dies
             identity = keypad.identity()
@@ -175,8 +178,13 @@ def run_demo(console: Console, pause: float = 0.6) -> int:
             if pause:  # the keypad plays its show again after the power cycle, then the LEDs
                 time.sleep(2.6)
                 show(SCRIPT[-1].title)
-            controller.stop()
             states = keybox.states()
+            if web is not None:
+                live.stop()
+                console.print("the controller keeps running with the panel; Ctrl-C stops")
+                with contextlib.suppress(KeyboardInterrupt):
+                    threading.Event().wait()
+            controller.stop()
             keypad.close()
             keybox.close()
     finally:
@@ -190,6 +198,8 @@ def run_demo(console: Console, pause: float = 0.6) -> int:
 @click.command("demo")
 @click.option("--pause", type=float, default=0.6, show_default=True,
               help="Seconds between the scripted steps.")
-def command(pause: float) -> None:
+@click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
+              metavar="[HOST:PORT]", help="Serve the front panel too, and keep running.")
+def command(pause: float, web: str | None) -> None:
     """A controller on a keypad and a Keybox twin: key N toggles output N, shown live."""
-    raise SystemExit(run_demo(Console(highlight=False), pause))
+    raise SystemExit(run_demo(Console(highlight=False), pause, web))

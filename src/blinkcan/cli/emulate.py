@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import threading
+from collections.abc import Iterator
 from typing import Any
 
 import can
@@ -57,11 +59,13 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
               help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
 @click.option("--low-side", default="", metavar="PINS",
               help="Keybox pins built as low-side drivers, e.g. 2,5 (errata K22).")
+@click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
+              metavar="[HOST:PORT]", help="Serve the front panel (default 127.0.0.1:8080).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @bus_options
 def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quirks: str,
-            response_delay: float, low_side: str, quiet: bool, interface: str | None,
-            channel: str | None, bitrate: int | None) -> None:
+            response_delay: float, low_side: str, web: str | None, quiet: bool,
+            interface: str | None, channel: str | None, bitrate: int | None) -> None:
     """Run device twins on a CAN bus until Ctrl-C. DEVICE: keypad (pkp-2600-si) or keybox.
 
     \b
@@ -87,12 +91,35 @@ def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quir
     names = ", ".join(f"{t.description.kind} {t.node_id:02X}h" for t in twins)
     console.print(f"[bold]blinkcan[/] emulating {names} on {bus.channel_info}. Ctrl-C stops.")
     try:
-        with emulator:
+        with emulator, panel(emulator, web, console):
             threading.Event().wait()
     except KeyboardInterrupt:
         console.print("stopped")
     finally:
         bus.shutdown()
+
+
+@contextlib.contextmanager
+def panel(emulator: Emulator, address: str | None, console: Console) -> Iterator[None]:
+    """Serve the front panel beside ``emulator`` when an address is given."""
+    if address is None:
+        yield
+        return
+    try:
+        from blinkcan.web.server import PanelServer, parse_address  # noqa: PLC0415 optional extra
+    except ImportError:
+        raise click.ClickException("the front panel needs the web extra: "
+                                   "pip install 'blinkcan[web]'") from None
+    try:
+        host, port = parse_address(address)
+        server = PanelServer(emulator, host, port).start()
+    except (ValueError, OSError) as error:
+        raise click.ClickException(f"front panel: {error}") from None
+    console.print(f"front panel: {server.url}")
+    try:
+        yield
+    finally:
+        server.stop()
 
 
 class _FramePrinter:

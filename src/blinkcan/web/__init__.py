@@ -1,0 +1,1 @@
+"""Front panel of the emulated devices in the browser (optional extra ``[web]``)."""

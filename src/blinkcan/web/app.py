@@ -1,0 +1,142 @@
+"""The front panel's HTTP side: the page, the devices' state pushed as server-sent events, and
+the actions a person can take (press a key, blow a fuse, power-cycle).
+
+State comes from the twins' ``snapshot()`` on the emulator's thread, at most 30 times a
+second, and only goes out when it changed, so the panel never slows the emulation. Actions go
+through the same physical-side methods tests use. Every request is validated: a key 1-12, a
+pin 1-13, a known action for that device; anything else is a 400 with the reason.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+from collections import deque
+from collections.abc import AsyncIterator, Callable
+from importlib import resources
+from typing import Any
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
+from starlette.routing import Mount, Route
+from starlette.staticfiles import StaticFiles
+
+from blinkcan.decode import Decoder
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime import Emulator
+from blinkcan.twin import KeyboxTwin, KeypadTwin
+from blinkcan.twin.base import CanopenTwin
+
+MAX_UPDATES_PER_S = 30
+FRAMES_KEPT = 20
+
+#: action -> (device kinds, argument, what it does with (twin, value, now))
+ACTIONS: dict[str, tuple[tuple[str, ...], str | None, Callable[[Any, Any, float], object]]] = {
+    "press": (("keypad",), "key", lambda t, v, now: t.press(v, now)),
+    "release": (("keypad",), "key", lambda t, v, now: t.release(v, now)),
+    "blow_fuse": (("keybox",), "pin", lambda t, v, now: t.blow_fuse(v, now)),
+    "replace_fuse": (("keybox",), "pin", lambda t, v, now: t.replace_fuse(v, now)),
+    "input_high": (("keybox",), "pin", lambda t, v, now: t.set_input(v, True, now)),
+    "input_low": (("keybox",), "pin", lambda t, v, now: t.set_input(v, False, now)),
+    "power_off": (("keypad", "keybox"), None, lambda t, v, now: t.power_off()),
+    "power_on": (("keypad", "keybox"), None, lambda t, v, now: t.power_on(now)),
+}
+_RANGES = {"key": (1, 12), "pin": (1, 13)}
+
+
+class Panel:
+    """Everything the page shows, gathered from the emulator."""
+
+    def __init__(self, emulator: Emulator) -> None:
+        self.emulator = emulator
+        self.decoder = Decoder({t.node_id: t.description for t in emulator.twins})
+        self.frames: deque[dict[str, Any]] = deque(maxlen=FRAMES_KEPT)
+        previous = emulator.on_frame
+
+        def record(frame: Frame, sent: bool, now: float) -> None:
+            if previous is not None:
+                previous(frame, sent, now)
+            self.frames.append({"id": f"{frame.can_id:03X}", "data": frame.data.hex(" ").upper(),
+                                "text": str(self.decoder.decode(frame, now))})
+
+        emulator.on_frame = record
+
+    def state(self) -> dict[str, Any]:
+        devices = self.emulator.run(lambda now: [t.snapshot() for t in self.emulator.twins])
+        return {"devices": devices, "frames": list(self.frames)}
+
+    def twin(self, node_id: object) -> CanopenTwin:
+        for twin in self.emulator.twins:
+            if twin.node_id == node_id:
+                return twin
+        nodes = ", ".join(f"{t.node_id}" for t in self.emulator.twins)
+        raise ValueError(f"no device with node id {node_id!r}; the panel has {nodes}")
+
+    def act(self, request: dict[str, Any]) -> None:
+        """Validate and carry out one action (ValueError with the reason)."""
+        if not isinstance(request, dict):
+            raise ValueError("send a JSON object: {node, action, key|pin}")
+        twin = self.twin(request.get("node"))
+        kind = "keypad" if isinstance(twin, KeypadTwin) else "keybox"
+        action = request.get("action")
+        if action not in ACTIONS:
+            raise ValueError(f"unknown action {action!r}; known: {', '.join(ACTIONS)}")
+        kinds, argument, perform = ACTIONS[action]
+        if kind not in kinds:
+            raise ValueError(f"a {kind} has no action {action!r}")
+        value = None
+        if argument is not None:
+            value = request.get(argument)
+            low, high = _RANGES[argument]
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise ValueError(f"{argument} must be {low}..{high}, not {value!r}")
+        self.emulator.run(lambda now: perform(twin, value, now))
+
+
+def create_app(emulator: Emulator) -> Starlette:
+    panel = Panel(emulator)
+    static = resources.files("blinkcan.web") / "static"
+
+    async def index(request: Request) -> Response:
+        return FileResponse(str(static / "index.html"))
+
+    async def state(request: Request) -> Response:
+        return JSONResponse(await asyncio.to_thread(panel.state))
+
+    async def events(request: Request) -> Response:
+        async def stream() -> AsyncIterator[str]:
+            last = ""
+            while not await request.is_disconnected():
+                started = time.monotonic()
+                text = json.dumps(await asyncio.to_thread(panel.state))
+                if text != last:
+                    last = text
+                    yield f"data: {text}\n\n"
+                await asyncio.sleep(max(0.0, 1 / MAX_UPDATES_PER_S - (time.monotonic() - started)))
+
+        return StreamingResponse(stream(), media_type="text/event-stream",
+                                 headers={"Cache-Control": "no-store"})
+
+    async def action(request: Request) -> Response:
+        try:
+            body = await request.json()
+        except ValueError:
+            return JSONResponse({"error": "the body is not JSON"}, status_code=400)
+        try:
+            await asyncio.to_thread(panel.act, body)
+        except (ValueError, TypeError) as error:
+            return JSONResponse({"error": str(error)}, status_code=400)
+        return JSONResponse({"ok": True})
+
+    return Starlette(routes=[
+        Route("/", index),
+        Route("/api/state", state),
+        Route("/api/events", events),
+        Route("/api/action", action, methods=["POST"]),
+        Mount("/static", StaticFiles(directory=str(static)), name="static"),
+    ])
+
+
+__all__ = ["ACTIONS", "KeyboxTwin", "Panel", "create_app"]
