@@ -3,11 +3,13 @@ python-can's ``udp_multicast`` interface."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import random
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 
 import can
 import pytest
@@ -26,16 +28,31 @@ def _multicast_bus(channel: str) -> can.BusABC:
                     "route run: ip route add 224.0.0.0/4 dev lo")
 
 
-def test_keypad_emulated_in_another_process_answers() -> None:
+@contextlib.contextmanager
+def emulated(*devices: str) -> Iterator[tuple[can.BusABC, subprocess.Popen[bytes]]]:
+    """``blinkcan emulate DEVICES`` in a child process on a fresh multicast group, and this
+    process's bus on the same group; both closed afterwards."""
     channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
     host = _multicast_bus(channel)
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     child = subprocess.Popen(
-        [sys.executable, "-m", "blinkcan", "emulate", "keypad:0x21", "-q",
-         "-i", "udp_multicast", "-c", channel],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+        [sys.executable, "-m", "blinkcan", "emulate", *devices, "-q", "-i", "udp_multicast",
+         "-c", channel],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
     try:
+        yield host, child
+    finally:
+        child.terminate()
+        try:
+            child.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            child.kill()
+        host.shutdown()
+
+
+def test_keypad_emulated_in_another_process_answers() -> None:
+    with emulated("keypad:0x21") as (host, child):
         frames: list[Frame] = []
         end = time.monotonic() + 20
         while time.monotonic() < end and Frame(0x721, b"\x00") not in frames:
@@ -56,26 +73,12 @@ def test_keypad_emulated_in_another_process_answers() -> None:
                 break
         else:
             pytest.fail("no SDO reply across processes")
-    finally:
-        child.terminate()
-        try:
-            child.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            child.kill()
-        host.shutdown()
 
 
 def test_drivers_in_this_process_twins_in_another() -> None:
     from blinkcan.host import Keybox, Keypad
 
-    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
-    host_bus = _multicast_bus(channel)
-    child = subprocess.Popen(
-        [sys.executable, "-m", "blinkcan", "emulate", "keypad", "keybox", "-q",
-         "-i", "udp_multicast", "-c", channel],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env={**os.environ},
-    )
-    try:
+    with emulated("keypad", "keybox") as (host_bus, _):
         end = time.monotonic() + 20
         booted: set[int] = set()
         while time.monotonic() < end and booted != {0x70C, 0x715}:
@@ -94,10 +97,3 @@ def test_drivers_in_this_process_twins_in_another() -> None:
         finally:
             keybox.close()
             keypad.close()
-    finally:
-        child.terminate()
-        try:
-            child.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            child.kill()
-        host_bus.shutdown()

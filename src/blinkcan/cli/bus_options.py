@@ -5,7 +5,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+import can
 import click
+
+from blinkcan.runtime import open_bus
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -20,6 +23,14 @@ def bus_options(function: F) -> F:
                             help="python-can interface (socketcan, pcan, kvaser, slcan, "
                                  "udp_multicast, virtual, ...). Default: python-can's "
                                  "configuration, else virtual.")(function)
+
+
+def cli_bus(interface: str | None, channel: str | None, bitrate: int | None) -> can.BusABC:
+    """The bus the options name; a bus that cannot be opened is one clear line, not a trace."""
+    try:
+        return open_bus(interface, channel, bitrate)
+    except (can.CanError, ValueError, ImportError, OSError) as error:
+        raise click.ClickException(f"cannot open the bus: {error}") from None
 
 
 def parse_int(text: str) -> int:

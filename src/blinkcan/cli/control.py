@@ -6,21 +6,16 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-import can
 import click
 
-from blinkcan.cli.bus_options import bus_options, parse_int
+from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
 from blinkcan.host import Keybox, Keypad, SdoError
-from blinkcan.runtime import open_bus
 
 
 @contextmanager
 def _device(kind: str, node_id: str | None, interface: str | None, channel: str | None,
             bitrate: int | None, start: bool = False) -> Iterator[Keypad | Keybox]:
-    try:
-        bus = open_bus(interface, channel, bitrate)
-    except (can.CanError, ValueError, ImportError, OSError) as error:
-        raise click.ClickException(f"cannot open the bus: {error}") from None
+    bus = cli_bus(interface, channel, bitrate)
     try:
         if kind == "keypad":
             device: Keypad | Keybox = Keypad(bus, parse_int(node_id) if node_id else 0x15,

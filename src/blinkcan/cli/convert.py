@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import time
 
-import can
 import click
 
-from blinkcan.cli.bus_options import bus_options
+from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.formats.logs import FrameWriter, LogError, read_frames
-from blinkcan.runtime import open_bus, to_frame
+from blinkcan.runtime import to_frame
 
 
 @click.command("convert")
@@ -35,10 +34,7 @@ def convert(source: str, target: str) -> None:
 def record(target: str, duration: float | None, interface: str | None, channel: str | None,
            bitrate: int | None) -> None:
     """Record a live bus to a file: .pcap for Wireshark, or any python-can log format."""
-    try:
-        bus = open_bus(interface, channel, bitrate)
-    except (can.CanError, ValueError, ImportError, OSError) as error:
-        raise click.ClickException(f"cannot open the bus: {error}") from None
+    bus = cli_bus(interface, channel, bitrate)
     end = None if duration is None else time.monotonic() + duration
     try:
         with FrameWriter(target) as writer:

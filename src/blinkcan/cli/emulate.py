@@ -7,14 +7,13 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-import can
 import click
 from rich.console import Console
 
-from blinkcan.cli.bus_options import bus_options, parse_int
+from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
 from blinkcan.decode import Decoder
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime import Emulator, open_bus
+from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.nvm import NvmError
@@ -79,10 +78,7 @@ def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quir
         twins = build_twins(devices, parse_int(node_id) if node_id else None, nvm, quirks, pins)
     except NvmError as error:
         raise click.ClickException(str(error)) from None
-    try:
-        bus = open_bus(interface, channel, bitrate)
-    except (can.CanError, ValueError, ImportError, OSError) as error:
-        raise click.ClickException(f"cannot open the bus: {error}") from None
+    bus = cli_bus(interface, channel, bitrate)
     decoder = Decoder({t.node_id: t.description for t in twins})
     printer = None if quiet else _FramePrinter(console, decoder)
     emulator = Emulator(bus, twins, response_delay=response_delay)

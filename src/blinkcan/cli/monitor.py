@@ -6,20 +6,19 @@ from __future__ import annotations
 import time
 from collections import deque
 
-import can
 import click
 from rich.console import Console, Group
 from rich.live import Live
 from rich.table import Table
 
-from blinkcan.cli.bus_options import bus_options
+from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.decode import parse_devices
 from blinkcan.cli.render import keybox_panel, keypad_panel
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.view import BusView
 from blinkcan.formats.logs import LogError, read_frames
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime import open_bus, to_frame
+from blinkcan.runtime import to_frame
 
 
 def render(view: BusView, events: deque[Event]) -> Group:
@@ -69,10 +68,7 @@ def command(devices: tuple[str, ...], log_file: str | None, duration: float | No
             raise click.ClickException(str(error)) from None
         console.print(render(view, events))
         return
-    try:
-        bus = open_bus(interface, channel, bitrate)
-    except (can.CanError, ValueError, ImportError, OSError) as error:
-        raise click.ClickException(f"cannot open the bus: {error}") from None
+    bus = cli_bus(interface, channel, bitrate)
     end = None if duration is None else time.monotonic() + duration
     try:
         with Live(render(view, events), console=console, auto_refresh=False) as live:

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import can
 import click
 from rich.console import Console
 from rich.table import Table
 
-from blinkcan.cli.bus_options import bus_options
+from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.host import scan
-from blinkcan.runtime import open_bus
 
 
 @click.command("scan")
@@ -19,10 +17,7 @@ from blinkcan.runtime import open_bus
 def command(listen: float, interface: str | None, channel: str | None,
             bitrate: int | None) -> None:
     """Find devices: boot-up and heartbeat heard, SDO read of 1000h, 1018h, 100Bh."""
-    try:
-        bus = open_bus(interface, channel, bitrate)
-    except (can.CanError, ValueError, ImportError, OSError) as error:
-        raise click.ClickException(f"cannot open the bus: {error}") from None
+    bus = cli_bus(interface, channel, bitrate)
     try:
         found = scan(bus, listen=listen)
     finally:
