@@ -11,8 +11,10 @@ from dataclasses import dataclass, field
 
 from blinkcan.decode.decoder import Event, Kind
 from blinkcan.devices.colours import channel_name
+from blinkcan.devices.keybox import PIN_COUNT
+from blinkcan.devices.keypad import KEY_COUNT
 
-KEYS, PINS = 12, 13
+KEYS, PINS = KEY_COUNT, PIN_COUNT
 _NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
                "enter pre-operational": "pre-operational"}
 

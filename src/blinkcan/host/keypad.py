@@ -44,18 +44,17 @@ class KeyEvent:
     time: float
 
 
-def _word(channels_by_key: Mapping[int, int]) -> int:
-    """The 36-bit LED word of PKP §11: red bits 0-11, green 12-23, blue 24-35."""
-    word = 0
+def _masks(channels_by_key: Mapping[int, int]) -> dict[str, int]:
+    """Per-colour key masks ({"red": ..., "green": ..., "blue": ...}) of a picture; the LED PDO
+    layout in ``devices/`` places them in the frame (PKP §11)."""
+    masks = {"red": 0, "green": 0, "blue": 0}
     for key, channels in channels_by_key.items():
         bit = 1 << (key - 1)
-        if channels & Channel.RED:
-            word |= bit
-        if channels & Channel.GREEN:
-            word |= bit << KEY_COUNT
-        if channels & Channel.BLUE:
-            word |= bit << (2 * KEY_COUNT)
-    return word
+        for name, channel in (("red", Channel.RED), ("green", Channel.GREEN),
+                              ("blue", Channel.BLUE)):
+            if channels & channel:
+                masks[name] |= bit
+    return masks
 
 
 class Keypad(Device):
@@ -81,13 +80,12 @@ class Keypad(Device):
         self._long_timers: dict[int, Timer] = {}
         self._steady: dict[int, int] = {}  # key -> channels lit steadily / in phase A
         self._blink: dict[int, int] = {}  # key -> channels that blink
-        self._sent: tuple[int, int] | None = None
+        self._sent: tuple[Frame, Frame] | None = None
         self._batching = 0
         self._indicator: int | None = None
         self._backlight_level: int | None = None
         self._backlight_colour: int | None = None
         key_pdo = self.description.pdo("key_state")
-        self._pdo = {p.name: p.cob_id(node_id) for p in self.description.pdos}
         self._unsubscribe.append(self.host.subscribe(key_pdo.cob_id(node_id), self._on_keys))
         if watchdog is not None:
             self.watch_host(watchdog)
@@ -199,13 +197,19 @@ class Keypad(Device):
     def _flush(self, force: bool = False) -> None:
         if self._batching:
             return
-        on, blink = _word(self._steady), _word(self._blink)
+        on, blink = self._pdo_frame("led_on", _masks(self._steady)), \
+            self._pdo_frame("led_blink", _masks(self._blink))
         sent = self._sent
         if force or sent is None or sent[0] != on:
-            self.host.send(Frame(self._pdo["led_on"], on.to_bytes(5, "little") + bytes(3)))
+            self.host.send(on)
         if force or sent is None or sent[1] != blink:
-            self.host.send(Frame(self._pdo["led_blink"], blink.to_bytes(5, "little") + bytes(3)))
+            self.host.send(blink)
         self._sent = (on, blink)
+
+    def _pdo_frame(self, name: str, values: Mapping[str, int]) -> Frame:
+        """An RPDO of this keypad from its layout in ``devices/`` (signals not named: 0)."""
+        layout = self.description.pdo(name)
+        return Frame(layout.cob_id(self.node_id), layout.encode(values))
 
     # -- brightness and backlight -----------------------------------------------------------------
 
@@ -213,7 +217,7 @@ class Keypad(Device):
         """Indicator LED brightness 0..63 (PKP §13; 0 is the minimum, not off)."""
         check_range("brightness", level, 0, LEVEL_MAX)
         self._indicator = level
-        self.host.send(Frame(self._pdo["indicator_brightness"], bytes((level,)) + bytes(7)))
+        self.host.send(self._pdo_frame("indicator_brightness", {"level": level}))
 
     def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
         """Backlight colour (by name, PKP §18c) and level 0..63 (0 = off, PKP §14)."""
@@ -237,7 +241,7 @@ class Keypad(Device):
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
         # a rev 1.1-style frame would undo a colour set before; send the colour along.
         colour = (self._backlight_colour or 0) if self.generation == "1.5" else 0
-        return Frame(self._pdo["backlight_brightness"], bytes((level, colour)) + bytes(6))
+        return self._pdo_frame("backlight_brightness", {"level": level, "colour": colour})
 
     def set_default_backlight_colour(self, colour: str) -> None:
         self.write("default_backlight_colour", int(BacklightColour.from_name(colour)))
@@ -290,8 +294,7 @@ class Keypad(Device):
             return
         self._flush(force=True)  # errata field report: a rebooted keypad forgot its LEDs
         if self._indicator is not None:
-            self.host.send(Frame(self._pdo["indicator_brightness"],
-                                 bytes((self._indicator,)) + bytes(7)))
+            self.host.send(self._pdo_frame("indicator_brightness", {"level": self._indicator}))
         if self._backlight_colour is not None:
             in_thread(self._restore_backlight)  # the colour goes by SDO: off this thread
         elif self._backlight_level is not None:

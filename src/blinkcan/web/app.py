@@ -24,6 +24,8 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from blinkcan.decode import Decoder
+from blinkcan.devices.keybox import PIN_COUNT
+from blinkcan.devices.keypad import KEY_COUNT
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin, KeypadTwin
@@ -43,7 +45,7 @@ ACTIONS: dict[str, tuple[tuple[str, ...], str | None, Callable[[Any, Any, float]
     "power_off": (("keypad", "keybox"), None, lambda t, v, now: t.power_off()),
     "power_on": (("keypad", "keybox"), None, lambda t, v, now: t.power_on(now)),
 }
-_RANGES = {"key": (1, 12), "pin": (1, 13)}
+_RANGES = {"key": (1, KEY_COUNT), "pin": (1, PIN_COUNT)}
 
 
 class Panel:
