@@ -142,14 +142,16 @@ class KeypadTwin(CanopenTwin):
         def on_write(value: int) -> AbortCode | None:
             word = self._words[prefix]
             self._words[prefix] = (word & ~(mask << shift)) | (value << shift)
-            self._refresh_led_views()
+            self._refresh_led_views(prefix)
             return None
 
         return on_write
 
-    def _refresh_led_views(self) -> None:
+    def _refresh_led_views(self, only: str | None = None) -> None:
+        """Bring 2001h/2002h (or only the object ``only`` names) up to date with the words."""
         for name, (prefix, shift, mask) in self._led_views.items():
-            self._store.set(name, (self._words[prefix] >> shift) & mask)
+            if only is None or prefix == only:
+                self._store.set(name, (self._words[prefix] >> shift) & mask)
 
     def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
         if layout.name in self._words:  # PKP §11/§12: the whole picture in one frame
@@ -158,7 +160,7 @@ class KeypadTwin(CanopenTwin):
                 self._held[layout.name] = word  # applied at the next SYNC (rev 1.5 §36/§37)
             else:
                 self._words[layout.name] = word
-                self._refresh_led_views()
+                self._refresh_led_views(layout.name)
             return []
         if layout.name == "backlight_brightness" and self._generation2:
             return self._on_backlight_pdo(signals, layout.min_length)
