@@ -6,6 +6,7 @@ import io
 import shutil
 import subprocess
 import uuid
+from collections.abc import Callable
 from pathlib import Path
 
 import can
@@ -51,11 +52,14 @@ def test_import_od_reads_the_eds_back_identically(device: str, tmp_path: Path) -
     assert entries(theirs) == entries(ours)
 
 
-@pytest.mark.parametrize(("device", "twin_class"), [("keypad", KeypadTwin), ("keybox", KeyboxTwin)])
+@pytest.mark.parametrize(("device", "make_twin"), [
+    ("keypad", KeypadTwin), ("keybox", KeyboxTwin), ("keypad@1.5", lambda: KeypadTwin(manual="1.5"))])
 def test_a_remote_node_from_the_shipped_eds_reads_every_object(device: str,
-                                                               twin_class: type) -> None:
+                                                               make_twin: Callable[[], object]
+                                                               ) -> None:
     description = describe_device(device)
-    twin = twin_class()
+    twin = make_twin()
+    assert isinstance(twin, (KeypadTwin, KeyboxTwin))
     channel = f"eds-{uuid.uuid4().hex}"
     device_bus = can.Bus(interface="virtual", channel=channel)
     network = canopen.Network()

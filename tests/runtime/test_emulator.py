@@ -41,9 +41,10 @@ def wait_for(host: can.BusABC, can_id: int, timeout: float = 2.0) -> Frame:
 
 
 @pytest.mark.parametrize("quirks", ["firmware", "cia301"])
-@pytest.mark.parametrize("kind", ["keypad", "keybox"])
+@pytest.mark.parametrize("kind", ["keypad", "keybox", "keypad2"])
 def test_remote_node_reads_every_readable_object(channel: str, quirks: Quirks, kind: str) -> None:
-    twin = KeypadTwin(quirks=quirks) if kind == "keypad" else KeyboxTwin(quirks=quirks)
+    twin = (KeyboxTwin(quirks=quirks) if kind == "keybox"
+            else KeypadTwin(quirks=quirks, manual="1.5" if kind == "keypad2" else "1.1"))
     node_id = twin.node_id
     network = canopen.Network()
     network.connect(interface="virtual", channel=channel)

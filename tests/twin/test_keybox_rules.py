@@ -313,3 +313,10 @@ def test_bit_rate_codes_apply_at_the_next_reset() -> None:
     assert bench.twin.snapshot()["bitrate"] == 125_000
     bench.replay("> 000 81 0C\n< 70C 00")
     assert bench.twin.snapshot()["bitrate"] == 500_000  # errata B1: Keybox code 02h
+
+
+def test_a_consumer_heartbeat_write_alone_is_stored(tmp_path: Path) -> None:
+    path = tmp_path / "keybox.json"
+    bench = Bench(KeyboxTwin(nvm=path))
+    bench.replay("on\n< 70C 00\n> 60C 23 16 10 01 F4 01 01 00\n< 58C 60 16 10 01 00 00 00 00")
+    assert json.loads(path.read_text())["settings"]["consumer_heartbeat_time"] == 0x000101F4

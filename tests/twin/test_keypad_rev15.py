@@ -390,3 +390,8 @@ def test_s4_to_s7_nmt(bench: Bench, command: str) -> None:
 
 def test_s6_s8_reset_and_boot_up(bench: Bench) -> None:
     bench.replay("> 000 81 15\n< 715 00")
+
+
+def test_s23_the_new_node_id_is_stored_too() -> None:
+    bench = boot()
+    bench.replay("> 615 2F 13 20 00 3A 00 00 00\n< 5BA 60 13 20 00 00 00 00 00\noff\non\n< 73A 00")

@@ -103,13 +103,14 @@ class ObjectStore:
         return self._commit(slot, value)
 
     def _commit(self, slot: _Slot, value: Value) -> AbortCode | None:
+        previous = slot.value  # before the hook, which may set the entry itself
         if slot.hook is not None:
             refusal = slot.hook(value)  # type: ignore[arg-type]
             if refusal is not None:
                 return refusal
             if not slot.keeps_value:
                 return None
-        changed = value != slot.value
+        changed = value != previous
         _store_value(slot, value)
         # an unchanged stored value is not written again (as devices spare their EEPROM)
         if changed and slot.entry.stored and self.on_stored_change is not None:
