@@ -53,7 +53,8 @@ def test_import_od_reads_the_eds_back_identically(device: str, tmp_path: Path) -
 
 
 @pytest.mark.parametrize(("device", "make_twin"), [
-    ("keypad", KeypadTwin), ("keybox", KeyboxTwin), ("keypad@1.5", lambda: KeypadTwin(manual="1.5"))])
+    ("keypad", KeypadTwin), ("keybox", KeyboxTwin),
+    ("keypad@1.5", lambda: KeypadTwin(manual="1.5"))])
 def test_a_remote_node_from_the_shipped_eds_reads_every_object(device: str,
                                                                make_twin: Callable[[], object]
                                                                ) -> None:
