@@ -4,6 +4,7 @@ python-can's ``udp_multicast`` interface."""
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import random
 import subprocess
@@ -20,9 +21,10 @@ from blinkcan.runtime import to_frame, to_message
 pytestmark = pytest.mark.multiprocess
 
 
-def _multicast_bus(channel: str) -> can.BusABC:
+def _multicast_bus(channel: str, port: int) -> can.BusABC:
     try:
-        return can.Bus(interface="udp_multicast", channel=channel, receive_own_messages=False)
+        return can.Bus(interface="udp_multicast", channel=channel, port=port,
+                       receive_own_messages=False)
     except (OSError, ImportError, can.CanError) as error:
         pytest.skip(f"udp_multicast unavailable here ({error}); on a machine without a default "
                     "route run: ip route add 224.0.0.0/4 dev lo")
@@ -32,13 +34,16 @@ def _multicast_bus(channel: str) -> can.BusABC:
 def emulated(*devices: str) -> Iterator[tuple[can.BusABC, subprocess.Popen[bytes]]]:
     """``blinkcan emulate DEVICES`` in a child process on a fresh multicast group, and this
     process's bus on the same group; both closed afterwards."""
+    # A group and a port of its own: Linux hands multicast to every socket on the port, so
+    # two test runs on one machine would otherwise hear each other.
     channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
-    host = _multicast_bus(channel)
+    port = random.randint(40000, 60000)
+    host = _multicast_bus(channel, port)
     child = subprocess.Popen(
         [sys.executable, "-m", "blinkcan", "emulate", *devices, "-q", "-i", "udp_multicast",
          "-c", channel],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        env={**os.environ, "PYTHONUNBUFFERED": "1", "CAN_CONFIG": json.dumps({"port": port})},
     )
     try:
         yield host, child
