@@ -16,7 +16,7 @@ import pytest
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator, to_frame, to_message
 from blinkcan.twin import KeyboxTwin, KeypadTwin
-from tests.host.conftest import quiet_keypad
+from tests.host.conftest import quiet_keypad, wait_until
 
 playwright_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 pytest.importorskip("starlette", reason="the web extra is not installed")
@@ -69,7 +69,9 @@ def bench() -> Iterator[Bench]:
         page.goto(server.url)
         page.wait_for_selector('[data-test="key-1"]')
         bench = Bench(emulator, keypad, keybox, host, page)
-        bench.send("000 01 00")  # start both
+        bench.send("000 01 00")  # start them all, and wait until they are
+        wait_until(lambda: all(emulator.snapshot(t)["nmt_state"] == "operational"
+                               for t in emulator.twins))
         yield bench
         browser.close()
     device_bus.shutdown()
