@@ -29,90 +29,131 @@ function element(tag, attributes, children) {
   return node;
 }
 
-function header(device) {
-  const power = element("button", { class: "power", "data-test": `power-${device.node_id}`,
-                                    text: device.powered ? "power off" : "power on" });
-  power.onclick = () => act(device.node_id, device.powered ? "power_off" : "power_on");
-  const title = device.kind === "keypad"
-    ? `PKP-2600-SI keypad ${hex(device.node_id)} · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}`
-    : `Keybox ${hex(device.node_id)}`;
+// Each device's elements are built once and then updated in place: a click's press and
+// release always land on the same element, however often the state changes.
+const views = new Map();  // node id -> { kind, root, update(device) }
+const current = new Map();  // node id -> latest snapshot
+
+function headerView(node) {
+  const power = element("button", { class: "power", "data-test": `power-${node}` });
+  power.onclick = () => act(node, current.get(node).powered ? "power_off" : "power_on");
+  const title = element("h2");
   const facts = element("div", { class: "facts" });
-  facts.innerHTML = `NMT <b data-test="nmt-${device.node_id}">${device.nmt_state}</b> · ` +
-    `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
-    (device.quirks === "cia301" ? " · CiA 301 profile" : "");
-  return [power, element("h2", { text: title }), facts];
+  return { parts: [power, title, facts], update(device) {
+    power.textContent = device.powered ? "power off" : "power on";
+    title.textContent = device.kind === "keypad"
+      ? `PKP-2600-SI keypad ${hex(node)} · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}`
+      : `Keybox ${hex(node)}`;
+    facts.innerHTML = `NMT <b data-test="nmt-${node}">${device.nmt_state}</b> · ` +
+      `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
+      (device.quirks === "cia301" ? " · CiA 301 profile" : "");
+  } };
 }
 
-function keypad(device) {
-  const box = element("div", { class: "device" + (device.powered ? "" : " off-power"),
-                               "data-test": `device-${device.node_id}` }, header(device));
+function keypadView(node) {
+  const head = headerView(node);
   const grid = element("div", { class: "keypad" });
-  const glow = BACKLIGHT[device.backlight.colour];
-  if (glow && device.backlight.level > 0) {
-    const spread = 4 + device.backlight.level / 3;
-    grid.style.boxShadow = `0 0 ${spread}px ${spread / 2}px ${glow}`;
-  }
-  const brightness = 0.35 + 0.65 * (device.indicator_brightness / 63);
-  const phase = Math.floor(Date.now() / (1000 * device.blink_period_s / 2)) % 2;
-  device.keys.forEach((key) => {
-    const cell = element("div", { class: "key" + (key.pressed ? " pressed" : ""),
-                                  "data-test": `key-${key.key}`, "data-colour": key.phases[phase],
-                                  "data-phases": key.phases.join(",") });
+  const cells = [];
+  for (let number = 1; number <= 12; number++) {
     const led = element("div", { class: "led" });
-    const colour = key.phases[phase];
-    led.style.background = LED[colour];
-    led.style.opacity = colour === "off" ? 1 : brightness;
-    if (colour !== "off") led.style.boxShadow = `0 0 10px ${LED[colour]}`;
-    cell.append(led, element("span", { class: "num", text: key.key }));
-    const press = (event) => { event.preventDefault(); act(device.node_id, "press", { key: key.key }); };
-    const release = (event) => { event.preventDefault(); act(device.node_id, "release", { key: key.key }); };
+    const cell = element("div", { class: "key", "data-test": `key-${number}` },
+                         [led, element("span", { class: "num", text: number })]);
+    const press = (event) => { event.preventDefault(); act(node, "press", { key: number }); };
+    const release = (event) => { event.preventDefault(); act(node, "release", { key: number }); };
     cell.addEventListener("pointerdown", press);
     cell.addEventListener("pointerup", release);
-    cell.addEventListener("pointerleave", (event) => { if (key.pressed) release(event); });
+    cell.addEventListener("pointerleave", (event) => {
+      const key = current.get(node).keys[number - 1];
+      if (key.pressed) release(event);
+    });
+    cells.push({ cell, led });
     grid.appendChild(cell);
-  });
-  box.appendChild(grid);
-  const extra = device.demo ? ` · DEMO: ${device.demo.step || "on"}` : "";
-  const show = device.startup_show ? ` · startup show: ${device.startup_show.mode}` : "";
-  box.appendChild(element("div", { class: "facts", text:
-    `backlight ${device.backlight.colour} ${device.backlight.level}/63 · LEDs ${device.indicator_brightness}/63${show}${extra}` }));
-  return box;
+  }
+  const footer = element("div", { class: "facts" });
+  const root = element("div", { class: "device", "data-test": `device-${node}` },
+                       [...head.parts, grid, footer]);
+  return { kind: "keypad", root, update(device) {
+    head.update(device);
+    root.classList.toggle("off-power", !device.powered);
+    const glow = BACKLIGHT[device.backlight.colour];
+    const spread = 4 + device.backlight.level / 3;
+    grid.style.boxShadow = glow && device.backlight.level > 0 ? `0 0 ${spread}px ${spread / 2}px ${glow}` : "none";
+    const brightness = 0.35 + 0.65 * (device.indicator_brightness / 63);
+    const phase = Math.floor(Date.now() / (1000 * device.blink_period_s / 2)) % 2;
+    device.keys.forEach((key, i) => {
+      const { cell, led } = cells[i];
+      const colour = key.phases[phase];
+      cell.classList.toggle("pressed", key.pressed);
+      cell.dataset.phases = key.phases.join(",");
+      cell.dataset.colour = colour;
+      led.style.background = LED[colour];
+      led.style.opacity = colour === "off" ? 1 : brightness;
+      led.style.boxShadow = colour === "off" ? "none" : `0 0 10px ${LED[colour]}`;
+    });
+    const extra = device.demo ? ` · DEMO: ${device.demo.step || "on"}` : "";
+    const show = device.startup_show ? ` · startup show: ${device.startup_show.mode}` : "";
+    footer.textContent = `backlight ${device.backlight.colour} ${device.backlight.level}/63 · ` +
+      `LEDs ${device.indicator_brightness}/63${show}${extra}`;
+  } };
 }
 
-function keybox(device) {
-  const box = element("div", { class: "device" + (device.powered ? "" : " off-power"),
-                               "data-test": `device-${device.node_id}` }, header(device));
+function keyboxView(node) {
+  const head = headerView(node);
   const grid = element("div", { class: "keybox" });
-  device.pins.forEach((pin) => {
-    const label = pin.pwm_percent !== null ? `PWM ${pin.pwm_percent}%` : pin.state.toUpperCase();
-    const fuse = element("button", { class: pin.fuse === "blown" ? "fuse-blown" : "",
-                                     "data-test": `fuse-${pin.pin}`,
-                                     text: pin.fuse === "blown" ? "replace fuse" : "blow fuse" });
-    fuse.onclick = () => act(device.node_id, pin.fuse === "blown" ? "replace_fuse" : "blow_fuse", { pin: pin.pin });
-    const input = element("button", { class: pin.input ? "input-high" : "", "data-test": `input-${pin.pin}`,
-                                      text: `input ${pin.input ? "high" : "low"}` });
-    input.onclick = () => act(device.node_id, pin.input ? "input_low" : "input_high", { pin: pin.pin });
-    const cell = element("div", { class: "pin", "data-test": `pin-${pin.pin}` }, [
-      element("div", { text: `pin ${pin.pin}` }),
-      element("div", { class: `state ${pin.state}`, "data-test": `state-${pin.pin}`, text: label }),
-      fuse, input,
-    ]);
-    if (pin.low_side) cell.appendChild(element("div", { class: "lowside", text: "low side" }));
+  const cells = [];
+  for (let number = 1; number <= 13; number++) {
+    const state = element("div", { class: "state", "data-test": `state-${number}` });
+    const fuse = element("button", { "data-test": `fuse-${number}` });
+    fuse.onclick = () => act(node, current.get(node).pins[number - 1].fuse === "blown"
+                             ? "replace_fuse" : "blow_fuse", { pin: number });
+    const input = element("button", { "data-test": `input-${number}` });
+    input.onclick = () => act(node, current.get(node).pins[number - 1].input
+                              ? "input_low" : "input_high", { pin: number });
+    const lowside = element("div", { class: "lowside", text: "low side" });
+    const cell = element("div", { class: "pin", "data-test": `pin-${number}` },
+                         [element("div", { text: `pin ${number}` }), state, fuse, input, lowside]);
+    cells.push({ state, fuse, input, lowside });
     grid.appendChild(cell);
-  });
-  box.appendChild(grid);
-  if (device.heartbeat_consumer && device.heartbeat_consumer.time_ms) {
-    const c = device.heartbeat_consumer;
-    box.appendChild(element("div", { class: "facts",
-      text: `watching node ${hex(c.node_id)} every ${c.time_ms} ms: ${c.state}` }));
   }
-  return box;
+  const consumer = element("div", { class: "facts" });
+  const root = element("div", { class: "device", "data-test": `device-${node}` },
+                       [...head.parts, grid, consumer]);
+  return { kind: "keybox", root, update(device) {
+    head.update(device);
+    root.classList.toggle("off-power", !device.powered);
+    device.pins.forEach((pin, i) => {
+      const view = cells[i];
+      view.state.className = `state ${pin.state}`;
+      view.state.textContent = pin.pwm_percent !== null ? `PWM ${pin.pwm_percent}%` : pin.state.toUpperCase();
+      view.fuse.className = pin.fuse === "blown" ? "fuse-blown" : "";
+      view.fuse.textContent = pin.fuse === "blown" ? "replace fuse" : "blow fuse";
+      view.input.className = pin.input ? "input-high" : "";
+      view.input.textContent = `input ${pin.input ? "high" : "low"}`;
+      view.lowside.style.display = pin.low_side ? "" : "none";
+    });
+    const c = device.heartbeat_consumer;
+    consumer.textContent = c && c.time_ms
+      ? `watching node ${hex(c.node_id)} every ${c.time_ms} ms: ${c.state}` : "";
+  } };
 }
 
 function render() {
   if (!latest) return;
   const devices = document.getElementById("devices");
-  devices.replaceChildren(...latest.devices.map((d) => (d.kind === "keypad" ? keypad(d) : keybox(d))));
+  latest.devices.forEach((device) => {
+    current.set(device.node_id, device);
+    let view = views.get(device.node_id);
+    if (!view || view.kind !== device.kind) {
+      view = device.kind === "keypad" ? keypadView(device.node_id) : keyboxView(device.node_id);
+      views.set(device.node_id, view);
+      devices.appendChild(view.root);
+    }
+    view.update(device);
+  });
+  const present = new Set(latest.devices.map((d) => d.node_id));
+  for (const [node, view] of views) {  // a keypad that moved to another node id
+    if (!present.has(node)) { view.root.remove(); views.delete(node); current.delete(node); }
+  }
   document.getElementById("frames").replaceChildren(...latest.frames.slice().reverse().map(
     (f) => element("li", { text: `${f.id.padStart(3)}  ${f.data.padEnd(23)}  ${f.text}` })));
 }
