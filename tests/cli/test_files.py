@@ -63,6 +63,22 @@ def test_convert_round_trips_through_other_formats(candump: Path, tmp_path: Path
     assert runner.invoke(cli, ["convert", str(candump), str(other)]).exit_code == 0
     assert runner.invoke(cli, ["convert", str(other), str(back)]).exit_code == 0
     assert [f for _, f in read_frames(back)] == [f for _, f in read_frames(candump)]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(  # no partial file left
+        ["session.log", other.name, "back.log"])
+
+
+def test_nothing_a_user_stored_is_replaced_without_force(candump: Path, tmp_path: Path) -> None:
+    mine = tmp_path / "mine.pcap"
+    mine.write_bytes(b"my capture")
+    for args in (["convert", str(candump), str(mine)], ["export", "eds", "keypad", "-o",
+                                                        str(mine)],
+                 ["record", str(mine), "--duration", "0.1", "-i", "virtual"]):
+        result = CliRunner().invoke(cli, args)
+        assert result.exit_code != 0
+        assert "exists; pass --force" in result.output
+        assert mine.read_bytes() == b"my capture"
+    assert CliRunner().invoke(cli, ["convert", str(candump), str(mine), "--force"]).exit_code == 0
+    assert mine.read_bytes() != b"my capture"
 
 
 def test_export_writes_files_other_tools_read(tmp_path: Path) -> None:
@@ -130,3 +146,17 @@ def test_mistakes_are_one_clear_line(args: list[str], message: str, tmp_path: Pa
     assert result.exit_code != 0
     assert message in result.output
     assert "Traceback" not in result.output
+
+
+def test_a_failed_conversion_leaves_no_file(tmp_path: Path) -> None:
+    broken = tmp_path / "broken.pcap"
+    broken.write_bytes(b"\xd4\xc3\xb2\xa1" + bytes(20) + b"\x01")  # header, then garbage
+    target = tmp_path / "out.asc"
+    result = CliRunner().invoke(cli, ["convert", str(broken), str(target)])
+    assert result.exit_code == 1
+    assert "not SocketCAN" in result.output
+    assert "Traceback" not in result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.pcap"]
+    decoded = CliRunner().invoke(cli, ["decode", str(broken)])
+    assert decoded.exit_code == 1
+    assert "not SocketCAN" in decoded.output

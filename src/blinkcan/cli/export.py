@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from blinkcan.cli.bus_options import parse_int
@@ -19,8 +21,9 @@ from blinkcan.formats.eds import eds_text
               show_default=True, help="EDS: the profile whose default values to write.")
 @click.option("--node-id", default=None, help="DBC: the node the COB-IDs are for.")
 @click.option("--manual", default=None, help="Keypad generation (manual revision), e.g. 1.1.")
+@click.option("--force", is_flag=True, help="Replace FILE if it exists.")
 def command(kind: str, device: str, output: str | None, quirks: str, node_id: str | None,
-            manual: str | None) -> None:
+            manual: str | None, force: bool) -> None:
     """Write the EDS or DBC file of a device, from the same tables the twins run on."""
     try:
         description = describe_device(f"{device}@{manual}" if manual else device, quirks)
@@ -31,6 +34,8 @@ def command(kind: str, device: str, output: str | None, quirks: str, node_id: st
     if output is None:
         click.echo(text, nl=False)
     else:
+        if Path(output).exists() and not force:
+            raise click.ClickException(f"{output} exists; pass --force to replace it")
         write_atomically(output, text.encode("utf-8"))
         click.echo(f"wrote {output}", err=True)
 
