@@ -331,7 +331,7 @@ class KeypadTwin(CanopenTwin):
 
     def _boot(self, now: float, application: bool) -> list[Frame]:
         if application:
-            stored = self._nvm.load() or {}
+            stored = self._stored_settings() or {}
             self._j1939 = stored.get("can_protocol", PROTOCOL_CANOPEN) == PROTOCOL_J1939
         if self._j1939:  # J1939 mode: CANopen silent; only the way back is answered
             super()._boot(now, application)
