@@ -27,6 +27,7 @@ from blinkcan.devices.keypad import (
 )
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME, NVM_PREFIX, STORED_SETTINGS
 from blinkcan.devices.model import Quirks
+from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
@@ -83,7 +84,7 @@ class KeypadTwin(CanopenTwin):
             nvm = JsonFileNvm(nvm, description.model, description.generation, description.table,
                               {NVM_PREFIX + key: f.valid for key, f in STORED_SETTINGS.items()})
         j1939_name = name if isinstance(name, J1939Name) else J1939Name.from_bytes(name)
-        self._j1939_keypad = J1939Keypad(j1939_name, {}, lambda settings: self._persist())
+        self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939)
         fresh = nvm.load() is None  # a corrupt or foreign file fails here
         super().__init__(description, node_id, nvm)
         self._j1939_keypad.settings.update(self._stored_j1939_settings(self._nvm.load() or {}))
@@ -350,10 +351,10 @@ class KeypadTwin(CanopenTwin):
 
     def _boot(self, now: float, application: bool) -> list[Frame]:
         if application:
-            stored = self._nvm.load() or {}
+            stored = self._stored_settings() or {}
             self._j1939 = stored.get("can_protocol", PROTOCOL_CANOPEN) == PROTOCOL_J1939
         if self._j1939:  # J1939 mode: CANopen silent, the J1939 keypad speaks
-            stored = self._nvm.load() or {}
+            stored = self._stored_settings() or {}
             super()._boot(now, application)
             self._routes = {}
             self._nmt = NmtState.BOOT_UP
@@ -369,11 +370,17 @@ class KeypadTwin(CanopenTwin):
         return {key[prefix:]: value for key, value in stored.items()
                 if key.startswith(NVM_PREFIX) and key[prefix:] in STORED_SETTINGS}
 
-    def _persist(self) -> None:
-        settings = self._store.stored_values()
-        settings.update({NVM_PREFIX + key: value
-                         for key, value in self._j1939_keypad.settings.items()})
-        self._nvm.save(settings)
+    def _save_settings(self, settings: dict[str, Value]) -> AbortCode | None:
+        return self._save_with_j1939(settings, self._j1939_keypad.settings)
+
+    def _save_with_j1939(self, settings: dict[str, Value], j1939: dict[str, int]
+                         ) -> AbortCode | None:
+        """The CANopen and the J1939 settings share the NVM: each write keeps the other's."""
+        return super()._save_settings(
+            {**settings, **{NVM_PREFIX + key: value for key, value in j1939.items()}})
+
+    def _save_j1939(self, j1939: dict[str, int]) -> bool:
+        return self._save_with_j1939(self._store.stored_values(), j1939) is None
 
     @property
     def bitrate(self) -> int:

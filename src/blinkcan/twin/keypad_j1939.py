@@ -83,11 +83,13 @@ def _clear_key(word: int, key: int) -> int:
 
 class J1939Keypad:
     """The keypad while it speaks J1939. ``settings`` are the stored J1939 settings (names
-    of ``devices/keypad_j1939.STORED_SETTINGS``); ``save`` is called with them after a change.
+    of ``devices/keypad_j1939.STORED_SETTINGS``); ``save`` stores them as they are to become
+    and says whether it could: a setting the NVM cannot take is not changed (nothing is
+    answered on J1939 either way).
     """
 
     def __init__(self, name: J1939Name, settings: dict[str, int],
-                 save: Callable[[dict[str, int]], None]) -> None:
+                 save: Callable[[dict[str, int]], bool]) -> None:
         self.name = name
         self.settings = {**default_settings(), **settings}
         self._save = save
@@ -208,16 +210,14 @@ class J1939Keypad:
     # -- commands -------------------------------------------------------------------------------
 
     def _store(self, command: J1939Command, fields: dict[str, int]) -> None:
-        changed = False
+        wanted = dict(self.settings)
         for field in command.fields:
             value = fields[field.name]
-            if field.setting is None or value == field.keep:
-                continue
-            if self.settings.get(field.setting) != value:
-                self.settings[field.setting] = value
-                changed = True
-        if changed:  # an unchanged value is not written again
-            self._save(dict(self.settings))
+            if field.setting is not None and value != field.keep:
+                wanted[field.setting] = value
+        # an unchanged value is not written again; one the NVM cannot take is not changed
+        if wanted != self.settings and self._save(wanted):
+            self.settings = wanted
 
     def _store_only(self, command: J1939Command, fields: dict[str, int],
                     now: float) -> list[Frame]:
