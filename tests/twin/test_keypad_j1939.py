@@ -471,18 +471,22 @@ def test_the_protocol_argument_is_the_factory_protocol(tmp_path: Path) -> None:
     assert twin.receive(frame("18EF2100 04 1B 70 30 FF FF FF FF"), 1.0) == []
     twin.receive(frame("18EF3000 04 1B 80 00 FF FF FF FF"), 1.0)
     assert twin.snapshot()["protocol"] == "canopen"
+    twin.close()
     again = KeypadTwin(nvm=path, protocol="j1939")  # a stored protocol wins
     again.power_on(0.0)
     assert again.snapshot()["protocol"] == "canopen"
     stored = json.loads(path.read_text())["settings"]
     assert stored["j1939_source_address"] == 0x30
+    again.close()
     with pytest.raises(ValueError, match="protocol must be one of canopen, j1939"):
         KeypadTwin(protocol="nmea")
 
 
 def test_an_nvm_file_with_an_invalid_j1939_value_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "keypad.json"
-    KeypadTwin(nvm=path, protocol="j1939").power_on(0.0)
+    twin = KeypadTwin(nvm=path, protocol="j1939")
+    twin.power_on(0.0)
+    twin.close()
     document = json.loads(path.read_text())
     document["settings"]["j1939_source_address"] = 0xFE
     path.write_text(json.dumps(document))
