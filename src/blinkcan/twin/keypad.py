@@ -11,7 +11,7 @@ and, from the base, the consumer heartbeat and restore defaults.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
@@ -25,6 +25,7 @@ from blinkcan.devices.keypad import (
     describe_keypad,
 )
 from blinkcan.devices.model import Quirks
+from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
@@ -67,9 +68,10 @@ class KeypadTwin(CanopenTwin):
         quirks: Quirks = "firmware",
         nvm: str | os.PathLike[str] | Nvm | None = None,
         manual: str = "1.1",
+        settings: Mapping[str, Value] | None = None,
     ) -> None:
         description = describe_keypad(manual, quirks, node_id)
-        super().__init__(description, node_id, nvm)
+        super().__init__(description, node_id, nvm, settings)
         self._key_pdo = description.pdo("key_state")
         self._key_cob_id = self._key_pdo.cob_id(node_id)
         self._keys = 0
@@ -407,4 +409,7 @@ class KeypadTwin(CanopenTwin):
             "demo": self._demo.describe() if self._demo is not None else None,
             "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
             "leds": dict(self._words),
+            # what the host last commanded, apart from what a show or DEMO mode displays
+            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
+                          for key in range(1, KEY_COUNT + 1)],
         }
