@@ -34,6 +34,9 @@ class DeviceDescription:
     bitrates: dict[int, int]
     #: extra NMT command bytes the device accepts (keypad: 00h = stop, errata P12)
     nmt_aliases: dict[int, NmtCommand] = field(default_factory=dict)
+    #: entry name -> the default the EDS states instead of the table's, where a master that
+    #: configures itself from the EDS must see another value than an SDO read returns
+    eds_defaults: dict[str, int] = field(default_factory=dict)
 
     def pdo(self, name: str) -> PdoLayout:
         for layout in self.pdos:
