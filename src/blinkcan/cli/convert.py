@@ -5,11 +5,11 @@ a live bus. Formats by file name: .pcap, or any python-can log format (.asc .blf
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus
+from blinkcan.cli.targets import check_target, writing
 from blinkcan.formats.logs import FrameWriter, LogError, read_frames
 from blinkcan.runtime import to_frame
 
@@ -20,8 +20,9 @@ from blinkcan.runtime import to_frame
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 def convert(source: str, target: str, force: bool) -> None:
     """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap."""
+    check_target(target, force)
     try:
-        with FrameWriter(target, replace=force) as writer:
+        with writing(target), FrameWriter(target, replace=force) as writer:
             for timestamp, frame in read_frames(source):
                 writer.write(timestamp, frame)
     except LogError as error:
@@ -34,15 +35,13 @@ def convert(source: str, target: str, force: bool) -> None:
 @click.option("--duration", type=float, default=None, help="Seconds to record (default: Ctrl-C).")
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 @bus_options
-def record(target: str, duration: float | None, force: bool, interface: str | None,
-           channel: str | None, bitrate: int | None) -> None:
+def record(target: str, duration: float | None, force: bool) -> None:
     """Record a live bus to a file: .pcap for Wireshark, or any python-can log format."""
-    if Path(target).exists() and not force:
-        raise click.ClickException(f"{target} exists; pass --force to replace it")
-    bus = cli_bus(interface, channel, bitrate)
+    check_target(target, force)
+    bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
     try:
-        with FrameWriter(target, replace=force) as writer:
+        with writing(target), FrameWriter(target, replace=force) as writer:
             click.echo(f"recording {bus.channel_info} to {target}; Ctrl-C stops", err=True)
             try:
                 while end is None or time.monotonic() < end:
