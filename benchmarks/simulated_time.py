@@ -13,11 +13,11 @@ import statistics
 import time
 
 from blinkcan.host import Keybox, Keypad
-from blinkcan.testing import Rig
+from blinkcan.testing import Rig, TimedFrame
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
 
-def _minute(seconds: float) -> tuple[float, int, list[object]]:
+def _minute(seconds: float) -> tuple[float, int, list[TimedFrame]]:
     start = time.perf_counter()
     with Rig() as rig:
         keypad_twin = rig.add(KeypadTwin(node_id=0x15, settings={

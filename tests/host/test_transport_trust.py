@@ -8,6 +8,7 @@ import random
 import threading
 import time
 import uuid
+from collections.abc import Iterator
 
 import can
 import pytest
@@ -78,8 +79,11 @@ def test_a_reply_nobody_asked_for_is_discarded() -> None:
 
 # -- 6. any number of drivers and scan on one python-can bus ---------------------------------
 
+Bench = tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]
+
+
 @pytest.fixture
-def bench() -> tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]:
+def bench() -> Iterator[Bench]:
     channel = f"trust-{uuid.uuid4().hex}"
     device_bus = can.Bus(interface="virtual", channel=channel)
     host_bus = can.Bus(interface="virtual", channel=channel)
@@ -98,7 +102,8 @@ def test_two_drivers_and_scan_share_one_bus(bench: tuple[can.BusABC, Emulator, K
     keybox = Keybox(bus, 0x0C)
     found = scan(bus, listen=0.05, timeout=0.1, node_ids=range(0x0B, 0x16))
     assert [f.node_id for f in found] == [0x0C, 0x15]
-    assert keypad.sdo.timeout == 0.7 and keypad.sdo.retries == 1  # scan changed nothing
+    assert keypad.sdo.timeout == 0.7  # scan changed nothing
+    assert keypad.sdo.retries == 1
     keybox.on(3)
     assert _pin(keybox_twin, 3) == "high"
     assert keypad.host is keybox.host
@@ -134,7 +139,8 @@ def test_a_shut_down_bus_is_reported_once_and_stops_the_reader(
     with caplog.at_level(logging.DEBUG, logger="blinkcan"):
         time.sleep(0.5)
     errors = [r for r in caplog.records if r.levelno >= logging.ERROR]
-    assert len(errors) == 1 and "shut down" in errors[0].getMessage()
+    assert len(errors) == 1
+    assert "shut down" in errors[0].getMessage()
     assert host.closed
     assert not [t for t in threading.enumerate() if t.name.startswith("can.notifier")
                 and t.is_alive() and getattr(t, "_args", (None,))[0] is bus]
