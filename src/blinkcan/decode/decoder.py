@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import orjson
 
+from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keybox import describe_keybox
 from blinkcan.devices.keypad import KEY_COUNT, describe_keypad
@@ -39,7 +40,6 @@ _NMT_TEXT = {
 }
 _STATE_TEXT = {NmtState.STOPPED: "stopped", NmtState.OPERATIONAL: "operational",
                NmtState.PRE_OPERATIONAL: "pre-operational"}
-J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")  # PKP §44
 _JSON_CACHE_SIZE = 100_000
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
 
@@ -66,6 +66,8 @@ class Kind(str, Enum):
     SDO_SEGMENT = "sdo-segment"
     SDO_ABORT = "sdo-abort"
     J1939 = "j1939"
+    REMOTE = "remote"
+    ERROR = "error"
     FRAME = "frame"
 
 
@@ -149,6 +151,8 @@ class Decoder:
         self._device_types = {d.table["device_type"].default: d for d in
                               (describe_keypad(), describe_keybox())}
         self._model_ids = {d.table["model_id"].default: d for d in self._device_types.values()}
+        #: keypads in J1939 mode, by address (decode/j1939.py)
+        self.j1939 = J1939KeypadDecoder()
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
@@ -192,12 +196,24 @@ class Decoder:
                 self._json_bodies[cache_key] = line[len(prefix):]
         return line
 
+    def decode_remote(self, can_id: int, extended: bool, dlc: int, time: float = 0.0) -> Event:
+        """A remote (RTR) frame: on 700h + node it is node guarding (CiA 301 7.2.8.3.2.1)."""
+        frame = Frame.trusted(can_id, b"", extended)
+        node = can_id & 0x7F
+        if not extended and can_id & 0x780 == HEARTBEAT and node:
+            return Event(time, frame, Kind.REMOTE, "node guarding request", node,
+                         self._who(node), {"dlc": dlc})
+        ident = f"{can_id:08X}h" if extended else f"{can_id:03X}h"
+        return Event(time, frame, Kind.REMOTE, f"remote request {ident}, DLC {dlc}",
+                     fields={"dlc": dlc})
+
     # -- routing ----------------------------------------------------------------------------------
 
     def _route(self, frame: Frame) -> Callable[[Frame, float], Event]:
         key = (frame.can_id, frame.extended)
         self._pure.add(key)  # every route below but SDO and the key state is pure
         if frame.extended:
+            self._pure.discard(key)  # J1939 decoding learns keypad addresses
             return self._extended
         can_id = frame.can_id
         if can_id == NMT:
@@ -263,9 +279,11 @@ class Decoder:
                      {"state": state})
 
     def _extended(self, frame: Frame, time: float) -> Event:
-        if (frame.can_id & 0x03FFFF00) == 0x00EF2100 and frame.data == J1939_RETURN_DATA:
-            return Event(time, frame, Kind.J1939, "J1939: keypads return to CANopen (PKP §44)")
-        return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+        meaning = self.j1939.decode(frame)
+        if meaning is None:
+            return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+        return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
+                     "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})
 
     def _unknown(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
@@ -443,6 +461,22 @@ class Decoder:
         self.devices[node] = device
         self._forget_routes(node)
         return True
+
+
+#: SocketCAN error classes, the bits of an error frame's identifier (linux/can/error.h)
+ERROR_CLASSES = (
+    (0x001, "TX timeout"), (0x002, "lost arbitration"), (0x004, "controller problem"),
+    (0x008, "protocol violation"), (0x010, "transceiver status"), (0x020, "no ACK"),
+    (0x040, "bus-off"), (0x080, "bus error"), (0x100, "controller restarted"),
+)
+
+
+def error_event(time: float, error_class: int, data: bytes) -> Event:
+    """An error frame; ``error_class`` is the SocketCAN class bits (0 when the log has none)."""
+    names = [name for bit, name in ERROR_CLASSES if error_class & bit]
+    frame = Frame.trusted(error_class & 0x1FFFFFFF, bytes(data[:8]), True)
+    return Event(time, frame, Kind.ERROR, f"error frame: {', '.join(names) or 'unspecified'}",
+                 fields={"errors": names})
 
 
 def _show(value: int | str) -> str:

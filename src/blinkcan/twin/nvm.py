@@ -26,10 +26,11 @@ import json
 import os
 import re
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 from typing import IO, Protocol
 
-from blinkcan.devices.objects import ObjectTable, Value
+from blinkcan.devices.objects import ObjectTable, Ranges, Value
 
 if sys.platform != "win32":
     import fcntl
@@ -75,14 +76,16 @@ class MemoryNvm:
 
 class JsonFileNvm:
     """Settings in a JSON file tagged with the model and generation that wrote it; see the
-    module docstring for the rules. Opening takes the file's lock (NvmError if taken)."""
+    module docstring for the rules. Opening takes the file's lock (NvmError if taken).
+    ``others``: stored settings that are not objects of ``table`` (the keypad's J1939 ones)."""
 
     def __init__(self, path: str | os.PathLike[str], model: str, generation: str,
-                 table: ObjectTable) -> None:
+                 table: ObjectTable, others: Mapping[str, Ranges] | None = None) -> None:
         self.path = Path(path)
         self.model = model
         self.generation = generation
         self._table = table
+        self._others = dict(others or {})
         self._temporary = self.path.with_name(f".{self.path.name}.tmp")
         self._known: str | None = None  # the text this twin last read or wrote
         self._lock: IO[str] | None = self._acquire()
@@ -178,6 +181,12 @@ class JsonFileNvm:
     def _checked(self, settings: dict[str, object]) -> dict[str, Value]:
         checked: dict[str, Value] = {}
         for name, value in settings.items():
+            if name in self._others:
+                if not isinstance(value, int) or value not in self._others[name]:
+                    raise NvmError(f"{self.path}: {name} = {value!r} is not valid "
+                                   f"({self._others[name]})")
+                checked[name] = value
+                continue
             if name not in self._table or not self._table[name].stored:
                 raise NvmError(f"{self.path}: {name!r} is not a stored setting of a {self.model}")
             entry = self._table[name]
