@@ -16,14 +16,10 @@ from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.canopen_od import object_dictionary
 from blinkcan.formats.shipped import shipped_eds
 
-#: manual revision dates (revision histories), month-day-year as EDS writes them
-_DATES = {("pkp-2600-si", "1.1"): "02-05-2018", ("pkp-2600-si", "1.5"): "10-25-2021",
-          ("keybox", "1.0"): "04-18-2019"}
-
 
 def eds_text(description: DeviceDescription) -> str:
     od = object_dictionary(description)
-    date = _DATES.get((description.model, description.generation), "01-01-2024")
+    date = description.eds_date  # the manual revision's date, month-day-year
     file_info = {
         "FileName": shipped_eds(description).name,
         "FileVersion": 1,
