@@ -83,6 +83,9 @@ class DeviceDescription:
     #: the shipped EDS file's name and date (the manual revision's date, MM-DD-YYYY)
     eds_file: str = ""
     eds_date: str = "01-01-2024"
+    #: entry name -> the default the EDS states instead of the table's, where a master that
+    #: configures itself from the EDS must see another value than an SDO read returns
+    eds_defaults: dict[str, int] = field(default_factory=dict)
 
     def pdo(self, name: str) -> PdoLayout:
         for layout in self.pdos:
