@@ -7,7 +7,6 @@ naming the valid range and the bus sees nothing.
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -22,11 +21,6 @@ from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
-
-
-def in_thread(action: Callable[[], object]) -> None:
-    """Run a blocking call (an SDO) off the bus thread, where handlers must not block."""
-    threading.Thread(target=action, name="blinkcan-sdo", daemon=True).start()
 
 
 def unreversed(version: str) -> str:
@@ -67,11 +61,9 @@ class Device:
                  *, sdo_timeout: float = 0.5, sdo_retries: int = 1) -> None:
         self.node_id = check_node_id(node_id)
         self.description = description
-        self._owns_host = not isinstance(bus, HostBus)
-        self.host = bus if isinstance(bus, HostBus) else HostBus(bus)
-        self.host.start()
+        self.host = HostBus.attach(bus)  # shared by every driver on this bus
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
-        self.health = EventSource[HealthEvent]()
+        self.health = EventSource[HealthEvent](self.host.scheduler)
         self.nmt_state: NmtState | None = None
         self.alive: bool | None = None
         self._heartbeat_timeout: float | None = None
@@ -269,8 +261,10 @@ class Device:
             unsubscribe()
         if self._watch is not None:
             self._watch.cancel()
-        if self._owns_host:
-            self.host.stop()
+        for value in list(vars(self).values()):
+            if isinstance(value, EventSource):
+                value.close()  # iterators over this driver's events end
+        self.host.release()
 
     def __enter__(self) -> Any:
         return self

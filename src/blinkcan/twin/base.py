@@ -95,16 +95,19 @@ class CanopenTwin:
     CONSUMER_MAY_WATCH_ITSELF = True
 
     def __init__(self, description: DeviceDescription, node_id: int,
-                 nvm: str | os.PathLike[str] | Nvm | None = None) -> None:
+                 nvm: str | os.PathLike[str] | Nvm | None = None,
+                 settings: Mapping[str, Value] | None = None) -> None:
         check_node_id(node_id)
         self.description = description
         self.factory_node_id = node_id
         self._store = ObjectStore(description.table, node_id)
+        configured = self._checked_settings(settings or {})
         self._nvm = open_nvm(nvm, description)  # a file in use by another twin fails here
         try:
             stored = self._nvm.load()  # a corrupt or foreign file fails here, before anything runs
-            if stored is None:
-                self._nvm.save(self._factory_settings())
+            if stored is None or configured:  # built as configured: as if written earlier
+                stored = {**(stored or self._factory_settings()), **configured}
+                self._nvm.save(stored)
         except NvmError:
             self._nvm.close()
             raise
@@ -259,6 +262,23 @@ class CanopenTwin:
         }
 
     # -- boot and NMT -----------------------------------------------------------------------
+
+    def _checked_settings(self, settings: Mapping[str, Value]) -> dict[str, Value]:
+        """Stored settings a twin is built with (as if configured earlier), by object name;
+        ValueError for a name that is not a stored setting or a value out of its range."""
+        table = self.description.table
+        stored_names = sorted(entry.name for entry in table if entry.stored)
+        checked: dict[str, Value] = {}
+        for name, value in settings.items():
+            if name not in stored_names:
+                raise ValueError(f"{name!r} is not a stored setting of this "
+                                 f"{self.description.kind}; stored settings: "
+                                 f"{', '.join(stored_names)}")
+            entry = table[name]
+            if not entry.accepts(value):
+                raise ValueError(f"{name} takes {entry.describe_valid()}, not {value!r}")
+            checked[name] = value
+        return checked
 
     def _factory_settings(self) -> dict[str, Value]:
         return {

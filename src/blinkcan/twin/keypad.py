@@ -12,7 +12,7 @@ and, from the base, the consumer heartbeat and restore defaults. In J1939 mode
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
@@ -82,15 +82,18 @@ class KeypadTwin(CanopenTwin):
         manual: str = "1.1",
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
+        settings: Mapping[str, Value] | None = None,
         model: str = MODEL,
     ) -> None:
         if model != MODEL:
             raise ValueError(f"the PKP-2600-SI twin runs model {MODEL!r}, not {model!r}")
-        self._init_keypad(describe_keypad(manual, quirks, node_id), node_id, nvm, protocol, name)
+        self._init_keypad(describe_keypad(manual, quirks, node_id), node_id, nvm, protocol, name,
+                          settings)
 
     def _init_keypad(self, description: DeviceDescription, node_id: int,
                      nvm: str | os.PathLike[str] | Nvm | None, protocol: str = "canopen",
-                     name: J1939Name | bytes = DEFAULT_NAME) -> None:
+                     name: J1939Name | bytes = DEFAULT_NAME,
+                     settings: Mapping[str, Value] | None = None) -> None:
         if protocol not in PROTOCOLS:
             raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, not {protocol!r}")
         if nvm is None:
@@ -101,7 +104,7 @@ class KeypadTwin(CanopenTwin):
         j1939_name = name if isinstance(name, J1939Name) else J1939Name.from_bytes(name)
         self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939)
         fresh = nvm.load() is None  # a corrupt or foreign file fails here
-        super().__init__(description, node_id, nvm)
+        super().__init__(description, node_id, nvm, settings)
         self._j1939_keypad.settings.update(self._stored_j1939_settings(self._nvm.load() or {}))
         if protocol == "j1939" and fresh:
             self._store.set("can_protocol", PROTOCOL_J1939)
@@ -491,4 +494,7 @@ class KeypadTwin(CanopenTwin):
             "demo": self._demo.describe() if self._demo is not None else None,
             "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
             "leds": dict(self._words),
+            # what the host last commanded, apart from what a show or DEMO mode displays
+            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
+                          for key in self._face.key_numbers],
         }
