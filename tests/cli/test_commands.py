@@ -70,7 +70,7 @@ def assert_one_line_error(result: Result, message: str) -> None:
     (["export", "dbc", "keypad", "--node-id", "0x99"], "node id 0x99 outside"),
     (["emulate", "keypad", "keypad"], "keypad and keypad both on node 15h"),
     (["emulate", "keypad:0x0C", "keybox"], "keypad and keybox both on node 0Ch"),
-    (["emulate", "keybox@2.0"], "the Keybox has one generation"),
+    (["emulate", "keybox@2.0"], "keybox generations are 1.0"),
     (["emulate", "keypad@9.9"], "9.9"),
     (["nmt", "start", "0x80"], "node id 0x80 outside"),
     (["keybox", "pwm", "12", "55%"], "not a step of 10 %"),

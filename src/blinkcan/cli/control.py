@@ -10,11 +10,11 @@ from contextlib import contextmanager
 import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
+from blinkcan.devices.registry import model
 from blinkcan.host import Keybox, Keypad, SdoError
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
-DEFAULT_NODE = {"keypad": 0x15, "keybox": 0x0C}
 
 
 @contextmanager
@@ -61,9 +61,11 @@ def _confirm(what: str, yes: bool) -> None:
 
 
 def _group(kind: str, title: str) -> click.Group:
+    default = model(kind).default_node_id
+
     @click.group(kind, help=f"One-shot control of {title}.")
-    @click.option("--node-id", type=NODE_ID, default=DEFAULT_NODE[kind],
-                  help=f"The {kind}'s node id (default {DEFAULT_NODE[kind]:02X}h).")
+    @click.option("--node-id", type=NODE_ID, default=default,
+                  help=f"The {kind}'s node id (default {default:02X}h).")
     @bus_options
     @click.pass_context
     def group(ctx: click.Context, node_id: int) -> None:

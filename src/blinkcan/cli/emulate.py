@@ -20,13 +20,12 @@ from blinkcan.cli.bus_options import (
     parse_node_id,
 )
 from blinkcan.decode import Decoder
-from blinkcan.devices.registry import describe_device
+from blinkcan.devices.registry import parse_spec
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
-from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.nvm import NvmError
-from blinkcan.twin.registry import DEFAULT_NODE_IDS, twin_class
+from blinkcan.twin.registry import build_twin
 
 
 def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
@@ -38,22 +37,16 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
     twins: list[CanopenTwin] = []
     for spec in devices:
         model, _, node_text = spec.partition(":")
-        name, _, generation = model.partition("@")
         try:
-            cls = twin_class(name)
-            describe_device(model)  # an unknown generation is named here
+            found = parse_spec(model)[0]
         except ValueError as error:
             raise click.BadParameter(str(error), param_hint="DEVICE") from None
         node = parse_node_id(node_text) if node_text else node_id
-        if node is None:
-            node = DEFAULT_NODE_IDS[name.lower()]
-        options: dict[str, object] = {"node_id": node, "quirks": quirks, "nvm": nvm}
-        if generation:
-            options["manual"] = generation
-        if low_side and cls is KeyboxTwin:
+        options: dict[str, object] = {}
+        if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
         try:
-            twins.append(cls(**options))  # type: ignore[arg-type]
+            twins.append(build_twin(model, node, quirks, nvm, **options))
         except (ValueError, TypeError) as error:
             for twin in twins:
                 twin.close()
@@ -104,8 +97,9 @@ def _free_node_id(near: int, taken: set[int]) -> int:
 @bus_options
 def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quirks: str,
             response_delay: float, low_side: str, web: str | None, quiet: bool) -> None:
-    """Run device twins on a CAN bus until Ctrl-C. DEVICE: keypad (pkp-2600-si) or keybox;
-    keypad@1.5 is the newer firmware (manual rev 1.5).
+    """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
+    (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5: the newer
+    firmware, manual rev 1.5).
 
     \b
     blinkcan emulate keypad keybox
