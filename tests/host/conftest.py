@@ -35,7 +35,7 @@ class Rig:
     host: HostBus
     keypad: KeypadTwin
     keybox: KeyboxTwin
-    sniffer: can.BusABC
+    sniffer: can.BusABC | _Sniffer
     generation: str = "1.1"
     bench: Bench | None = None  # set when the rig runs in simulated time
 
