@@ -16,6 +16,7 @@ import pytest
 from blinkcan.host import AsyncKeypad, HostBus, Keybox, Keypad, SdoTimeoutError, scan
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
+from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.testing import Rig
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
@@ -70,8 +71,10 @@ def test_a_reply_nobody_asked_for_is_discarded() -> None:
     with Rig() as rig:
         rig.add(KeyboxTwin(node_id=0x0C))
         keybox = Keybox(rig.bus, 0x0C)
-        rig.bus.send(can.Message(arbitration_id=0x58C, data=bytes.fromhex("6001200400000000"),
-                                 is_extended_id=False))
+        stray = SimulatedBus(rig.network, "another node")  # not the controller's own frame
+        stray.send(can.Message(arbitration_id=0x58C, data=bytes.fromhex("6001200400000000"),
+                               is_extended_id=False))
+        stray.shutdown()
         rig.settle()
         assert keybox.host._sdo[0x0C].late_replies == 1
         keybox.close()

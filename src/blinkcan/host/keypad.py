@@ -195,8 +195,13 @@ class Keypad(Device):
     # -- LEDs -------------------------------------------------------------------------------------
 
     def set_led(self, key: int, colour: str = "off", blink: str | None = None) -> None:
-        """Light ``key`` (1..12) in ``colour``; with ``blink`` it blinks in that colour, and with
-        both it alternates between them (PKP §12 alternate mode).
+        """Light ``key`` (1..12) in ``colour``. ``blink`` makes it blink: the same colour (or
+        ``colour="off"``) blinks on and off, another colour alternates with ``colour``
+        (PKP §12 alternate mode)::
+
+            set_led(3, "blue")                  # steady blue
+            set_led(3, "blue", blink="blue")    # blue, blinking
+            set_led(3, "red", blink="green")    # red and green alternating
 
         Colours: off, red, green, blue, yellow/amber, cyan, magenta, white.
         """
@@ -208,9 +213,15 @@ class Keypad(Device):
         steady = led_colour(colour)
         blinking = led_colour(blink) if blink is not None else Channel.NONE
         # the twin's phase model: phase A shows the "on" channels, phase B the on-and-not-
-        # blinking plus the blinking-and-not-on ones; so on = colour, blink = colour ^ blink.
+        # blinking plus the blinking-and-not-on ones; so one colour blinks with on = blink =
+        # colour, and two alternate with on = colour, blink = colour ^ other.
         self._steady[key] = int(steady)
-        self._blink[key] = int(steady ^ blinking) if blink is not None else 0
+        if blink is None:
+            self._blink[key] = 0
+        elif blinking == steady:
+            self._blink[key] = int(steady)
+        else:
+            self._blink[key] = int(steady ^ blinking)
         self._flush()
 
     def set_leds(self, colours: Mapping[int, str], blink: Mapping[int, str] | None = None) -> None:
