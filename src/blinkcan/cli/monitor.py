@@ -10,6 +10,7 @@ import click
 from rich.console import Console, Group
 from rich.live import Live
 from rich.table import Table
+from rich.text import Text
 
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.decode import parse_devices
@@ -31,6 +32,8 @@ def render(view: BusView, events: deque[Event]) -> Group:
         elif node.device == "keybox":
             pins = ((pin, state, False) for pin, state in node.outputs.items())
             parts.append(keybox_panel(pins, title))
+        if node.other:  # what the model sends besides keys and outputs: knobs, inputs...
+            parts.append(Text("\n".join(node.other.values())))
     table = Table("time", "id", "data", "meaning", title="events", title_justify="left")
     for event in events:
         frame = event.frame

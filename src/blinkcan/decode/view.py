@@ -14,6 +14,8 @@ from blinkcan.devices.colours import channel_name
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import describe_device
 
+#: the PDOs followed field by field; any other PDO is kept as its latest meaning
+_FOLLOWED = frozenset({"led_on", "led_blink", "key_state", "outputs", "faults"})
 _NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
                "enter pre-operational": "pre-operational"}
 
@@ -28,6 +30,8 @@ class NodeView:
     held: list[int] = field(default_factory=list)
     outputs: dict[int, str] = field(default_factory=dict)
     face: Face = field(default_factory=Face)  # the model's keys and pins, once known
+    #: PDO name -> what its last frame meant (encoders, analog inputs, ring LEDs, ...)
+    other: dict[str, str] = field(default_factory=dict)
 
     def know(self, face: Face) -> None:
         if face != self.face:
@@ -91,7 +95,10 @@ class BusView:
         elif event.kind is Kind.HEARTBEAT:
             view.state = fields.get("state", view.state)
         elif event.kind is Kind.PDO:
-            self._pdo(view, fields)
+            if fields.get("pdo") in _FOLLOWED:
+                self._pdo(view, fields)
+            else:
+                view.other[str(fields.get("pdo"))] = event.text
         elif event.kind in (Kind.SDO_WRITE, Kind.SDO_VALUE):
             self._object(view, event.kind, fields)
 
