@@ -50,7 +50,7 @@ def decoder() -> Decoder:
     ("20C 01 00 02 00 00 00 00 00", "keybox 0Ch: outputs OFF: 1; HIGH: 2"),
     ("18C 18 00 00 00 00 00 00 00", "keybox 0Ch: outputs in FAULT: 4, 5"),
     ("18C 00 01 00 00 00 00 00 00", "keybox 0Ch: outputs in FAULT: 9"),
-    ("18EF2100 04 1B 80 00 FF FF FF FF", "J1939: keypads return to CANopen (PKP §44)"),
+    ("18EF2100 04 1B 80 00 FF FF FF FF", "keypad 21h: switch to CANopen (§27, PKP §44)"),
 ])
 def test_manual_frames_decode_to_their_meaning(decoder: Decoder, text: str, meaning: str) -> None:
     assert str(decoder.decode(frame(text))) == meaning
@@ -120,8 +120,9 @@ def test_json_form_is_one_object_with_the_meaning(decoder: Decoder) -> None:
 
 
 @pytest.mark.parametrize(("spec", "message"), [
-    ("toaster", "known: keypad, pkp-2600-si, keybox"), ("keybox@2", "one generation"),
-    ("keypad@9.9", "keypad manual must be one of 1.1")])
+    ("toaster", r"known: pkp-2600-si \(keypad\), keybox"),
+    ("keybox@2", "keybox generations are 1.0, not '2'"),
+    ("keypad@9.9", "pkp-2600-si generations are 1.1, 1.5")])
 def test_unknown_device_names_are_refused(spec: str, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Decoder({1: spec})

@@ -18,16 +18,16 @@ from typing import Any, NamedTuple
 
 import orjson
 
+from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.devices.colours import BacklightColour
-from blinkcan.devices.keybox import describe_keybox
-from blinkcan.devices.keypad import KEY_COUNT, describe_keypad
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.pdo import PdoLayout
-from blinkcan.devices.registry import describe_device
+from blinkcan.devices.registry import describe_device, identify
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo import EXPEDITED_UPLOAD_COMMAND
 
@@ -39,7 +39,6 @@ _NMT_TEXT = {
 }
 _STATE_TEXT = {NmtState.STOPPED: "stopped", NmtState.OPERATIONAL: "operational",
                NmtState.PRE_OPERATIONAL: "pre-operational"}
-J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")  # PKP §44
 #: cached JSON bodies kept at most (the oldest half goes when full): a few MB at worst
 _JSON_CACHE_SIZE = 16_384
 #: a route's JSON stops being cached when, after this many misses, under 1 in 4 lookups hit
@@ -135,12 +134,7 @@ def numbers(mask: int, offset: int = 1) -> list[int]:
     """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
     if offset == 1 and 0 <= mask < _TABLED:
         return list(_ITEMS[mask])
-    found = []
-    while mask:
-        lowest = mask & -mask
-        found.append(lowest.bit_length() - 1 + offset)
-        mask ^= lowest
-    return found
+    return item_numbers(mask, offset)
 
 
 def listing(items: list[int]) -> str:
@@ -202,9 +196,10 @@ class Decoder:
         #: per route: [cache hits, cache misses]; routes whose frames rarely repeat go uncached
         self._cache_stats: dict[tuple[int, bool], list[int]] = {}
         self._uncached: set[tuple[int, bool]] = set()
-        self._device_types = {d.table["device_type"].default: d for d in
-                              (describe_keypad(), describe_keybox())}
-        self._model_ids = {d.table["model_id"].default: d for d in self._device_types.values()}
+        #: nodes named from 1000h alone: 100Bh may still correct them (two keypads share it)
+        self._guessed: set[int] = set()
+        #: keypads in J1939 mode, by address (decode/j1939.py)
+        self.j1939 = J1939KeypadDecoder()
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
@@ -356,9 +351,11 @@ class Decoder:
                      {"state": state})
 
     def _extended(self, frame: Frame, time: float) -> Event:
-        if (frame.can_id & 0x03FFFF00) == 0x00EF2100 and frame.data == J1939_RETURN_DATA:
-            return Event(time, frame, Kind.J1939, "J1939: keypads return to CANopen (PKP §44)")
-        return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+        meaning = self.j1939.decode(frame)
+        if meaning is None:
+            return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+        return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
+                     "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})
 
     def _unknown(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
@@ -369,7 +366,7 @@ class Decoder:
 
     def _pdo_route(self, layout: PdoLayout, node: int, device: str
                    ) -> Callable[[Frame, float], Event]:
-        describe = _PDO_TEXT.get(layout.name, _generic_pdo)
+        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
 
         def route(frame: Frame, time: float) -> Event:
             if len(frame.data) < layout.min_length:
@@ -389,13 +386,15 @@ class Decoder:
         """The PDO's JSON line written directly: the same text as ``to_json`` of its event
         (tests/decode check both ways agree), without the Event and the dict in between.
         None for what the event route handles (a short frame)."""
-        describe = _PDO_TEXT.get(layout.name, _generic_pdo)
+        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
         length, name = layout.length, layout.name
         decode_values = layout.decode
+        signals = {s.name: (s.start, s.mask) for s in layout.signals}
         fast = _PDO_JSON.get(name)
+        if fast is not None and not set(fast[0]) <= set(signals):
+            fast = None  # another model's PDO of that name: the Event route describes it
         if fast is not None:  # the signals it reads, as (shift, mask), in its order
             names, describe_json = fast
-            signals = {s.name: (s.start, s.mask) for s in layout.signals}
             (s0, m0), (s1, m1), (s2, m2) = ([signals[n] for n in names] + [(0, 0)] * 3)[:3]
         who = f"{device} {node:02X}h: "
         head = ""  # the constant part between "time" and "data", made on the first frame
@@ -424,7 +423,7 @@ class Decoder:
 
     def _key_masks(self, node: int, keys: int) -> tuple[int, int, int]:
         """(pressed, released, held) masks of a key-state PDO, the keys remembered."""
-        keys &= (1 << KEY_COUNT) - 1
+        keys &= (1 << self.devices[node].face.keys) - 1
         before = self._keys.get(node, 0)
         self._keys[node] = keys
         return keys & ~before, before & ~keys, keys
@@ -588,13 +587,20 @@ class Decoder:
 
     def _learn(self, node: int, index: int, value: int | str) -> bool:
         """Name an unknown node's model from its identity; True when it was learned."""
-        if not self.learn or node in self.devices:
+        if not self.learn:
+            return False
+        known = self.devices.get(node)
+        if known is not None and node not in self._guessed:
             return False
         device = None
-        if index == 0x1000 and isinstance(value, int):
-            device = self._device_types.get(value)
+        if index == 0x1000 and isinstance(value, int) and known is None:
+            device = identify(device_type=value)  # the first model with this 1000h
+            self._guessed.add(node)
         elif index == 0x100B and isinstance(value, str):
-            device = self._model_ids.get(value)
+            device = identify(model_id=value)  # 100Bh names the model (MT M59)
+            self._guessed.discard(node)
+            if known is not None and (device is None or device.model == known.model):
+                return False
         if device is None:
             return False
         self.devices[node] = device
@@ -633,9 +639,29 @@ def _backlight(values: dict[str, int]) -> tuple[str, dict[str, Any]]:
     return f"backlight {level}/63 in {colour}", {"level": level, "colour": colour}
 
 
-def _generic_pdo(decoder: Decoder, node: int, values: dict[str, int]
+def _generic_pdo(layout: PdoLayout
+                 ) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
+    """Any PDO from its layout alone: masks as item numbers, values scaled to their unit."""
+    signals = {s.name: s for s in layout.signals}
+
+    def describe(decoder: Decoder, node: int, values: dict[str, int]
                  ) -> tuple[str, dict[str, Any]]:
-    return ", ".join(f"{k} {v}" for k, v in values.items()), dict(values)
+        parts: list[str] = []
+        fields: dict[str, Any] = {}
+        for name, raw in values.items():
+            signal = signals[name]
+            if signal.item is not None:
+                items = numbers(raw)
+                fields[name] = items
+                parts.append(f"{signal.item} {listing(items)}")
+            else:
+                value = signal.physical(raw)
+                fields[name] = value
+                shown = f"{value:g} {signal.unit}" if signal.unit else f"{value}"
+                parts.append(f"{signal.label.lower()} {shown}")
+        return f"{layout.label.lower()}: {', '.join(parts)}", fields
+
+    return describe
 
 
 def _key_text(pressed: int, released: int, held: int) -> str:

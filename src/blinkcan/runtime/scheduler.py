@@ -110,8 +110,10 @@ class Scheduler(ABC):
         """A fresh signal that :meth:`wait` can wait for."""
 
     @abstractmethod
-    def wait(self, signal: Signal, timeout: float) -> bool:
-        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False)."""
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False).
+        ``background``: spawned work may run meanwhile (waiting for events, not in the middle
+        of a transfer)."""
 
     @abstractmethod
     def sleep(self, seconds: float) -> None:
@@ -243,7 +245,7 @@ class RealTimeScheduler(Scheduler):
     def signal(self) -> Signal:
         return threading.Event()
 
-    def wait(self, signal: Signal, timeout: float) -> bool:
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
         assert isinstance(signal, threading.Event)
         return signal.wait(timeout)
 
@@ -348,7 +350,9 @@ class SimulatedScheduler(Scheduler):
     def signal(self) -> Signal:
         return Flag()
 
-    def wait(self, signal: Signal, timeout: float) -> bool:
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        if background:
+            return self.run_until(signal.is_set, self._now + timeout)
         self._waits += 1
         try:
             return self.run_until(signal.is_set, self._now + timeout)
