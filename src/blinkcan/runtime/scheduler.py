@@ -262,10 +262,12 @@ class RealTimeScheduler(Scheduler):
             self._workers = ThreadPoolExecutor(_WORKERS, thread_name_prefix=f"{self.name}-work")
 
         def work() -> None:
-            if key is not None:
-                with self._pending_lock:
-                    self._pending.discard(key)
-            guarded(action)
+            try:
+                guarded(action)
+            finally:  # the same work is not queued again until this one is over
+                if key is not None:
+                    with self._pending_lock:
+                        self._pending.discard(key)
 
         try:
             self._workers.submit(work)
