@@ -50,7 +50,8 @@ def render(view: BusView, events: deque[Event]) -> Group:
               help="Replay a log file instead of a live bus.")
 @click.option("--duration", type=click.FloatRange(min=0.0), default=None,
               help="Stop after this many seconds.")
-@click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True, help="Events shown.")
+@click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True,
+              help="Events shown.")
 @bus_options
 def command(devices: tuple[str, ...], log_file: str | None, duration: float | None,
             rows: int) -> None:
