@@ -1,4 +1,6 @@
-"""Twins in an Emulator on a virtual bus, a HostBus for the drivers, and a sniffer."""
+"""Twins in an Emulator, a HostBus for the drivers, and a sniffer: on a virtual bus in real
+time (the threaded path), or on blinkcan.testing's simulated bus (``simulated_rig``), where
+waits and sleeps run virtual time."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 from blinkcan.host import HostBus
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator, to_frame
+from blinkcan.testing import Rig as Bench
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
 
@@ -32,16 +35,29 @@ class Rig:
     host: HostBus
     keypad: KeypadTwin
     keybox: KeyboxTwin
-    sniffer: can.BusABC
+    sniffer: can.BusABC | _Sniffer
     generation: str = "1.1"
+    bench: Bench | None = None  # set when the rig runs in simulated time
 
     @property
     def firmware(self) -> str:
         return "V2.8" if self.generation == "1.5" else "V2.2"
 
+    def sleep(self, seconds: float) -> None:
+        if self.bench is not None:
+            self.bench.advance(seconds)
+        else:
+            time.sleep(seconds)
+
+    def wait_until(self, condition: Callable[[], object], timeout: float = 2.0) -> None:
+        if self.bench is not None:
+            self.bench.until(condition, timeout)
+        else:
+            wait_until(condition, timeout)
+
     def sniffed(self, settle: float = 0.05) -> list[Frame]:
         """Frames seen on the bus since the last call."""
-        time.sleep(settle)
+        self.sleep(settle)
         frames = []
         while (message := self.sniffer.recv(0)) is not None:
             frame = to_frame(message)
@@ -58,10 +74,18 @@ def wait_until(condition: Callable[[], object], timeout: float = 2.0) -> None:
         time.sleep(0.005)
 
 
-@pytest.fixture(params=[("firmware", "1.1"), ("cia301", "1.1"), ("firmware", "1.5")],
-                ids=["firmware", "cia301", "generation2"])
+FLAVOURS = [("firmware", "1.1"), ("cia301", "1.1"), ("firmware", "1.5")]
+FLAVOUR_IDS = ["firmware", "cia301", "generation2"]
+
+
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
 def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
     """Every driver test runs against both quirk profiles and both keypad generations."""
+    yield from threaded_rig(request)
+
+
+def threaded_rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    """The rig on a virtual bus in real time: threads, python-can's notifier."""
     quirks, generation = request.param
     channel = f"host-{uuid.uuid4().hex}"
     buses = [can.Bus(interface="virtual", channel=channel) for _ in range(3)]
@@ -75,3 +99,34 @@ def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
         yield rig
     for bus in buses:
         bus.shutdown()
+
+
+def simulated_rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    """The same rig in simulated time (use as a fixture body, with the same params)."""
+    quirks, generation = request.param
+    with Bench() as bench:
+        keypad = bench.add(quiet_keypad(quirks, manual=generation))
+        keybox = bench.add(KeyboxTwin(quirks=quirks))
+        host = HostBus(bench.bus)
+        with host:
+            rig = Rig(bench.emulator, host, keypad, keybox, _Sniffer(bench), generation,
+                      bench=bench)
+            rig.sniffed()
+            yield rig
+
+
+class _Sniffer:
+    """The frames on a simulated wire since the last call, like a listening bus."""
+
+    def __init__(self, bench: Bench) -> None:
+        self._bench = bench
+        self._seen = 0
+
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        frames = self._bench.frames
+        if self._seen >= len(frames):
+            return None
+        when, frame = frames[self._seen]
+        self._seen += 1
+        return can.Message(arbitration_id=frame.can_id, data=frame.data,
+                           is_extended_id=frame.extended, timestamp=when)

@@ -10,6 +10,7 @@ import click
 from rich.console import Console, Group
 from rich.live import Live
 from rich.table import Table
+from rich.text import Text
 
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.decode import parse_devices
@@ -27,10 +28,12 @@ def render(view: BusView, events: deque[Event]) -> Group:
         title = f"{node.device or 'node'} {node.node_id:02X}h, {node.state}"
         if node.device == "keypad":
             keys = ((k, lit, blink, k in node.held) for k, lit, blink in node.key_colours())
-            parts.append(keypad_panel(keys, title))
+            parts.append(keypad_panel(keys, title, node.face.grid))
         elif node.device == "keybox":
             pins = ((pin, state, False) for pin, state in node.outputs.items())
             parts.append(keybox_panel(pins, title))
+        if node.other:  # what the model sends besides keys and outputs: knobs, inputs...
+            parts.append(Text("\n".join(node.other.values())))
     table = Table("time", "id", "data", "meaning", title="events", title_justify="left")
     for event in events:
         frame = event.frame
@@ -45,13 +48,16 @@ def render(view: BusView, events: deque[Event]) -> Group:
               help="Which node is which device (else learned from identity traffic).")
 @click.option("--file", "log_file", type=click.Path(dir_okay=False), default=None,
               help="Replay a log file instead of a live bus.")
-@click.option("--duration", type=float, default=None, help="Stop after this many seconds.")
-@click.option("--rows", type=int, default=15, show_default=True, help="Events shown.")
+@click.option("--duration", type=click.FloatRange(min=0.0), default=None,
+              help="Stop after this many seconds.")
+@click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True,
+              help="Events shown.")
 @bus_options
-def command(devices: tuple[str, ...], log_file: str | None, duration: float | None, rows: int,
-            interface: str | None, channel: str | None, bitrate: int | None) -> None:
+def command(devices: tuple[str, ...], log_file: str | None, duration: float | None,
+            rows: int) -> None:
     """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops."""
-    decoder, view = Decoder(parse_devices(devices)), BusView()
+    decoder = Decoder(parse_devices(devices))
+    view = BusView(decoder)
     events: deque[Event] = deque(maxlen=rows)
     console = Console(highlight=False)
 
@@ -68,7 +74,7 @@ def command(devices: tuple[str, ...], log_file: str | None, duration: float | No
             raise click.ClickException(str(error)) from None
         console.print(render(view, events))
         return
-    bus = cli_bus(interface, channel, bitrate)
+    bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
     try:
         with Live(render(view, events), console=console, auto_refresh=False) as live:

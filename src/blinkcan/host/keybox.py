@@ -15,14 +15,13 @@ from dataclasses import dataclass
 import can
 
 from blinkcan.devices.keybox import (
+    FACE,
     FAULT_PERIOD_UNIT_S,
-    PIN_COUNT,
     PIN_FAULT,
     PIN_HIGH,
     PIN_OFF,
     PIN_RESET,
     PWM_LEVEL_MAX,
-    PWM_PINS,
     describe_keybox,
 )
 from blinkcan.host.bus import HostBus, Timer
@@ -30,6 +29,7 @@ from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_mask, item_numbers
 from blinkcan.protocol.sdo_client import SdoError
 
 log = logging.getLogger(__name__)
@@ -45,14 +45,11 @@ class FaultEvent:
 
 
 def _mask(pins: Iterable[int]) -> int:
-    mask = 0
-    for pin in pins:
-        mask |= 1 << (check_range("pin", pin, 1, PIN_COUNT) - 1)
-    return mask
+    return item_mask(pins, "pin", FACE.pins)
 
 
 def _pins(mask: int) -> frozenset[int]:
-    return frozenset(p for p in range(1, PIN_COUNT + 1) if mask >> (p - 1) & 1)
+    return frozenset(item_numbers(mask & ((1 << FACE.pins) - 1)))
 
 
 class Keybox(Device):
@@ -107,7 +104,7 @@ class Keybox(Device):
         self._pin(pin, PIN_RESET)
 
     def _pin(self, pin: int, code: int) -> None:
-        check_range("pin", pin, 1, PIN_COUNT)
+        check_range("pin", pin, 1, FACE.pins)
         self.write(f"pin_{pin}_state", code)
         if code == PIN_HIGH:
             self.commanded_high.add(pin)
@@ -129,15 +126,15 @@ class Keybox(Device):
     def set_pwm(self, pins: Iterable[int], duty: int) -> None:
         """PWM on pins 12 and/or 13 at ``duty`` 0..10 (x 10 %); pins not named leave PWM."""
         chosen = set(pins)
-        if not chosen <= set(PWM_PINS):
-            raise ValueError(f"PWM is on pins {PWM_PINS} only, not {sorted(chosen)}")
+        if not chosen <= set(FACE.pwm_pins):
+            raise ValueError(f"PWM is on pins {FACE.pwm_pins} only, not {sorted(chosen)}")
         check_range("PWM duty", duty, 0, PWM_LEVEL_MAX)
-        mask = sum(1 << i for i, pin in enumerate(PWM_PINS) if pin in chosen)
+        mask = sum(1 << i for i, pin in enumerate(FACE.pwm_pins) if pin in chosen)
         self.write("pwm", mask | duty << 8)
 
     def state(self, pin: int) -> str:
         """"off", "high" or "fault"."""
-        check_range("pin", pin, 1, PIN_COUNT)
+        check_range("pin", pin, 1, FACE.pins)
         return STATE_NAMES[int(self.read(f"pin_{pin}_state"))]
 
     def states(self) -> dict[int, str]:
@@ -145,12 +142,12 @@ class Keybox(Device):
         high = _pins(int(self.read("output_high_mask")))
         fault = _pins(int(self.read("output_fault_mask")))
         return {p: "fault" if p in fault else "high" if p in high else "off"
-                for p in range(1, PIN_COUNT + 1)}
+                for p in FACE.pin_numbers}
 
     def inputs(self) -> dict[int, bool]:
         """The level on every pin (2003h/01, errata K21)."""
         levels = int(self.read("input_levels"))
-        return {p: bool(levels >> (p - 1) & 1) for p in range(1, PIN_COUNT + 1)}
+        return {p: bool(levels >> (p - 1) & 1) for p in FACE.pin_numbers}
 
     # -- faults -----------------------------------------------------------------------------------
 
@@ -165,7 +162,7 @@ class Keybox(Device):
             self._update_faults(int.from_bytes(frame.data[:2], "little"), now)
 
     def _update_faults(self, mask: int, now: float) -> None:
-        pins = _pins(mask & ((1 << PIN_COUNT) - 1))
+        pins = _pins(mask)
         before, self.fault_pins = self.fault_pins, pins
         for pin in sorted(pins - before):
             self.faults.emit(FaultEvent(pin, True, now))

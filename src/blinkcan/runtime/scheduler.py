@@ -33,6 +33,7 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 
 _STOP = object()
+_POSTED = object()
 _MAX_IDLE_WAIT = 0.5
 _WORKERS = 4  # blocking work (SDO off a handler) per scheduler: bounded, never one per call
 
@@ -110,8 +111,10 @@ class Scheduler(ABC):
         """A fresh signal that :meth:`wait` can wait for."""
 
     @abstractmethod
-    def wait(self, signal: Signal, timeout: float) -> bool:
-        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False)."""
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False).
+        ``background``: spawned work may run meanwhile (waiting for events, not in the middle
+        of a transfer)."""
 
     @abstractmethod
     def sleep(self, seconds: float) -> None:
@@ -137,6 +140,11 @@ class Scheduler(ABC):
 
     def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(when, None, callback))
+
+    def post(self, callback: Callable[[], object]) -> None:
+        """Run ``callback`` on the loop as soon as it can, after what was posted before
+        (from any thread; cheaper than a timer: frames from the reader come this way)."""
+        self.call_soon(callback)
 
     def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(self.clock() + delay, None, callback))
@@ -233,6 +241,9 @@ class RealTimeScheduler(Scheduler):
         self._inbox.put(timer)
         return timer
 
+    def post(self, callback: Callable[[], object]) -> None:
+        self._inbox.put((_POSTED, callback))
+
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         if self._thread is None or self.in_loop:
             return action()
@@ -243,7 +254,7 @@ class RealTimeScheduler(Scheduler):
     def signal(self) -> Signal:
         return threading.Event()
 
-    def wait(self, signal: Signal, timeout: float) -> bool:
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
         assert isinstance(signal, threading.Event)
         return signal.wait(timeout)
 
@@ -260,10 +271,12 @@ class RealTimeScheduler(Scheduler):
             self._workers = ThreadPoolExecutor(_WORKERS, thread_name_prefix=f"{self.name}-work")
 
         def work() -> None:
-            if key is not None:
-                with self._pending_lock:
-                    self._pending.discard(key)
-            guarded(action)
+            try:
+                guarded(action)
+            finally:  # the same work is not queued again until this one is over
+                if key is not None:
+                    with self._pending_lock:
+                        self._pending.discard(key)
 
         try:
             self._workers.submit(work)
@@ -299,6 +312,9 @@ class RealTimeScheduler(Scheduler):
             self._heap.push(item)
             return
         action, future = item
+        if action is _POSTED:
+            guarded(future)
+            return
         try:
             future.set_result(action())
         except BaseException as error:
@@ -348,7 +364,9 @@ class SimulatedScheduler(Scheduler):
     def signal(self) -> Signal:
         return Flag()
 
-    def wait(self, signal: Signal, timeout: float) -> bool:
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        if background:
+            return self.run_until(signal.is_set, self._now + timeout)
         self._waits += 1
         try:
             return self.run_until(signal.is_set, self._now + timeout)

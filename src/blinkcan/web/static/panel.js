@@ -41,38 +41,112 @@ function headerView(node) {
   const facts = element("div", { class: "facts" });
   return { parts: [power, title, facts], update(device) {
     power.textContent = device.powered ? "power off" : "power on";
-    title.textContent = device.kind === "keypad"
-      ? `PKP-2600-SI keypad ${hex(node)} · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}`
-      : `Keybox ${hex(node)}`;
+    title.textContent = `${device.title} ${hex(node)}` +
+      (device.kind === "keypad" ? ` · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}` : "");
     facts.innerHTML = `NMT <b data-test="nmt-${node}">${device.nmt_state}</b> · ` +
       `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
       (device.quirks === "cia301" ? " · CiA 301 profile" : "");
   } };
 }
 
-function keypadView(node) {
+// A rotary encoder: its ring LEDs drawn clockwise from six o'clock (as the model's face
+// numbers them), turned by dragging up/down or scrolling; its cap is the key it also is.
+const TICK_PIXELS = 12;
+function knobView(node, encoder, cell) {
+  const dots = encoder.ring_leds.map((led, i) => {
+    const angle = (i / encoder.ring_leds.length) * 2 * Math.PI;  // clockwise from six o'clock
+    const dot = element("div", { class: "ring-led", "data-test": `ring-led-${led}` });
+    dot.style.left = `${50 - 44 * Math.sin(angle)}%`;
+    dot.style.top = `${50 + 44 * Math.cos(angle)}%`;
+    cell.appendChild(dot);
+    return dot;
+  });
+  const counter = element("span", { class: "counter", "data-test": `counter-${encoder.number}` });
+  cell.appendChild(counter);
+  cell.classList.add("knob");
+  const turn = (ticks) => { if (ticks) act(node, "turn", { encoder: encoder.number, ticks }); };
+  cell.addEventListener("wheel", (event) => {
+    event.preventDefault();
+    turn(event.deltaY < 0 ? 1 : -1);  // scroll up: clockwise
+  }, { passive: false });
+  let dragY = null;
+  let turned = false;
+  cell.addEventListener("pointerdown", (event) => {
+    event.preventDefault(); dragY = event.clientY; turned = false;
+  });
+  cell.addEventListener("pointermove", (event) => {
+    if (dragY === null) return;
+    const ticks = Math.trunc((dragY - event.clientY) / TICK_PIXELS);  // up: clockwise
+    if (ticks) { dragY -= ticks * TICK_PIXELS; turned = true; turn(ticks); }
+  });
+  cell.addEventListener("pointerup", async () => {  // a click without turning pushes the knob
+    if (dragY !== null && !turned) {
+      await act(node, "press", { key: encoder.key });
+      await act(node, "release", { key: encoder.key });
+    }
+    dragY = null;
+  });
+  cell.addEventListener("pointerleave", () => { dragY = null; });
+  return { update(state, phase) {
+    counter.textContent = state.counter;
+    state.ring.forEach((led, i) => {
+      const lit = phase === 0 ? led.on : led.on !== led.blink;  // blink: the on mask XOR blink
+      dots[i].classList.toggle("lit", lit);
+    });
+  } };
+}
+
+// Analog inputs: a slider per input (0 to the face's full scale), its digital level beside.
+function inputsView(node, face) {
+  const box = element("div", { class: "inputs" });
+  const rows = [];
+  for (let n = 0; n < face.analog_inputs; n++) {
+    const slider = element("input", { type: "range", min: 0, max: face.analog_volts_max, step: 0.01,
+                                      value: 0, "data-test": `analog-${n}` });
+    slider.addEventListener("change", () =>
+      act(node, "set_analog", { input: n, volts: parseFloat(slider.value) }));
+    const value = element("span", { class: "volts" });
+    rows.push({ slider, value });
+    box.appendChild(element("label", {}, [element("span", { text: `IN${n}` }), slider, value]));
+  }
+  return { root: box, update(device) {
+    (device.analog_inputs || []).forEach((input, n) => {
+      if (document.activeElement !== rows[n].slider) rows[n].slider.value = input.volts;
+      rows[n].value.textContent = `${input.volts.toFixed(2)} V · ${input.digital ? "high" : "low"}`;
+    });
+  } };
+}
+
+function keypadView(node, face) {
   const head = headerView(node);
   const grid = element("div", { class: "keypad" });
-  const cells = [];
-  for (let number = 1; number <= 12; number++) {
+  grid.style.gridTemplateColumns = `repeat(${Math.max(...face.grid.map((row) => row.length))}, 4.2rem)`;
+  const cells = new Map();  // key number -> its elements
+  for (const number of face.grid.flat()) {
+    if (!number) { grid.appendChild(element("div", { class: "gap" })); continue; }
     const led = element("div", { class: "led" });
     const cell = element("div", { class: "key", "data-test": `key-${number}` },
                          [led, element("span", { class: "num", text: number })]);
     const press = (event) => { event.preventDefault(); act(node, "press", { key: number }); };
     const release = (event) => { event.preventDefault(); act(node, "release", { key: number }); };
-    cell.addEventListener("pointerdown", press);
-    cell.addEventListener("pointerup", release);
-    cell.addEventListener("pointerleave", (event) => {
-      const key = current.get(node).keys[number - 1];
-      if (key.pressed) release(event);
-    });
-    cells.push({ cell, led });
+    const encoder = face.encoders.find((e) => e.key === number);
+    if (!encoder) {  // a knob is pushed by a click (knobView)
+      cell.addEventListener("pointerdown", press);
+      cell.addEventListener("pointerup", release);
+      cell.addEventListener("pointerleave", (event) => {
+        const key = current.get(node).keys[number - 1];
+        if (key.pressed) release(event);
+      });
+    }
+    const knob = encoder ? knobView(node, encoder, cell) : null;
+    cells.set(number, { cell, led, knob, encoder });
     grid.appendChild(cell);
   }
+  const inputs = inputsView(node, face);
   const footer = element("div", { class: "facts" });
   const root = element("div", { class: "device", "data-test": `device-${node}` },
-                       [...head.parts, grid, footer]);
-  return { kind: "keypad", root, update(device) {
+                       [...head.parts, grid, inputs.root, footer]);
+  return { model: null, root, update(device) {
     head.update(device);
     root.classList.toggle("off-power", !device.powered);
     const glow = BACKLIGHT[device.backlight.colour];
@@ -80,8 +154,14 @@ function keypadView(node) {
     grid.style.boxShadow = glow && device.backlight.level > 0 ? `0 0 ${spread}px ${spread / 2}px ${glow}` : "none";
     const brightness = 0.35 + 0.65 * (device.indicator_brightness / 63);
     const phase = Math.floor(Date.now() / (1000 * device.blink_period_s / 2)) % 2;
-    device.keys.forEach((key, i) => {
-      const { cell, led } = cells[i];
+    for (const state of device.encoders || []) {
+      const view = [...cells.values()].find((c) => c.encoder && c.encoder.number === state.encoder);
+      if (view) view.knob.update(state, phase);
+    }
+    inputs.update(device);
+    device.keys.forEach((key) => {
+      if (!cells.has(key.key)) return;
+      const { cell, led } = cells.get(key.key);
       const colour = key.phases[phase];
       cell.classList.toggle("pressed", key.pressed);
       cell.dataset.phases = key.phases.join(",");
@@ -97,11 +177,11 @@ function keypadView(node) {
   } };
 }
 
-function keyboxView(node) {
+function keyboxView(node, face) {
   const head = headerView(node);
   const grid = element("div", { class: "keybox" });
   const cells = [];
-  for (let number = 1; number <= 13; number++) {
+  for (let number = 1; number <= face.pins; number++) {
     const state = element("div", { class: "state", "data-test": `state-${number}` });
     const fuse = element("button", { "data-test": `fuse-${number}` });
     fuse.onclick = () => act(node, current.get(node).pins[number - 1].fuse === "blown"
@@ -118,7 +198,7 @@ function keyboxView(node) {
   const consumer = element("div", { class: "facts" });
   const root = element("div", { class: "device", "data-test": `device-${node}` },
                        [...head.parts, grid, consumer]);
-  return { kind: "keybox", root, update(device) {
+  return { model: null, root, update(device) {
     head.update(device);
     root.classList.toggle("off-power", !device.powered);
     device.pins.forEach((pin, i) => {
@@ -143,8 +223,9 @@ function render() {
   latest.devices.forEach((device) => {
     current.set(device.node_id, device);
     let view = views.get(device.node_id);
-    if (!view || view.kind !== device.kind) {
-      view = device.kind === "keypad" ? keypadView(device.node_id) : keyboxView(device.node_id);
+    if (!view || view.model !== device.model) {
+      view = (device.face.keys ? keypadView : keyboxView)(device.node_id, device.face);
+      view.model = device.model;
       views.set(device.node_id, view);
       devices.appendChild(view.root);
     }
