@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import inspect
 import logging
 import random
 import threading
@@ -19,6 +20,9 @@ from blinkcan.runtime import Emulator
 from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.testing import Rig
 from blinkcan.twin import KeyboxTwin, KeypadTwin
+
+# drivers confirm the device by default; an absent one is driven only when told not to
+_NO_VERIFY = {"verify": False} if "verify" in inspect.signature(Keybox).parameters else {}
 
 
 def _pin(twin: KeyboxTwin, pin: int) -> str:
@@ -249,3 +253,22 @@ def test_udp_multicast_echo_is_not_taken_for_received_frames() -> None:
     finally:
         device_bus.shutdown()
         host_bus.shutdown()
+
+
+# -- 7. polling an absent device never piles up threads --------------------------------------
+
+def test_fault_polls_of_an_absent_keybox_stay_bounded() -> None:
+    bus = can.Bus(interface="virtual", channel=f"absent-{uuid.uuid4().hex}")
+    try:
+        before = threading.active_count()
+        keybox = Keybox(bus, 0x0C, fault_poll=0.05, sdo_timeout=0.2, **_NO_VERIFY)
+        counts = []
+        for _ in range(3):
+            time.sleep(0.5)
+            counts.append(threading.active_count() - before)
+        keybox.close()
+        # the bus loop, the notifier and one poll worker: no growth over 1.5 s (was +20/s)
+        assert max(counts) <= 4
+        assert counts[-1] <= counts[0]
+    finally:
+        bus.shutdown()
