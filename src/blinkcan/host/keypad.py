@@ -25,6 +25,13 @@ from blinkcan.devices.keypad import (
     SHOW_OFF,
     describe_keypad,
 )
+from blinkcan.devices.keypad_j1939 import (
+    DEFAULT_ADDRESS,
+    DEFAULT_HOST_ADDRESS,
+    PGN_COMMAND,
+    PRIORITY,
+)
+from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
@@ -34,11 +41,15 @@ from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
+from blinkcan.protocol.j1939 import j1939_frame
 from blinkcan.protocol.sdo_client import SdoAbortError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
-J1939_RETURN = Frame(0x18EF2100, bytes.fromhex("041B8000FFFFFFFF"), extended=True)  # PKP §44
+#: PKP §44 / J1939 manual §27: the way back to CANopen, from the J1939 command table
+J1939_RETURN = j1939_frame(PGN_COMMAND, DEFAULT_HOST_ADDRESS,
+                           j1939_command("switch_to_canopen").encode(0),
+                           destination=DEFAULT_ADDRESS, priority=PRIORITY)
 
 
 @dataclass(frozen=True)
