@@ -176,6 +176,7 @@ def describe_keybox(quirks: Quirks = "firmware", factory_node_id: int = DEFAULT_
         bitrates=BITRATES,
         face=FACE,
         title="Keybox",
+        edition=f"manual rev {GENERATION}",
         eds_file="keybox.eds",
         eds_date="04-18-2019",  # KBX §42: manual rev 1.0, 18/04/2019
     )
