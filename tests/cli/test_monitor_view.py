@@ -7,6 +7,7 @@ import io
 import re
 import uuid
 from pathlib import Path
+from types import SimpleNamespace
 
 import can
 import pytest
@@ -96,8 +97,8 @@ class _Clock:
 def test_a_file_is_replayed_at_its_own_pace(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                             speed: str, slept: float) -> None:
     clock = _Clock()
-    monkeypatch.setattr(monitor.time, "monotonic", clock.monotonic)
-    monkeypatch.setattr(monitor.time, "sleep", clock.sleep)
+    monkeypatch.setattr(monitor, "time", SimpleNamespace(monotonic=clock.monotonic,
+                                                         sleep=clock.sleep))
     path = _log(tmp_path, [(0.0, "715#05"), (1.0, "215#0100000000000000"), (3.0, "715#05")])
     result = CliRunner().invoke(cli, ["monitor", "--file", str(path), "--speed", speed])
     assert result.exit_code == 0, result.output
