@@ -334,6 +334,7 @@ def describe_pkp3500(
         nmt_aliases={0x00: NmtCommand.STOP},  # MT §7, M22
         face=FACE,
         title="PKP-3500-MT keypad",
+        edition=f"manual rev {GENERATION}",
         eds_file="pkp-3500-mt.eds",
         eds_date="05-16-2023",  # manual rev 1.3, 16/05/2023
         led_fields=LED_FIELDS,
