@@ -178,7 +178,7 @@ def test_shipped_eds_matches_a_fresh_export_and_python_canopen_reads_it() -> Non
     assert path.read_text() == eds_text(description)
     od: Any = canopen.import_od(str(path), 0x15)
     assert od[0x2000][7].default == 8  # TOP position encoder 2 (MT §3)
-    assert od[0x2005][4].name == "Analog input IN3 (5 V = FFh)"
+    assert od[0x2005][4].name == "Analog input IN3 (FFh at 5 V)"
     assert od[0x1803][2].access_type == "ro"
     assert len(od[0x1A03]) == 1  # stated empty for readers that pair 1803h with it (M50)
 

@@ -225,7 +225,7 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
             u8(1, "digital_inputs", "Digital inputs IN0-IN3", Access.RO, 0),
         )),
         record(0x2005, "analog_inputs", "Read analog input", tuple(  # MT §24, M45, M49
-            u8(n + 1, f"analog_input_{n}", f"Analog input IN{n} (5 V = FFh)", Access.RO, 0)
+            u8(n + 1, f"analog_input_{n}", f"Analog input IN{n} (FFh at 5 V)", Access.RO, 0)
             for n in range(ANALOG_INPUTS)
         )),
         var(0x2006, "Set analog input message period", u8(0, "analog_period",
