@@ -57,7 +57,8 @@ def test_the_panel_shows_j1939_mode_and_address(
     page.wait_for_function(
         "document.querySelector('[data-test=\"address-21\"]').textContent === '30h'")
     page.click('[data-test="key-4"]')
-    frames, end = [], time.monotonic() + 2
+    frames: list[Frame] = []
+    end = time.monotonic() + 2
     while time.monotonic() < end and len(frames) < 2:
         message = host.recv(0.05)
         if message is not None and (frame := to_frame(message)) is not None:
