@@ -6,25 +6,40 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import model
 from blinkcan.host import Keybox, Keypad, SdoError
+from blinkcan.protocol.j1939 import ADDRESS_MAX
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
+#: ``blinkcan keypad --protocol j1939 --address 0x21``: kept in the context's meta
+_J1939_ADDRESS = "blinkcan.j1939_address"
+
+
+def _j1939_address() -> int | None:
+    """The keypad's J1939 address when ``--protocol j1939`` was given, else None."""
+    context = click.get_current_context(silent=True)
+    return None if context is None else context.meta.get(_J1939_ADDRESS)
 
 
 @contextmanager
 def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
     kind, node_id = target
+    address = _j1939_address()
     bus = cli_bus()
     try:
         try:
-            if kind == "keypad":
-                device: Keypad | Keybox = Keypad(bus, node_id, start=start)
+            if kind == "keypad" and address is not None:
+                device: Keypad | Keybox = Keypad(bus, node_id, protocol="j1939",
+                                                 address=address)
+            elif kind == "keypad":
+                device = Keypad(bus, node_id, start=start)
             else:
                 device = Keybox(bus, node_id, start=start)
         except (SdoError, ValueError) as error:
@@ -42,6 +57,10 @@ def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
 def _done(target: Target, what: str) -> None:
     """One line saying what an action did, e.g. ``keybox 0Ch: output 4 HIGH``."""
     kind, node_id = target
+    address = _j1939_address()
+    if address is not None:
+        click.echo(f"{kind} {address:02X}h (J1939): {what}")
+        return
     click.echo(f"{kind} {node_id:02X}h: {what}")
 
 
@@ -60,6 +79,16 @@ def _confirm(what: str, yes: bool) -> None:
         raise click.Abort()
 
 
+def _set_node_id(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
+    if value is not None:
+        ctx.obj = (ctx.obj[0], value)
+
+
+#: ``--node-id`` after the command too (``blinkcan keypad info --node-id 0x16``)
+node_id_option = click.option("--node-id", type=NODE_ID, default=None, expose_value=False,
+                              callback=_set_node_id, help="The device's node id.")
+
+
 def _group(kind: str, title: str) -> click.Group:
     default = model(kind).default_node_id
 
@@ -75,12 +104,54 @@ def _group(kind: str, title: str) -> click.Group:
 
 
 keypad = _group("keypad", "a PKP-2600-SI keypad")
+
+
+class J1939Address(click.ParamType):  # type: ignore[type-arg]
+    """A J1939 source address: 0x21, 33 or 21h, 01h..FDh."""
+
+    name = "ADDRESS"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> int:
+        try:
+            address = parse_int(str(value))
+        except click.BadParameter as error:
+            self.fail(error.message, param, ctx)
+        if not 0x01 <= address <= ADDRESS_MAX:
+            self.fail(f"a J1939 keypad address is 01h..{ADDRESS_MAX:02X}h, not {value}", param,
+                      ctx)
+        return address
+
+
+def _set_protocol(ctx: click.Context, param: click.Parameter, value: str | None) -> None:
+    if value == "j1939":
+        ctx.meta.setdefault(_J1939_ADDRESS, DEFAULT_ADDRESS)
+    elif value == "canopen":
+        ctx.meta.pop(_J1939_ADDRESS, None)
+
+
+def _set_address(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
+    if value is not None:
+        ctx.meta[_J1939_ADDRESS] = value
+
+
+# a keypad in J1939 mode (spec/pkp-2600-si-j1939.md): led, backlight and brightness go as J1939
+# commands to its source address (--address implies --protocol j1939)
+keypad.params += [
+    click.Option(["--protocol"], type=click.Choice(["canopen", "j1939"]), default=None,
+                 expose_value=False, is_eager=True, callback=_set_protocol,
+                 help="The keypad's protocol (default canopen)."),
+    click.Option(["--address"], type=J1939Address(), default=None,
+                 expose_value=False, callback=_set_address,
+                 help=f"J1939 source address of the keypad (default {DEFAULT_ADDRESS:02X}h)."),
+]
 keybox = _group("keybox", "a Keybox")
 
 
 for group in (keypad, keybox):
     @group.command("info")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def info(target: Target) -> None:
         """Identity: name, model, versions (un-reversed), serial, vendor."""
@@ -90,6 +161,7 @@ for group in (keypad, keybox):
     @group.command("heartbeat")
     @click.argument("milliseconds", type=click.IntRange(0, 0xFFFF))
     @bus_options
+    @node_id_option
     @click.pass_obj
     def heartbeat(target: Target, milliseconds: int) -> None:
         """Producer heartbeat period in ms (0 = off)."""
@@ -101,6 +173,7 @@ for group in (keypad, keybox):
     @click.argument("new_id", type=NODE_ID)
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def set_node_id(target: Target, new_id: int, yes: bool) -> None:
         """Store a new node id (applies at the next reset; generation 2 keypads: at once)."""
@@ -113,6 +186,7 @@ for group in (keypad, keybox):
     @click.argument("bit_rate", metavar="BITRATE", type=int)
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def set_baud(target: Target, bit_rate: int, yes: bool) -> None:
         """Store a bit rate in bit/s, with this model's own code (applies at the next reset)."""
@@ -125,12 +199,15 @@ for group in (keypad, keybox):
     @group.command("restore-defaults")
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def restore_defaults(target: Target, yes: bool) -> None:
         """Every stored setting back to factory values (1011h), applied at the next reset."""
         _confirm(f"Every stored setting of the {target[0]} (node id, bit rate, heartbeat...) "
                  "goes back to its factory value at the next reset", yes)
         with _device(target) as device:
+            if isinstance(device, Keypad):
+                _ = device.generation  # probed: generation 2 has 1011h, generation 1 does not
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")
 
@@ -150,6 +227,7 @@ def _blink_words(colour: str, blink: str | None) -> str:
               help="Blink: alone, COLOUR blinks on and off; with another colour, the LED "
                    "alternates between the two.")
 @bus_options
+@node_id_option
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     """Light KEY (1-12) in COLOUR (off, red, green, blue, amber, cyan, magenta, white). Starts
@@ -171,6 +249,7 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
 @click.option("--colour", default=None, help="Backlight colour (red ... yellow/green).")
 @click.option("--level", type=int, default=None, help="0-63 (0 = off).")
 @bus_options
+@node_id_option
 @click.pass_obj
 def backlight(target: Target, colour: str | None, level: int | None) -> None:
     """Backlight colour and level."""
@@ -187,6 +266,7 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
 @keypad.command("brightness")
 @click.argument("level", type=int)
 @bus_options
+@node_id_option
 @click.pass_obj
 def brightness(target: Target, level: int) -> None:
     """Indicator LED brightness 0-63."""
@@ -200,6 +280,7 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
     @keybox.command(name, help=doc)
     @click.argument("pin", type=int)
     @bus_options
+    @node_id_option
     @click.pass_obj
     def command(target: Target, pin: int) -> None:
         with _device(target) as device:
@@ -216,6 +297,7 @@ _pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} R
 @click.argument("pins")
 @click.argument("duty")
 @bus_options
+@node_id_option
 @click.pass_obj
 def pwm(target: Target, pins: str, duty: str) -> None:
     """PWM on PINS (12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps of 10.
@@ -242,6 +324,7 @@ def pwm(target: Target, pins: str, duty: str) -> None:
 
 @keybox.command("states")
 @bus_options
+@node_id_option
 @click.pass_obj
 def states(target: Target) -> None:
     """Every output's state, and the input levels."""
@@ -254,6 +337,7 @@ def states(target: Target) -> None:
 
 @keybox.command("faults")
 @bus_options
+@node_id_option
 @click.pass_obj
 def faults(target: Target) -> None:
     """The outputs in FAULT."""

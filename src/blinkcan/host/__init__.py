@@ -4,6 +4,7 @@ from blinkcan.host.aio import AsyncKeybox, AsyncKeypad, async_scan
 from blinkcan.host.behaviours import Cycle, Momentary, Toggle
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import HealthEvent, Identity
+from blinkcan.host.j1939_keypad import FoundJ1939, scan_j1939
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.host.scan import Found, scan
@@ -15,6 +16,7 @@ __all__ = [
     "Cycle",
     "FaultEvent",
     "Found",
+    "FoundJ1939",
     "HealthEvent",
     "HostBus",
     "Identity",
@@ -28,4 +30,5 @@ __all__ = [
     "Toggle",
     "async_scan",
     "scan",
+    "scan_j1939",
 ]

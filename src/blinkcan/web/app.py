@@ -13,24 +13,26 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from collections import deque
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, Collection
 from dataclasses import asdict
 from importlib import resources
 from typing import Any
 
 from starlette.applications import Starlette
+from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from blinkcan.decode import Decoder
+from blinkcan.decode.eventlog import EventLog
 from blinkcan.devices.model import Face
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.web.guard import REQUEST_TIMEOUT_S, BodyError, Guard, json_body
 
 MAX_UPDATES_PER_S = 30
 FRAMES_KEPT = 20
@@ -89,25 +91,35 @@ class Panel:
     def __init__(self, emulator: Emulator) -> None:
         self.emulator = emulator
         self.decoder = Decoder({t.node_id: t.description for t in emulator.twins})
-        self.frames: deque[dict[str, Any]] = deque(maxlen=FRAMES_KEPT)
+        #: the last frames with their meaning, repeated heartbeats folded (decode/eventlog.py)
+        self.log = EventLog(FRAMES_KEPT)
         self._faces: dict[str, dict[str, Any]] = {}
         previous = emulator.on_frame
 
         def record(frame: Frame, sent: bool, now: float) -> None:
             if previous is not None:
                 previous(frame, sent, now)
-            self.frames.append({"id": f"{frame.can_id:03X}", "data": frame.data.hex(" ").upper(),
-                                "text": str(self.decoder.decode(frame, now))})
+            self.log.add(self.decoder.decode(frame, now))
 
         emulator.on_frame = record
+
+    @property
+    def frames(self) -> list[dict[str, Any]]:
+        """The last frames: seconds since the first, id, data, meaning (xN: folded)."""
+        log = self.log
+        return [{"time": f"{log.since_start(row.event):.3f}",
+                 "id": f"{row.event.frame.can_id:03X}",
+                 "data": row.event.frame.data.hex(" ").upper(), "text": row.text()}
+                for row in list(log.rows)]
 
     def state(self) -> dict[str, Any]:
         devices = self.emulator.run(lambda now: [t.snapshot() for t in self.emulator.twins])
         for twin, device in zip(self.emulator.twins, devices, strict=True):
             description = twin.description
             device["model"], device["title"] = description.model, description.title
+            device["edition"] = description.edition
             device["face"] = self._faces.setdefault(description.model, asdict(description.face))
-        return {"devices": devices, "frames": list(self.frames)}
+        return {"devices": devices, "frames": self.frames}
 
     def twin(self, node_id: object) -> CanopenTwin:
         for twin in self.emulator.twins:
@@ -143,7 +155,10 @@ class Panel:
         self.emulator.run(lambda now: perform(twin, value, now))
 
 
-def create_app(emulator: Emulator) -> Starlette:
+def create_app(emulator: Emulator, hosts: Collection[str] | None = ("127.0.0.1",),
+               request_timeout: float = REQUEST_TIMEOUT_S) -> Starlette:
+    """The panel's web app. ``hosts``: the Host names it answers to (None: any, for a wildcard
+    address; see web/guard.py); ``request_timeout``: seconds a request body may take."""
     panel = Panel(emulator)
     static = resources.files("blinkcan.web") / "static"
 
@@ -169,9 +184,10 @@ def create_app(emulator: Emulator) -> Starlette:
 
     async def action(request: Request) -> Response:
         try:
-            body = await request.json()
-        except ValueError:
-            return JSONResponse({"error": "the body is not JSON"}, status_code=400)
+            body = await json_body(request, request_timeout)
+        except BodyError as error:  # an unread or slow body: do not wait for more of it
+            return JSONResponse({"error": str(error)}, status_code=error.status,
+                                headers={"Connection": "close"})
         try:
             await asyncio.to_thread(panel.act, body)
         except (ValueError, TypeError) as error:
@@ -184,7 +200,7 @@ def create_app(emulator: Emulator) -> Starlette:
         Route("/api/events", events),
         Route("/api/action", action, methods=["POST"]),
         Mount("/static", StaticFiles(directory=str(static)), name="static"),
-    ])
+    ], middleware=[Middleware(Guard, hosts=hosts)])
 
 
 __all__ = ["ACTIONS", "KeyboxTwin", "Panel", "create_app"]
