@@ -105,7 +105,8 @@ class SimulatedBus(can.BusABC):
     """One endpoint of a :class:`SimulatedNetwork`, with python-can's bus interface.
 
     ``recv(timeout)`` runs the simulation until a frame arrives or ``timeout`` virtual seconds
-    passed (``recv()`` with no timeout: at most :data:`RECV_FOREVER`). Do not give it to a ``can.Notifier``: the simulation has no threads.
+    passed (``recv()`` with no timeout: at most :data:`RECV_FOREVER`). Do not give it to a
+    ``can.Notifier``: the simulation has no threads.
     """
 
     def __init__(self, network: SimulatedNetwork, channel: str = "simulated",
