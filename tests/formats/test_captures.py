@@ -232,3 +232,16 @@ def test_record_stops_cleanly_on_sigterm_keeping_every_frame(tmp_path: Path,
     kinds = [(frame_kind(m), m.arbitration_id) for m in read_messages(target)]
     assert ("remote", 0x70C) in kinds
     assert ("data", 0x715) in kinds
+
+
+def test_can_fd_frames_go_through_a_pcap_whole(tmp_path: Path) -> None:
+    source = tmp_path / "fd.log"
+    source.write_text("(1.0) can0 123##1" + bytes(range(12)).hex().upper() + "\n"
+                      "(2.0) can0 715#05\n")
+    target = tmp_path / "fd.pcap"
+    result = CliRunner().invoke(cli, ["convert", str(source), str(target)])
+    assert result.exit_code == 0, result.output
+    messages = list(read_messages(target))
+    assert messages[0].is_fd
+    assert bytes(messages[0].data) == bytes(range(12))
+    assert bytes(messages[1].data) == b"\x05"
