@@ -34,6 +34,7 @@ class Rig:
     keybox: KeyboxTwin
     sniffer: can.BusABC
     generation: str = "1.1"
+    channel: str = ""  # the virtual channel, for a command line pointed at this bus
 
     @property
     def firmware(self) -> str:
@@ -70,7 +71,7 @@ def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
     emulator = Emulator(buses[0], [keypad, keybox])
     host = HostBus(buses[1])
     with emulator, host:
-        rig = Rig(emulator, host, keypad, keybox, buses[2], generation)
+        rig = Rig(emulator, host, keypad, keybox, buses[2], generation, channel)
         rig.sniffed()
         yield rig
     for bus in buses:

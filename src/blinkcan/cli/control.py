@@ -1,5 +1,9 @@
 """``blinkcan keypad ...`` and ``blinkcan keybox ...``: one-shot control and configuration on
-top of the host drivers. Changing a node id or bit rate asks for confirmation (``--yes``)."""
+top of the host drivers. Changing a node id or bit rate asks for confirmation (``--yes``).
+
+Every command, PDO-only ones included (``keypad led``), first confirms which device answers at
+the node id (the drivers' identity check): nothing answering, or another kind of device, is one
+line and a non-zero exit, and the bus sees no command."""
 
 from __future__ import annotations
 
@@ -9,7 +13,7 @@ from contextlib import contextmanager
 import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
-from blinkcan.host import Keybox, Keypad, SdoError
+from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
 
 
 @contextmanager
@@ -17,11 +21,14 @@ def _device(kind: str, node_id: str | None, interface: str | None, channel: str 
             bitrate: int | None, start: bool = False) -> Iterator[Keypad | Keybox]:
     bus = cli_bus(interface, channel, bitrate)
     try:
-        if kind == "keypad":
-            device: Keypad | Keybox = Keypad(bus, parse_int(node_id) if node_id else 0x15,
-                                             start=start)
-        else:
-            device = Keybox(bus, parse_int(node_id) if node_id else 0x0C, start=start)
+        try:
+            if kind == "keypad":
+                device: Keypad | Keybox = Keypad(bus, parse_int(node_id) if node_id else 0x15,
+                                                 start=start)
+            else:
+                device = Keybox(bus, parse_int(node_id) if node_id else 0x0C, start=start)
+        except (IdentityError, SdoError) as error:
+            raise click.ClickException(str(error)) from None
         try:
             yield device
         except (SdoError, ValueError) as error:

@@ -3,6 +3,13 @@
 Only what traffic shows: NMT state from heartbeats, the keypad's LED picture from its LED
 PDOs, the keys held from its key-state PDOs, the Keybox's outputs as commanded (RPDO, 2001h and
 2008h writes) and as reported (the fault PDO, 2008h reads).
+
+What a device does by itself is followed by the twins' fail-safe rules (README "Decisions"):
+a boot-up means outputs OFF, LEDs dark and FAULT latches cleared (so does an NMT reset); an NMT
+stop, or a heartbeat saying "stopped", switches HIGH outputs OFF; a device that goes from
+operational to pre-operational with no NMT command asking for it tripped its consumer heartbeat
+(KBX §28, PKP rev 1.5 §26): HIGH outputs OFF, LEDs dark. FAULT stays latched through all but a
+reset.
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ from blinkcan.devices.keypad import KEY_COUNT
 KEYS, PINS = KEY_COUNT, PIN_COUNT
 _NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
                "enter pre-operational": "pre-operational"}
+_RESETS = ("reset node", "reset communication")
 
 
 @dataclass
@@ -29,6 +37,29 @@ class NodeView:
     held: list[int] = field(default_factory=list)
     outputs: dict[int, str] = field(default_factory=lambda: dict.fromkeys(range(1, PINS + 1),
                                                                            "off"))
+    #: the state the last NMT command to this node asked for (None: none seen, or a reset)
+    asked: str | None = None
+
+    def outputs_off(self) -> None:
+        """Fail-safe: every HIGH output OFF, FAULT latched."""
+        self.outputs = {pin: "fault" if state == "fault" else "off"
+                        for pin, state in self.outputs.items()}
+
+    def reboot(self) -> None:
+        """Power-on or reset: pre-operational, outputs OFF, no FAULT, LEDs dark, no key held."""
+        self.state, self.leds, self.blink, self.held = "pre-operational", {}, {}, []
+        self.outputs = dict.fromkeys(range(1, PINS + 1), "off")
+        self.asked = None
+
+    def reported(self, state: str) -> None:
+        """A heartbeat's state; a change the last NMT command did not ask for is a trip."""
+        if state == "stopped":
+            self.outputs_off()
+        elif (self.state, state) == ("operational", "pre-operational") \
+                and self.asked != "pre-operational":
+            self.outputs_off()  # the watchdog tripped: KBX §28, PKP rev 1.5 §26 note 2
+            self.leds, self.blink = {}, {}
+        self.state = state
 
     def key_colours(self) -> list[tuple[int, str, str]]:
         """(key, steady colour, blink colour) for keys 1..12."""
@@ -53,12 +84,17 @@ class BusView:
 
     def update(self, event: Event) -> None:
         if event.kind is Kind.NMT:
-            state = _NMT_STATES.get(event.fields.get("command", ""))
+            command = event.fields.get("command", "")
+            state = _NMT_STATES.get(command)
             target = event.fields.get("target", 0)
             targets = self.nodes.values() if target == 0 else [self.node(target)]
-            if state is not None:
-                for view in targets:
-                    view.state = state
+            for view in targets:
+                if command in _RESETS:
+                    view.reboot()
+                elif state is not None:
+                    view.asked = view.state = state
+                    if state == "stopped":
+                        view.outputs_off()
             return
         if event.node_id is None:
             return
@@ -66,10 +102,9 @@ class BusView:
         view.device = event.device or view.device
         fields = event.fields
         if event.kind is Kind.BOOT_UP:
-            view.state, view.leds, view.blink, view.held = "pre-operational", {}, {}, []
-            view.outputs = dict.fromkeys(range(1, PINS + 1), "off")
+            view.reboot()
         elif event.kind is Kind.HEARTBEAT:
-            view.state = fields.get("state", view.state)
+            view.reported(fields.get("state", view.state))
         elif event.kind is Kind.PDO:
             self._pdo(view, fields)
         elif event.kind in (Kind.SDO_WRITE, Kind.SDO_VALUE):

@@ -2,8 +2,10 @@
 
 The driver keeps the picture the application asked for and sends only what changed, at most
 one LED-on and one LED-blink PDO per change (or per ``with keypad.batch():``). When the keypad
-reboots it forgets its LEDs (errata.md, field reports): the driver starts it again and re-sends
-the whole picture.
+reboots it forgets its LEDs (errata.md, field reports), and generation 2 switches them off when
+its watchdog trips (rev 1.5 §26): the driver starts it again and re-sends the whole picture as
+it is when it is sent (the backlight colour goes by SDO, serialised with the application's own
+backlight commands, so a restore never writes a colour the application has since changed).
 """
 
 from __future__ import annotations
@@ -60,14 +62,16 @@ def _masks(channels_by_key: Mapping[int, int]) -> dict[str, int]:
 class Keypad(Device):
     """Drive a PKP-2600-SI at ``node_id`` on ``bus`` (a python-can bus or a :class:`HostBus`).
 
-    ``start``: send NMT start now and after every boot-up. ``long_press``: seconds a key is
-    held before a "long press" event. ``restore``: re-send the LED picture after a boot-up.
+    ``start``: send NMT start now, after every boot-up and after a watchdog trip.
+    ``long_press``: seconds a key is held before a "long press" event. ``restore``: re-send the
+    LED picture after a boot-up or a watchdog trip. ``verify``: confirm that a PKP-2600-SI
+    answers at ``node_id`` first (False only for a keypad that cannot answer SDO).
     """
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
                  long_press: float = 0.8, restore: bool = True, generation: str | None = None,
                  watchdog: float | None = None, host_node_id: int = 0x7F,
-                 sdo_timeout: float = 0.5) -> None:
+                 sdo_timeout: float = 0.5, verify: bool = True) -> None:
         super().__init__(bus, node_id, describe_keypad(generation or "1.1", "cia301", node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
@@ -87,6 +91,7 @@ class Keypad(Device):
         self._backlight_colour: int | None = None
         key_pdo = self.description.pdo("key_state")
         self._unsubscribe.append(self.host.subscribe(key_pdo.cob_id(node_id), self._on_keys))
+        self._confirm_or_close(verify)
         if watchdog is not None:
             self.watch_host(watchdog)
         if start:
@@ -114,6 +119,10 @@ class Keypad(Device):
         if self.generation != "1.5":
             raise ValueError("this keypad (manual 1.1) has no consumer heartbeat (1016h)")
         super().watch_host(period)
+
+    def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
+        self.generation  # noqa: B018  (1016h is generation 2's: find out which this is)
+        super().set_consumer_heartbeat(node_id, period)
 
     def set_synchronous(self, leds: bool = True, key_state_every: int | None = 1) -> None:
         """Generation 2: LED PDOs applied at the next SYNC and the key state sent every n-th
@@ -224,18 +233,21 @@ class Keypad(Device):
         code = BacklightColour.from_name(colour) if colour is not None else None
         if level is not None:
             check_range("backlight level", level, 0, LEVEL_MAX)
-        if code is not None:
-            self.write("backlight_colour", int(code))
-            self._backlight_colour = int(code)
-        if level is not None:
-            self._backlight_level = level
-            self.host.send(self._backlight_frame(level))
+        with self._command_lock:
+            if code is not None:
+                self.write("backlight_colour", int(code))
+                self._backlight_colour = int(code)
+            if level is not None:
+                self._backlight_level = level
+                self.host.send(self._backlight_frame(level))
 
     def _restore_backlight(self) -> None:
-        if self._backlight_colour is not None:
-            self.write("backlight_colour", self._backlight_colour)
-        if self._backlight_level is not None:
-            self.host.send(self._backlight_frame(self._backlight_level))
+        """The backlight as it is when this runs (after any backlight command in flight)."""
+        with self._command_lock:
+            if self._backlight_colour is not None:
+                self.write("backlight_colour", self._backlight_colour)
+            if self._backlight_level is not None:
+                self.host.send(self._backlight_frame(self._backlight_level))
 
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
@@ -287,6 +299,12 @@ class Keypad(Device):
             timer.cancel()
         self._long_timers.clear()
         self.pressed = frozenset()
+        self._recover()
+
+    def _on_watchdog_trip(self, now: float) -> None:
+        self._recover()  # rev 1.5 §26 note 2: the keypad switched its LEDs off
+
+    def _recover(self) -> None:
         if self.auto_start:
             self.start()
         if not self.restore:

@@ -58,9 +58,6 @@ class KeypadTwin(CanopenTwin):
     (or None for memory). ``manual`` selects the firmware generation ("1.1" or "1.5").
     """
 
-    CONSUMER_TIME_MAX = 0xFFFF  # errata G4: 10..65535 ms (the Keybox stops at 65279)
-    CONSUMER_MAY_WATCH_ITSELF = False  # errata G4: not the keypad's own id
-
     def __init__(
         self,
         node_id: int = 0x15,
