@@ -33,13 +33,13 @@ def candump(tmp_path: Path) -> Path:
 def test_decode_matches_the_golden_output(candump: Path) -> None:
     result = CliRunner().invoke(cli, ["decode", str(candump)])
     assert result.exit_code == 0, result.output
-    assert result.output == GOLDEN.read_text()
+    assert result.stdout == GOLDEN.read_text()
 
 
 def test_decode_json_is_one_object_per_frame(candump: Path) -> None:
     result = CliRunner().invoke(cli, ["decode", "--json", str(candump)])
     assert result.exit_code == 0, result.output
-    lines = [json.loads(line) for line in result.output.splitlines()]
+    lines = [json.loads(line) for line in result.stdout.splitlines()]
     assert len(lines) == len(session())
     faults = [line for line in lines if line.get("pdo") == "faults"]
     assert faults[0]["faults"] == [4]
@@ -48,11 +48,20 @@ def test_decode_json_is_one_object_per_frame(candump: Path) -> None:
 
 def test_decode_learns_or_is_told_which_node_is_which(tmp_path: Path) -> None:
     path = tmp_path / "pdo.log"
-    path.write_text("(1.0) can0 18C#0800000000000000\n")
-    told = CliRunner().invoke(cli, ["decode", str(path), "--device", "0x0C=keybox"])
-    assert "keybox 0Ch: outputs in FAULT: 4" in told.output
+    path.write_text("(1.0) can0 18C#0800000000000000\n(1.1) can0 18D#0800000000000000\n")
+    told = CliRunner().invoke(cli, ["decode", str(path), "--device", "0x0D=keybox"])
+    assert "keybox 0Dh: outputs in FAULT: 4" in told.stdout
+    assert "node 0Ch: frame 18Ch" in told.stdout  # told: nothing assumed
+    assert "assuming" not in told.stderr
+
+
+def test_decode_assumes_the_default_nodes_and_says_so(tmp_path: Path) -> None:
+    path = tmp_path / "pdo.log"
+    path.write_text("(1.0) can0 18C#0800000000000000\n(1.1) can0 18D#0800000000000000\n")
     untold = CliRunner().invoke(cli, ["decode", str(path)])
-    assert "node 0Ch: frame 18Ch" in untold.output
+    assert "keybox 0Ch: outputs in FAULT: 4" in untold.stdout
+    assert "node 0Dh: frame 18Dh" in untold.stdout
+    assert "assuming keybox 0Ch, keypad 15h" in untold.stderr
 
 
 @pytest.mark.parametrize("suffix", [".pcap", ".asc", ".blf", ".csv"])

@@ -24,11 +24,12 @@ def _until(events: Iterator[HealthEvent], kind: str) -> list[HealthEvent]:
     raise AssertionError(f"no {kind!r} event; saw {[e.kind for e in seen]}")
 
 
-def _capture_in_thread(monkeypatch: pytest.MonkeyPatch) -> list[Callable[[], object]]:
-    """Hold back the work drivers hand to ``in_thread``, to run it when the test says."""
+def _hold_blocking_work(rig: Rig, monkeypatch: pytest.MonkeyPatch
+                        ) -> list[Callable[[], object]]:
+    """Hold back the blocking work drivers hand off (``host.spawn``), to run it when the test
+    says."""
     held: list[Callable[[], object]] = []
-    for module in ("blinkcan.host.device", "blinkcan.host.keybox", "blinkcan.host.keypad"):
-        monkeypatch.setattr(f"{module}.in_thread", held.append, raising=False)
+    monkeypatch.setattr(rig.host, "spawn", lambda action, key=None: held.append(action))
     return held
 
 
@@ -116,7 +117,7 @@ def test_a_restore_never_switches_back_on_what_the_application_switched_off(
         rig: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
     keybox = Keybox(rig.host, restore_outputs=True)
     keybox.set_outputs(high=[4, 6])
-    held = _capture_in_thread(monkeypatch)
+    held = _hold_blocking_work(rig, monkeypatch)
     rig.emulator.power_cycle(rig.keybox)
     wait_until(lambda: held)  # the driver has planned its restore
     keybox.off(4)  # ... and the application switches 4 off before the restore runs
@@ -129,7 +130,7 @@ def test_the_keypad_restore_never_writes_a_stale_backlight_colour(
         rig: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
     keypad = Keypad(rig.host)
     keypad.set_backlight("blue", 20)
-    held = _capture_in_thread(monkeypatch)
+    held = _hold_blocking_work(rig, monkeypatch)
     rig.emulator.power_cycle(rig.keypad)
     wait_until(lambda: held)
     rig.emulator.response_delay = 0.3  # the application's write is slow to be acknowledged

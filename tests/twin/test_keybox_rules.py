@@ -275,6 +275,7 @@ def test_settings_survive_the_process(tmp_path: Path) -> None:
         < 58C 60 12 20 00 00 00 00 00
     """)
     assert json.loads(path.read_text())["model"] == "keybox"
+    first.twin.close()  # the process ends
     second = KeyboxTwin(nvm=path)
     second.power_on(0.0)
     assert second.snapshot()["heartbeat_consumer"] == {"node_id": 1, "time_ms": 500,

@@ -312,7 +312,8 @@ def test_settings_survive_the_process_in_an_nvm_file(tmp_path: Path) -> None:
     document = json.loads(path.read_text())
     assert document["model"] == "pkp-2600-si"
     assert document["settings"]["node_id"] == 0x22
-    second = KeypadTwin(nvm=path)  # another process would do the same
+    first.close()  # the process ends
+    second = KeypadTwin(nvm=path)
     assert second.power_on(0.0) == [frame("722 00")]
     assert second.objects["producer_heartbeat_time"] == 200
 
@@ -335,7 +336,7 @@ def test_a_foreign_nvm_file_is_refused(tmp_path: Path) -> None:
 
 def test_an_nvm_file_with_an_invalid_value_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "keypad.json"
-    KeypadTwin(nvm=path)
+    KeypadTwin(nvm=path).close()
     document = json.loads(path.read_text())
     document["settings"]["node_id"] = 0
     path.write_text(json.dumps(document))

@@ -4,14 +4,15 @@ a live bus. Formats by file name: .pcap, or any python-can log format (.asc .blf
 
 from __future__ import annotations
 
+import signal
+import threading
 import time
 from pathlib import Path
 
 import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus
-from blinkcan.formats.logs import FrameWriter, LogError, read_frames
-from blinkcan.runtime import to_frame
+from blinkcan.formats.logs import FrameWriter, LogError, read_messages
 
 
 @click.command("convert")
@@ -19,14 +20,25 @@ from blinkcan.runtime import to_frame
 @click.argument("target", type=click.Path(dir_okay=False))
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 def convert(source: str, target: str, force: bool) -> None:
-    """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap."""
+    """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap.
+    Remote and error frames are kept; what TARGET's format cannot carry is counted and named."""
     try:
         with FrameWriter(target, replace=force) as writer:
-            for timestamp, frame in read_frames(source):
-                writer.write(timestamp, frame)
+            for message in read_messages(source):
+                writer.write_message(message)
     except LogError as error:
         raise click.ClickException(str(error)) from None
     click.echo(f"{writer.count} frames written to {target}", err=True)
+    if (skipped := writer.skipped_text()) is not None:
+        click.echo(skipped, err=True)
+
+
+class _StopError(Exception):
+    """SIGTERM (or SIGINT) asked the recording to stop."""
+
+
+def _raise_stop(signum: int, frame: object) -> None:
+    raise _StopError
 
 
 @click.command("record")
@@ -36,23 +48,39 @@ def convert(source: str, target: str, force: bool) -> None:
 @bus_options
 def record(target: str, duration: float | None, force: bool, interface: str | None,
            channel: str | None, bitrate: int | None) -> None:
-    """Record a live bus to a file: .pcap for Wireshark, or any python-can log format."""
+    """Record a live bus to a file: .pcap for Wireshark, or any python-can log format.
+    Frames are streamed to disk; Ctrl-C or SIGTERM stops and keeps everything so far."""
     if Path(target).exists() and not force:
         raise click.ClickException(f"{target} exists; pass --force to replace it")
     bus = cli_bus(interface, channel, bitrate)
     end = None if duration is None else time.monotonic() + duration
+    previous = {}
+    if threading.current_thread() is threading.main_thread():  # signals reach the main thread
+        previous = {number: signal.signal(number, _raise_stop)
+                    for number in (signal.SIGINT, signal.SIGTERM)}
     try:
         with FrameWriter(target, replace=force) as writer:
             click.echo(f"recording {bus.channel_info} to {target}; Ctrl-C stops", err=True)
+            flushed = time.monotonic()
             try:
                 while end is None or time.monotonic() < end:
                     message = bus.recv(0.2)
-                    if message is not None and (frame := to_frame(message)) is not None:
-                        writer.write(message.timestamp, frame)
-            except KeyboardInterrupt:
+                    if message is not None:
+                        writer.write_message(message)
+                    if time.monotonic() - flushed > 1.0:  # at most a second lost on a crash
+                        writer.flush()
+                        flushed = time.monotonic()
+            except (KeyboardInterrupt, _StopError):
                 pass
+            finally:
+                for number, handler in previous.items():  # the closing is not interrupted
+                    signal.signal(number, handler)
     except LogError as error:
         raise click.ClickException(str(error)) from None
     finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
         bus.shutdown()
     click.echo(f"{writer.count} frames recorded", err=True)
+    if (skipped := writer.skipped_text()) is not None:
+        click.echo(skipped, err=True)

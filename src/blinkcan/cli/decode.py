@@ -2,20 +2,55 @@
 
 from __future__ import annotations
 
+import json
 import sys
 
+import can
 import click
 from rich.console import Console
 from rich.progress import Progress, SpinnerColumn, TextColumn
 
 from blinkcan.cli.bus_options import parse_int
-from blinkcan.decode import Decoder
+from blinkcan.decode import Decoder, Event, Kind
+from blinkcan.decode.decoder import error_event
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
-from blinkcan.formats.logs import LogError, read_frames
+from blinkcan.formats.logs import LogError, describe_frame, frame_kind, read_log
+from blinkcan.protocol.frame import Frame
+
+#: the devices assumed where no --device is given: each at its factory node id
+DEFAULT_DEVICES = ("keypad", "keybox")
+
+
+def default_devices() -> dict[int, str | DeviceDescription]:
+    descriptions = [describe_device(name) for name in DEFAULT_DEVICES]
+    return {d.default_node_id: d for d in descriptions}
+
+
+def assumed_text(devices: dict[int, str | DeviceDescription]) -> str:
+    named = ", ".join(f"{d.kind if isinstance(d, DeviceDescription) else d} {node:02X}h"
+                      for node, d in sorted(devices.items()))
+    return f"no --device given: assuming {named} (others learned from identity traffic)"
+
+
+def other_event(decoder: Decoder, message: can.Message) -> Event:
+    """The event of a frame that is not a classic data frame: remote, error, CAN FD."""
+    kind = frame_kind(message)
+    if kind == "error":
+        return error_event(message.timestamp, message.arbitration_id, bytes(message.data))
+    if kind == "remote":
+        return decoder.decode_remote(message.arbitration_id, message.is_extended_id,
+                                     message.dlc, message.timestamp)
+    frame = Frame.trusted(message.arbitration_id, bytes(message.data[:8]),
+                          message.is_extended_id)
+    return Event(message.timestamp, frame, Kind.FRAME, f"{describe_frame(message)}, "
+                 f"{len(message.data)} bytes (CAN FD is not decoded)")
 
 
 def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:
+    """--device options; none given: the default nodes (DEFAULT_DEVICES)."""
+    if not specs:
+        return default_devices()
     devices: dict[int, str | DeviceDescription] = {}
     for spec in specs:
         node_text, separator, model = spec.partition("=")
@@ -36,8 +71,12 @@ def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:
               help="Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=keypad@1.1."
                    " Others are learned from identity traffic.")
 def command(file: str, as_json: bool, devices: tuple[str, ...]) -> None:
-    """Decode a log file (any python-can format, or .pcap) into what happened."""
-    decoder = Decoder(parse_devices(devices))
+    """Decode a log file (any python-can format, or .pcap) into what happened. Without
+    --device the keypad is assumed at 15h and the Keybox at 0Ch."""
+    known = parse_devices(devices)
+    if not devices:
+        click.echo(assumed_text(known), err=True)
+    decoder = Decoder(known)
     out = sys.stdout
     write = out.write
     progress = None
@@ -47,16 +86,24 @@ def command(file: str, as_json: bool, devices: tuple[str, ...]) -> None:
     try:
         if as_json:
             json_line = decoder.json_line
-            for timestamp, frame in read_frames(file):
-                write(json_line(frame, timestamp) + "\n")
+            for timestamp, frame in read_log(file):
+                if isinstance(frame, Frame):
+                    write(json_line(frame, timestamp) + "\n")
+                else:
+                    write(json.dumps(other_event(decoder, frame).to_json()) + "\n")
             return
         task = progress.add_task("decode") if progress is not None else None
         if progress is not None:
             progress.start()
-        for count, (timestamp, frame) in enumerate(read_frames(file), start=1):
+        for count, (timestamp, item) in enumerate(read_log(file), start=1):
+            if isinstance(item, Frame):
+                frame, event = item, decoder.decode(item, timestamp)
+            else:
+                event = other_event(decoder, item)
+                frame = event.frame
             ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
             write(f"{timestamp:17.6f}  {ident:>8}  {frame.data.hex(' ').upper():<23}  "
-                  f"{decoder.decode(frame, timestamp)}\n")
+                  f"{event}\n")
             if progress is not None and task is not None and count % 5000 == 0:
                 progress.update(task, completed=count)
     except LogError as error:

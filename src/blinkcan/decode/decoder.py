@@ -66,6 +66,8 @@ class Kind(str, Enum):
     SDO_SEGMENT = "sdo-segment"
     SDO_ABORT = "sdo-abort"
     J1939 = "j1939"
+    REMOTE = "remote"
+    ERROR = "error"
     FRAME = "frame"
 
 
@@ -191,6 +193,17 @@ class Decoder:
                     self._json_bodies.clear()
                 self._json_bodies[cache_key] = line[len(prefix):]
         return line
+
+    def decode_remote(self, can_id: int, extended: bool, dlc: int, time: float = 0.0) -> Event:
+        """A remote (RTR) frame: on 700h + node it is node guarding (CiA 301 7.2.8.3.2.1)."""
+        frame = Frame.trusted(can_id, b"", extended)
+        node = can_id & 0x7F
+        if not extended and can_id & 0x780 == HEARTBEAT and node:
+            return Event(time, frame, Kind.REMOTE, "node guarding request", node,
+                         self._who(node), {"dlc": dlc})
+        ident = f"{can_id:08X}h" if extended else f"{can_id:03X}h"
+        return Event(time, frame, Kind.REMOTE, f"remote request {ident}, DLC {dlc}",
+                     fields={"dlc": dlc})
 
     # -- routing ----------------------------------------------------------------------------------
 
@@ -443,6 +456,22 @@ class Decoder:
         self.devices[node] = device
         self._forget_routes(node)
         return True
+
+
+#: SocketCAN error classes, the bits of an error frame's identifier (linux/can/error.h)
+ERROR_CLASSES = (
+    (0x001, "TX timeout"), (0x002, "lost arbitration"), (0x004, "controller problem"),
+    (0x008, "protocol violation"), (0x010, "transceiver status"), (0x020, "no ACK"),
+    (0x040, "bus-off"), (0x080, "bus error"), (0x100, "controller restarted"),
+)
+
+
+def error_event(time: float, error_class: int, data: bytes) -> Event:
+    """An error frame; ``error_class`` is the SocketCAN class bits (0 when the log has none)."""
+    names = [name for bit, name in ERROR_CLASSES if error_class & bit]
+    frame = Frame.trusted(error_class & 0x1FFFFFFF, bytes(data[:8]), True)
+    return Event(time, frame, Kind.ERROR, f"error frame: {', '.join(names) or 'unspecified'}",
+                 fields={"errors": names})
 
 
 def _show(value: int | str) -> str:

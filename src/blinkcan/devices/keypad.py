@@ -245,6 +245,7 @@ def _rev15_table(base: ObjectTable, factory_node_id: int, quirks: Quirks) -> Obj
         rpdo1_transmission_type={"access": Access.RW, "valid": sync_rpdo},
         rpdo2_transmission_type={"access": Access.RW, "valid": sync_rpdo},
         tpdo1_transmission_type={"access": Access.RW, "valid": sync_tpdo},
+        backlight_colour={"pdo_mappable": True},  # rev 1.5 §43: 1603h/02 maps 2003h/03
     )
     fields = LED_FIELDS["1.5"]
     return table.with_objects(
@@ -280,6 +281,21 @@ def _rev15_pdos(pdos: tuple[PdoLayout, ...]) -> tuple[PdoLayout, ...]:
     return tuple(backlight if p.name == "backlight_brightness" else p for p in pdos)
 
 
+def _eds_led_mappings(generation: str) -> dict[str, int]:
+    """What the EDS states for 1600h/1601h in rev 1.1 (errata P7).
+
+    The device answers SDO reads with the 8-bit entries the manual prints, but the frame it acts
+    on packs three 12-bit masks into bytes 0-4 (PKP §11/§12). A master that configures its RPDOs
+    from the EDS must build that frame, so the EDS maps each 16-bit mask object with 12 bits,
+    which is exactly the packed layout. Rev 1.5's printed entries (16 + 8 + 16 bits) already
+    cover bytes 0-4 and are stated as printed.
+    """
+    if generation != "1.1":
+        return {}
+    return {f"rpdo{n}_mapping_entry_{f.subindex}": mapping_value(index, f.subindex, f.width)
+            for n, index in ((1, 0x2001), (2, 0x2002)) for f in LED_FIELDS["1.1"]}
+
+
 def describe_keypad(
     generation: str = "1.1",
     quirks: Quirks = "firmware",
@@ -304,6 +320,7 @@ def describe_keypad(
         bitrates=BITRATES,
         nmt_aliases={0x00: NmtCommand.STOP},  # PKP §7 "old PKP sw compatibility", errata P12
         consumer_heartbeat=CONSUMER_HEARTBEAT if generation == "1.5" else None,
+        eds_defaults=_eds_led_mappings(generation),
     )
 
 

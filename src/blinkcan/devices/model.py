@@ -37,6 +37,9 @@ class DeviceDescription:
     nmt_aliases: dict[int, NmtCommand] = field(default_factory=dict)
     #: what 1016h/01 accepts, where the device has a consumer heartbeat (None: it has none)
     consumer_heartbeat: ConsumerHeartbeat | None = None
+    #: entry name -> the default the EDS states instead of the table's, where a master that
+    #: configures itself from the EDS must see another value than an SDO read returns
+    eds_defaults: dict[str, int] = field(default_factory=dict)
 
     def pdo(self, name: str) -> PdoLayout:
         for layout in self.pdos:

@@ -1,6 +1,8 @@
 """Our object table as a python-canopen ``ObjectDictionary``, built with its own classes.
 
 The interop tests load it into a ``RemoteNode``; the EDS writer exports it with ``export_od``.
+Only CiA 306 keys go in: no StorageLocation and no Unit (python-canopen's own keys, which
+CanFestival's objdictgen refuses), and every [DeviceInfo] key CiA 306 lists.
 """
 
 from __future__ import annotations
@@ -13,16 +15,16 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import NodeIdRelative, ObjectEntry, ObjectKind
 
 
-def _variable(entry: ObjectEntry, name: str, node_id: int) -> Any:
+def _variable(entry: ObjectEntry, name: str, node_id: int, stated: int | None = None) -> Any:
+    """One entry; ``stated`` replaces its default (DeviceDescription.eds_defaults)."""
     variable: Any = cod.ODVariable(name, entry.index, entry.subindex)
     variable.data_type = int(entry.data_type)
     variable.access_type = entry.access.value
     variable.pdo_mappable = entry.pdo_mappable
-    variable.unit = entry.unit
     variable.description = entry.doc
     if entry.valid is not None:
         variable.min, variable.max = entry.valid.low, entry.valid.high
-    default = entry.default
+    default = entry.default if stated is None else stated
     if isinstance(default, NodeIdRelative):
         # python-canopen keeps the value resolved and the $NODEID form for the EDS text
         variable.relative = True
@@ -30,8 +32,35 @@ def _variable(entry: ObjectEntry, name: str, node_id: int) -> Any:
         variable.default_raw = f"$NODEID+0x{default.offset:X}"
     else:
         variable.default = default
-    variable.storage_location = "PERSIST_COMM" if entry.stored else "RAM"
     return variable
+
+
+def _mapping_counts(description: DeviceDescription) -> tuple[int, int]:
+    """How many RPDOs and TPDOs the table has (1400h-15FFh, 1800h-19FFh: CiA 301 7.5)."""
+    indexes = {obj.index for obj in description.table.objects}
+    return (sum(0x1400 <= i <= 0x15FF for i in indexes),
+            sum(0x1800 <= i <= 0x19FF for i in indexes))
+
+
+def _device_information(od: Any, description: DeviceDescription) -> None:
+    table = description.table
+    info = od.device_information
+    info.product_name = table["model_id"].default
+    info.order_code = table["model_id"].default
+    info.vendor_name = "Blink Marine"
+    info.vendor_number = table["vendor_id"].default
+    for attribute, sub in (("product_number", 2), ("revision_number", 3)):  # 1018h/02, /03
+        entry = table.get(0x1018, sub)
+        setattr(info, attribute, entry.default if entry is not None else 0)
+    info.allowed_baudrates = set(description.bitrates.values())
+    info.simple_boot_up_master = False
+    info.simple_boot_up_slave = True  # boot-up message and NMT slave (CiA 301)
+    # the mapping objects are read-only: PDO mapping cannot be changed (granularity 0)
+    info.granularity = 0
+    info.dynamic_channels_supported = False
+    info.group_messaging = False
+    info.nr_of_RXPDO, info.nr_of_TXPDO = _mapping_counts(description)
+    info.LSS_supported = False
 
 
 def object_dictionary(description: DeviceDescription, node_id: int | None = None
@@ -39,18 +68,17 @@ def object_dictionary(description: DeviceDescription, node_id: int | None = None
     """A python-canopen object dictionary for ``description`` (node id for $NODEID values)."""
     od: Any = cod.ObjectDictionary()  # type: ignore[no-untyped-call]
     od.node_id = node_id if node_id is not None else description.default_node_id
-    od.device_information.product_name = description.table["model_id"].default
-    od.device_information.vendor_name = "Blink Marine"
-    od.device_information.vendor_number = description.table["vendor_id"].default
-    bitrates = sorted(set(description.bitrates.values()))
-    od.device_information.allowed_baudrates = set(bitrates)
+    _device_information(od, description)
+    stated = description.eds_defaults
     for obj in description.table.objects:
         if obj.kind is ObjectKind.VAR:
-            od.add_object(_variable(obj.entries[0], obj.label, od.node_id))
+            entry = obj.entries[0]
+            od.add_object(_variable(entry, obj.label, od.node_id, stated.get(entry.name)))
             continue
         kind = cod.ODArray if obj.kind is ObjectKind.ARRAY else cod.ODRecord
         container: Any = kind(obj.label, obj.index)
         for entry in obj.entries:
-            container.add_member(_variable(entry, entry.label, od.node_id))
+            container.add_member(_variable(entry, entry.label, od.node_id,
+                                           stated.get(entry.name)))
         od.add_object(container)
     return od

@@ -2,9 +2,15 @@
 tshark open and, with ``-d can.subdissector,canopen`` or the CANopen heuristics, dissect.
 
 Our own few lines rather than a dependency: the format is a 24-byte file header and, per
-frame, a 16-byte packet header plus the 16-byte ``struct can_frame`` (id big-endian with the
-extended flag in bit 31, length, three padding bytes, eight data bytes). python-can writes no
-pcap.
+frame, a 16-byte packet header plus the SocketCAN frame: ``struct can_frame`` (16 bytes: id
+big-endian with the flags in bits 29-31, length, three padding bytes, eight data bytes) or
+``struct canfd_frame`` (72 bytes, 64 data bytes, flags byte with CANFD_FDF). Remote and error
+frames are carried as SocketCAN does (CAN_RTR_FLAG, CAN_ERR_FLAG with the error class in the
+id, ``linux/can.h``, ``linux/can/error.h``). python-can writes no pcap.
+
+Reading never trusts a length: a packet longer than a CAN FD frame, a standard identifier over
+7FFh or a truncated file is a :class:`PcapError` naming the packet, and memory stays bounded by
+one frame whatever the file says.
 """
 
 from __future__ import annotations
@@ -14,56 +20,128 @@ import struct
 from collections.abc import Iterable, Iterator
 from typing import BinaryIO
 
+import can
+
 from blinkcan.protocol.frame import Frame
 
 LINKTYPE_CAN_SOCKETCAN = 227
 _HEADER = struct.Struct("<IHHiIII")
 _PACKET = struct.Struct("<IIII")
-_CAN = struct.Struct(">IB3x8s")
-_MAGIC = 0xA1B2C3D4
-_EXTENDED = 0x80000000
+_CAN = struct.Struct(">IBB2x8s")
+_CANFD = struct.Struct(">IBB2x64s")
+_MAGIC_MICRO, _MAGIC_NANO = 0xA1B2C3D4, 0xA1B23C4D
+_SNAPLEN = 65535
+# linux/can.h
+CAN_EFF_FLAG, CAN_RTR_FLAG, CAN_ERR_FLAG = 0x80000000, 0x40000000, 0x20000000
+CAN_EFF_MASK, CAN_SFF_MASK = 0x1FFFFFFF, 0x7FF
+CANFD_BRS, CANFD_ESI, CANFD_FDF = 0x01, 0x02, 0x04
+CAN_ERR_DLC = 8
 
 
 class PcapError(ValueError):
     """A file that is not a SocketCAN pcap capture."""
 
 
-def write_pcap(stream: BinaryIO, frames: Iterable[tuple[float, Frame]]) -> int:
-    """Write (timestamp, frame) pairs; returns how many."""
-    stream.write(_HEADER.pack(_MAGIC, 2, 4, 0, 0, 65535, LINKTYPE_CAN_SOCKETCAN))
-    count = 0
-    for timestamp, frame in frames:
+def encode_record(message: can.Message) -> bytes:
+    """The SocketCAN bytes of one message: data, remote, error or CAN FD frame."""
+    if message.is_error_frame:
+        can_id = CAN_ERR_FLAG | (message.arbitration_id & CAN_EFF_MASK)
+        return _CAN.pack(can_id, CAN_ERR_DLC, 0, bytes(message.data[:8]).ljust(8, b"\x00"))
+    can_id = message.arbitration_id | (CAN_EFF_FLAG if message.is_extended_id else 0)
+    if message.is_remote_frame:
+        return _CAN.pack(can_id | CAN_RTR_FLAG, message.dlc, 0, bytes(8))
+    data = bytes(message.data)
+    if message.is_fd:
+        flags = CANFD_FDF | (CANFD_BRS if message.bitrate_switch else 0) | (
+            CANFD_ESI if message.error_state_indicator else 0)
+        return _CANFD.pack(can_id, len(data), flags, data.ljust(64, b"\x00"))
+    return _CAN.pack(can_id, len(data), 0, data.ljust(8, b"\x00"))
+
+
+class PcapWriter:
+    """Streams messages to a binary stream as they come: header first, then one packet each."""
+
+    def __init__(self, stream: BinaryIO) -> None:
+        self._stream = stream
+        stream.write(_HEADER.pack(_MAGIC_MICRO, 2, 4, 0, 0, _SNAPLEN, LINKTYPE_CAN_SOCKETCAN))
+        self.count = 0
+
+    def write(self, message: can.Message) -> None:
+        timestamp = message.timestamp
         seconds = int(timestamp)
         micros = round((timestamp - seconds) * 1_000_000)
         if micros >= 1_000_000:
             seconds, micros = seconds + 1, micros - 1_000_000
-        can_id = frame.can_id | (_EXTENDED if frame.extended else 0)
-        record = _CAN.pack(can_id, len(frame.data), frame.data.ljust(8, b"\x00"))
-        stream.write(_PACKET.pack(seconds, micros, len(record), len(record)) + record)
-        count += 1
-    return count
+        record = encode_record(message)
+        self._stream.write(_PACKET.pack(seconds, micros, len(record), len(record)) + record)
+        self.count += 1
 
 
-def read_pcap(stream: BinaryIO) -> Iterator[tuple[float, Frame]]:
+def _message(number: int, timestamp: float, record: bytes) -> can.Message:
+    can_id, length, flags = struct.unpack_from(">IBB", record)
+    fd = len(record) >= _CANFD.size or bool(flags & CANFD_FDF)
+    data_area = record[8:]
+    if can_id & CAN_ERR_FLAG:
+        return can.Message(timestamp=timestamp, is_error_frame=True,
+                           arbitration_id=can_id & CAN_EFF_MASK,
+                           data=data_area[: min(length, CAN_ERR_DLC)], check=False)
+    extended = bool(can_id & CAN_EFF_FLAG)
+    ident = can_id & CAN_EFF_MASK
+    if not extended and ident > CAN_SFF_MASK:
+        raise PcapError(f"packet {number}: standard identifier {ident:X}h is over 7FFh")
+    if can_id & CAN_RTR_FLAG:
+        return can.Message(timestamp=timestamp, arbitration_id=ident, is_extended_id=extended,
+                           is_remote_frame=True, dlc=min(length, 8))
+    limit = 64 if fd else 8
+    if length > limit:
+        raise PcapError(f"packet {number}: length {length} over {limit} bytes")
+    return can.Message(timestamp=timestamp, arbitration_id=ident, is_extended_id=extended,
+                       data=data_area[:length], is_fd=fd,
+                       bitrate_switch=bool(flags & CANFD_BRS),
+                       error_state_indicator=bool(flags & CANFD_ESI))
+
+
+def read_pcap_messages(stream: BinaryIO) -> Iterator[can.Message]:
+    """Every frame of a SocketCAN capture, remote, error and CAN FD frames included."""
     header = stream.read(_HEADER.size)
     if len(header) < _HEADER.size:
         raise PcapError("too short for a pcap file")
     magic, _, _, _, _, _, linktype = _HEADER.unpack(header)
-    if magic != _MAGIC:
-        raise PcapError(f"not a little-endian microsecond pcap file (magic {magic:08X}h)")
+    if magic not in (_MAGIC_MICRO, _MAGIC_NANO):
+        raise PcapError(f"not a little-endian pcap file (magic {magic:08X}h)")
     if linktype != LINKTYPE_CAN_SOCKETCAN:
         raise PcapError(f"link type {linktype}, not SocketCAN ({LINKTYPE_CAN_SOCKETCAN})")
+    scale = 1e-9 if magic == _MAGIC_NANO else 1e-6
+    number = 0
     while packet := stream.read(_PACKET.size):
+        number += 1
         if len(packet) < _PACKET.size:
-            raise PcapError("truncated packet header")
-        seconds, micros, included, _ = _PACKET.unpack(packet)
+            raise PcapError(f"packet {number}: truncated header")
+        seconds, fraction, included, _ = _PACKET.unpack(packet)
+        if not _CAN.size <= included <= _CANFD.size:  # bounded: never read what a file claims
+            raise PcapError(f"packet {number}: {included} bytes, not a SocketCAN frame "
+                            f"({_CAN.size}..{_CANFD.size})")
         record = stream.read(included)
-        if len(record) < _CAN.size:
-            raise PcapError("truncated CAN frame")
-        can_id, length, data = _CAN.unpack(record[: _CAN.size])
-        extended = bool(can_id & _EXTENDED)
-        yield seconds + micros / 1_000_000, Frame(can_id & 0x1FFFFFFF, data[: min(length, 8)],
-                                                  extended)
+        if len(record) < included:
+            raise PcapError(f"packet {number}: truncated CAN frame")
+        yield _message(number, seconds + fraction * scale, record)
+
+
+def write_pcap(stream: BinaryIO, frames: Iterable[tuple[float, Frame]]) -> int:
+    """Write (timestamp, data frame) pairs; returns how many."""
+    writer = PcapWriter(stream)
+    for timestamp, frame in frames:
+        writer.write(can.Message(timestamp=timestamp, arbitration_id=frame.can_id,
+                                 data=frame.data, is_extended_id=frame.extended, check=False))
+    return writer.count
+
+
+def read_pcap(stream: BinaryIO) -> Iterator[tuple[float, Frame]]:
+    """(timestamp, frame) of the classic data frames of a capture."""
+    for message in read_pcap_messages(stream):
+        if not (message.is_error_frame or message.is_remote_frame or message.is_fd):
+            yield message.timestamp, Frame.trusted(message.arbitration_id, bytes(message.data),
+                                                   message.is_extended_id)
 
 
 def is_pcap(path: str | os.PathLike[str]) -> bool:

@@ -1,7 +1,9 @@
 """The asyncio face of the drivers: the same names, as coroutines and async iterators.
 
-``AsyncKeypad(bus, ...)`` takes the arguments of :class:`Keypad`. Blocking calls (SDO) run in
-a worker thread; events reach the event loop through ``call_soon_threadsafe``. Callbacks given
+``AsyncKeypad(bus, ...)`` takes the arguments of :class:`Keypad`. Blocking calls (SDO), the
+driver's own opening and properties that may read the device (``await keypad.generation``)
+run in a worker thread: the event loop never blocks. Events reach the loop through
+``call_soon_threadsafe``; iterators end when the driver closes. Callbacks given
 to ``on_key`` and the like still run on the bus thread, as with the blocking drivers.
 """
 
@@ -22,67 +24,128 @@ E = TypeVar("E")
 D = TypeVar("D", bound=Device)
 
 
-def _iterate(source: EventSource[E], timeout: float | None) -> AsyncIterator[E]:
-    """Events from the moment of this call on (subscribed now, not at the first ``anext``)."""
+def _iterate(opened: _AsyncDevice[Any], source: Callable[[Any], EventSource[E]],
+             timeout: float | None) -> AsyncIterator[E]:
+    """Events from the moment of this call on (from the moment the driver is open, if it is
+    still opening). A subscription whose event loop has closed removes itself."""
     loop = asyncio.get_running_loop()
     waiting: asyncio.Queue[E] = asyncio.Queue()
-    remove = source.subscribe(lambda event: loop.call_soon_threadsafe(waiting.put_nowait, event))
-    return _drain(waiting, remove, timeout)
+    removers: list[Callable[[], None]] = []
+
+    def deliver(event: E) -> None:
+        try:
+            loop.call_soon_threadsafe(waiting.put_nowait, event)
+        except RuntimeError:  # the loop is closed: nobody will read this iterator
+            for remove in removers:
+                remove()
+
+    def subscribe(device: Any) -> None:
+        removers.append(source(device).subscribe(deliver))
+
+    if opened._device is not None:
+        subscribe(opened._device)
+    return _drain(opened, subscribe, removers, waiting, source, timeout)
 
 
-async def _drain(waiting: asyncio.Queue[E], remove: Callable[[], None], timeout: float | None
+async def _drain(opened: _AsyncDevice[Any], subscribe: Callable[[Any], None],
+                 removers: list[Callable[[], None]], waiting: asyncio.Queue[E],
+                 source: Callable[[Any], EventSource[E]], timeout: float | None
                  ) -> AsyncIterator[E]:
     try:
+        if not removers:
+            await opened.open()
+            subscribe(opened._device)
+        events = source(opened._device)
         while True:
+            if events.closed and waiting.empty():
+                return  # the driver was closed
             try:
-                yield await asyncio.wait_for(waiting.get(), timeout)
+                yield await asyncio.wait_for(waiting.get(), 0.1 if timeout is None
+                                             else min(timeout, 0.1))
             except asyncio.TimeoutError:
-                return
+                if timeout is not None:
+                    timeout -= 0.1
+                    if timeout <= 0:
+                        return
     finally:
-        remove()
+        for remove in removers:
+            remove()
 
 
 class _AsyncDevice(Generic[D]):
-    """Wraps a blocking driver: its methods become coroutines, its attributes stay readable."""
+    """Wraps a blocking driver: its methods and properties become coroutines, run in a worker
+    thread, so the event loop never blocks. Built inside a running loop, the driver opens in
+    a worker thread too (``await x.open()`` or the first awaited call waits for it)."""
 
-    def __init__(self, device: D) -> None:
-        self.device = device
+    _driver: Callable[..., D]
 
-    def __getattr__(self, name: str) -> Any:
-        attribute = getattr(self.device, name)
-        if name.startswith("on_") or not callable(attribute):
-            return attribute  # callbacks register at once; values are read as they are
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        make = functools.partial(self._driver, *args, **kwargs)
+        self._device: D | None = None
+        self._opening: asyncio.Future[D] | None = None
+        try:
+            asyncio.get_running_loop()
+        except RuntimeError:
+            self._device = make()
+        else:
+            self._opening = asyncio.ensure_future(asyncio.to_thread(make))
 
-        @functools.wraps(attribute)
-        async def call(*args: Any, **kwargs: Any) -> Any:
-            return await asyncio.to_thread(attribute, *args, **kwargs)
-
-        return call
-
-    def health_events(self, timeout: float | None = None) -> AsyncIterator[Any]:
-        return _iterate(self.device.health, timeout)
-
-    async def __aenter__(self) -> Any:
+    async def open(self) -> Any:
+        if self._device is None:
+            assert self._opening is not None
+            self._device = await self._opening
         return self
 
+    @property
+    def device(self) -> D:
+        if self._device is None:
+            raise RuntimeError("the driver is still opening: await .open() first")
+        return self._device
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        kind = getattr(type(self).__dict__.get("_driver"), name, None)
+        if isinstance(kind, property):  # a property may do I/O (an SDO): await it
+
+            async def read() -> Any:
+                await self.open()
+                return await asyncio.to_thread(getattr, self._device, name)
+
+            return read()
+        if callable(kind) and not name.startswith("on_"):
+
+            @functools.wraps(kind)
+            async def call(*args: Any, **kwargs: Any) -> Any:
+                await self.open()
+                return await asyncio.to_thread(getattr(self._device, name), *args, **kwargs)
+
+            return call
+        return getattr(self.device, name)  # callbacks register at once; values as they are
+
+    def health_events(self, timeout: float | None = None) -> AsyncIterator[Any]:
+        return _iterate(self, lambda device: device.health, timeout)
+
+    async def __aenter__(self) -> Any:
+        return await self.open()
+
     async def __aexit__(self, *exc_info: object) -> None:
-        self.device.close()
+        await self.open()
+        await asyncio.to_thread(self.device.close)
 
 
 class AsyncKeypad(_AsyncDevice[Keypad]):
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(Keypad(*args, **kwargs))
+    _driver = Keypad
 
     def events(self, timeout: float | None = None) -> AsyncIterator[KeyEvent]:
-        return _iterate(self.device.keys, timeout)
+        return _iterate(self, lambda device: device.keys, timeout)
 
 
 class AsyncKeybox(_AsyncDevice[Keybox]):
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(Keybox(*args, **kwargs))
+    _driver = Keybox
 
     def fault_events(self, timeout: float | None = None) -> AsyncIterator[FaultEvent]:
-        return _iterate(self.device.faults, timeout)
+        return _iterate(self, lambda device: device.faults, timeout)
 
 
 async def async_scan(*args: Any, **kwargs: Any) -> list[Found]:

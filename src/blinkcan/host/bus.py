@@ -1,63 +1,70 @@
-"""The host side of one CAN bus: frames out, frames in by COB-ID, timers, one owning thread.
+"""The host side of one CAN bus: frames out, frames in by COB-ID, timers, one owning loop.
 
-A python-can ``Notifier`` reads the bus (ours, or one that already reads it, such as a
-python-canopen ``Network``'s: never a second notifier on one bus). Handlers and timers run on
-this bus's own thread, one at a time, so drivers need no locks for their state. SDO replies
-take a fast path: they are handed to the waiting caller straight from the reader thread.
-An exception in a handler is logged with its traceback; the thread goes on.
+Every driver and ``scan`` on one python-can bus share one ``HostBus`` (:meth:`HostBus.attach`):
+it is found again through the notifier that reads the bus (python-can's
+``Notifier.find_instances``), so any number of drivers work on one bus, and a notifier that
+already reads it (a python-canopen ``Network``'s, the application's) is joined, never doubled.
+
+Handlers and timers run on the bus's scheduler (``runtime.scheduler``), one at a time, so
+drivers need no locks for their state: a thread of its own on real buses, the simulation
+itself on a ``SimulatedBus`` (``blinkcan.testing.Rig``). SDO replies take a fast path: they are
+handed to the waiting caller straight from the reader. An exception in a handler is logged
+with its traceback; the loop goes on.
+
+A bus that fails (unplugged adapter, shut down) is reported once, then read with a back-off
+instead of a busy loop; a shut-down bus stops the reader and fails waiting SDO calls at once.
+Frames this program sent are never taken for received ones, also on python-can's
+``udp_multicast``, which echoes them (``runtime.canbus.OwnFrames``).
 """
 
 from __future__ import annotations
 
-import heapq
-import itertools
 import logging
-import queue
 import threading
 import time
-from collections.abc import Callable
-from concurrent.futures import Future
+from collections.abc import Callable, Hashable
 from typing import Any, TypeVar
 
 import can
 
-from blinkcan.host.sdo import SdoChannel
+from blinkcan.host.sdo import SdoChannel, SdoClient
 from blinkcan.protocol.cob import SYNC
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import to_frame, to_message
+from blinkcan.runtime.canbus import OwnFrames, to_frame, to_message
+from blinkcan.runtime.scheduler import (
+    RealTimeScheduler,
+    Scheduler,
+    Signal,
+    Timer,
+    guarded,
+)
+from blinkcan.runtime.simbus import SimulatedBus
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
 Handler = Callable[[Frame, float], None]
-_STOP = object()
+_MAX_BACKOFF = 1.0
 
-
-class Timer:
-    """A scheduled call; :meth:`cancel` stops it."""
-
-    def __init__(self, due: float, period: float | None, callback: Callable[[], None]) -> None:
-        self.due = due
-        self.period = period
-        self.callback = callback
-        self.cancelled = False
-
-    def cancel(self) -> None:
-        self.cancelled = True
+__all__ = ["Handler", "HostBus", "Timer"]
 
 
 class _Listener(can.Listener):
     def __init__(self, owner: HostBus) -> None:
-        self._owner = owner
+        self.owner = owner
 
     def on_message_received(self, msg: can.Message) -> None:
-        self._owner._from_reader(msg)
+        self.owner._from_reader(msg)
 
     def on_error(self, exc: Exception) -> None:
-        log.error("bus read failed: %s", exc)
+        self.owner._on_bus_error(exc)
 
 
 class HostBus:
-    """Runs the host side of ``bus``; pass ``network`` to share a python-canopen Network's bus."""
+    """Runs the host side of ``bus``; pass ``network`` to share a python-canopen Network's bus.
+
+    Drivers get theirs with :meth:`attach` (shared per bus, stopped when the last driver
+    closes); a ``HostBus`` you make and start yourself stays yours to stop.
+    """
 
     def __init__(self, bus: can.BusABC | None = None, *, notifier: can.Notifier | None = None,
                  network: Any = None, clock: Callable[[], float] = time.monotonic) -> None:
@@ -66,51 +73,102 @@ class HostBus:
         if bus is None:
             raise TypeError("HostBus needs a python-can bus or a connected canopen Network")
         self.bus = bus
-        self.clock = clock
+        self.simulated = isinstance(bus, SimulatedBus)
+        self.scheduler: Scheduler = (bus.scheduler if isinstance(bus, SimulatedBus)
+                                     else RealTimeScheduler("blinkcan-host", clock))
         self._given_notifier = notifier
         self._notifier: can.Notifier | None = None
+        self._joined: can.Notifier | None = None
         self._listener = _Listener(self)
         self._handlers: dict[int, list[Handler]] = {}
         self._fast: dict[int, Handler] = {}
         self._extended: list[Handler] = []
-        self._inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
-        self._timers: list[tuple[float, int, Timer]] = []
-        self._seq = itertools.count()
-        self._thread: threading.Thread | None = None
         self._sdo: dict[int, SdoChannel] = {}
+        self._own = OwnFrames(bus)
+        self._detach: Callable[[], None] | None = None
+        self._started = False
+        self._users = 0
+        self._auto = False
+        self._errors = 0
+        #: the last bus failure (None while the bus works); ``closed`` once it was shut down
+        self.error: Exception | None = None
+        self.closed = False
+
+    # -- sharing ----------------------------------------------------------------------------
+
+    @classmethod
+    def attach(cls, bus: HostBus | can.BusABC) -> HostBus:
+        """The running ``HostBus`` of ``bus``, shared by every driver on it; call
+        :meth:`release` when done."""
+        if isinstance(bus, HostBus):
+            host = bus
+        else:
+            host = cls._find(bus) or cls(bus)
+            if not host._started:
+                host._auto = True
+        host._users += 1
+        return host.start()
+
+    @staticmethod
+    def _find(bus: can.BusABC) -> HostBus | None:
+        if isinstance(bus, SimulatedBus):
+            found = bus.host
+            return found if isinstance(found, HostBus) and found._started else None
+        for notifier in can.Notifier.find_instances(bus):
+            for listener in notifier.listeners:
+                if isinstance(listener, _Listener) and listener.owner._started:
+                    return listener.owner
+        return None
+
+    def release(self) -> None:
+        """One driver fewer; the last one out stops a ``HostBus`` that :meth:`attach` made."""
+        self._users = max(0, self._users - 1)
+        if self._users == 0 and self._auto:
+            self.stop()
 
     # -- lifecycle --------------------------------------------------------------------------
 
     def start(self) -> HostBus:
-        if self._thread is not None:
+        if self._started:
             return self
-        self._thread = threading.Thread(target=self._run, name="blinkcan-host", daemon=True)
-        self._thread.start()
-        if self._given_notifier is not None:
-            self._given_notifier.add_listener(self._listener)
+        self._started = True
+        self.scheduler.start()
+        bus = self.bus
+        if isinstance(bus, SimulatedBus):
+            bus.host = self
+            self._detach = bus.add_frame_listener(self._from_simulation)
+            return self
+        notifier = self._given_notifier
+        if notifier is None:
+            found = can.Notifier.find_instances(bus)
+            notifier = found[0] if found else None
+        if notifier is not None:
+            notifier.add_listener(self._listener)
+            self._joined = notifier
         else:
-            self._notifier = can.Notifier(self.bus, [self._listener], timeout=0.1)
+            self._notifier = can.Notifier(bus, [self._listener], timeout=0.1)
         return self
 
     def stop(self) -> None:
-        if self._thread is None:
+        if not self._started:
             return
+        self._started = False
+        if self._detach is not None:
+            self._detach()
+            self._detach = None
+            if isinstance(self.bus, SimulatedBus) and self.bus.host is self:
+                self.bus.host = None
         if self._notifier is not None:
-            self._notifier.stop()
-            self._notifier = None
-        elif self._given_notifier is not None:
-            self._given_notifier.remove_listener(self._listener)
-        self._inbox.put(_STOP)
-        if threading.current_thread() is not self._thread:
-            self._thread.join(timeout=5)
-        self._thread = None
-        while True:  # calls still queued will never run: fail them now
-            try:
-                item = self._inbox.get_nowait()
-            except queue.Empty:
-                break
-            if isinstance(item, tuple) and isinstance(item[1], Future):
-                item[1].set_exception(RuntimeError("the host bus was stopped"))
+            notifier, self._notifier = self._notifier, None
+            if threading.current_thread().name.startswith("can.notifier"):
+                threading.Thread(target=notifier.stop, daemon=True).start()
+            else:
+                notifier.stop()
+        elif self._joined is not None:
+            if self._listener in self._joined.listeners:
+                self._joined.remove_listener(self._listener)
+            self._joined = None
+        self.scheduler.stop()
 
     def __enter__(self) -> HostBus:
         return self.start()
@@ -118,17 +176,62 @@ class HostBus:
     def __exit__(self, *exc_info: object) -> None:
         self.stop()
 
+    # -- the loop -----------------------------------------------------------------------------
+
     @property
     def on_own_thread(self) -> bool:
-        return threading.current_thread() is self._thread
+        return self.scheduler.in_loop
+
+    @property
+    def in_handler(self) -> bool:
+        """True inside a handler or timer, where nothing may block."""
+        return self.scheduler.in_loop
+
+    def clock(self) -> float:
+        return self.scheduler.clock()
+
+    def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
+        return self.scheduler.call_later(delay, callback)
+
+    def call_every(self, period: float, callback: Callable[[], object], first: float = 0.0
+                   ) -> Timer:
+        return self.scheduler.call_every(period, callback, first)
+
+    def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
+        """Run ``action`` on this bus's loop and return its result."""
+        return self.scheduler.run(action, timeout)
+
+    def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
+        """Blocking work (SDO) from a handler: run outside the loop, on a bounded pool; work
+        with the same ``key`` still pending is not queued twice."""
+        self.scheduler.spawn(action, key)
+
+    def signal(self) -> Signal:
+        return self.scheduler.signal()
+
+    def wait(self, signal: Signal, timeout: float) -> bool:
+        """Wait for ``signal`` (False after ``timeout``); returns at once when the bus is
+        gone."""
+        if self.closed:
+            return signal.is_set()
+        return self.scheduler.wait(signal, timeout)
+
+    def sleep(self, seconds: float) -> None:
+        self.scheduler.sleep(seconds)
 
     # -- frames -------------------------------------------------------------------------------
 
     def send(self, frame: Frame) -> None:
-        self.bus.send(to_message(frame))
+        bus = self.bus
+        if isinstance(bus, SimulatedBus):
+            bus.send_frame(frame)
+            return
+        now = self.scheduler.clock()
+        self._own.sent(frame, now)
+        bus.send(to_message(frame, now))
 
     def subscribe(self, can_id: int, handler: Handler) -> Callable[[], None]:
-        """Call ``handler(frame, now)`` on this bus's thread for every frame with ``can_id``;
+        """Call ``handler(frame, now)`` on this bus's loop for every frame with ``can_id``;
         returns the function that unsubscribes."""
         handlers = self._handlers.setdefault(can_id, [])
         handlers.append(handler)
@@ -146,98 +249,71 @@ class HostBus:
         frame = to_frame(message)
         if frame is None:
             return
+        now = self.scheduler.clock()
+        if self._errors:
+            self._recovered()
+        if self._own.active and self._own.is_echo(frame, now):
+            return
         fast = self._fast.get(frame.can_id)
         if fast is not None and not frame.extended:
-            fast(frame, self.clock())
+            fast(frame, now)
         if frame.extended or frame.can_id in self._handlers:
-            self._inbox.put((frame, self.clock()))
+            self.scheduler.call_soon(lambda: self._dispatch(frame, now))
 
-    def sdo(self, node_id: int, timeout: float = 0.5, retries: int = 1) -> SdoChannel:
-        """The one SDO channel to ``node_id`` on this bus (shared by every driver)."""
+    def _from_simulation(self, frame: Frame, now: float) -> None:
+        fast = self._fast.get(frame.can_id)
+        if fast is not None and not frame.extended:
+            fast(frame, now)
+        if frame.extended or frame.can_id in self._handlers:
+            self._dispatch(frame, now)
+
+    def _dispatch(self, frame: Frame, now: float) -> None:
+        handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())
+        for handler in list(handlers):
+            guarded(handler, frame, now)
+
+    def _on_bus_error(self, error: Exception) -> None:
+        """On the reader thread: report once, then back off (a failing bus must not make the
+        reader spin); a shut-down bus stops the reader."""
+        self._errors += 1
+        self.error = error
+        if getattr(self.bus, "_is_shutdown", False):
+            if not self.closed:
+                self.closed = True
+                log.error("bus %s was shut down; blinkcan stops reading it",
+                          self.bus.channel_info)
+                for channel in self._sdo.values():
+                    channel._signal.set()  # waiting calls return now and see the timeout
+                threading.Thread(target=self._stop_reader, daemon=True).start()
+            time.sleep(0.1)
+            return
+        if self._errors == 1:
+            log.error("reading bus %s failed: %s (retrying with back-off, reported once)",
+                      self.bus.channel_info, error)
+        time.sleep(min(_MAX_BACKOFF, 0.01 * 2 ** min(self._errors, 8)))
+
+    def _recovered(self) -> None:
+        log.warning("bus %s reads again after %d errors", self.bus.channel_info, self._errors)
+        self._errors = 0
+        self.error = None
+
+    def _stop_reader(self) -> None:
+        if self._notifier is not None:
+            notifier, self._notifier = self._notifier, None
+            notifier.stop()
+
+    # -- services -----------------------------------------------------------------------------
+
+    def sdo(self, node_id: int, timeout: float = 0.5, retries: int = 1) -> SdoClient:
+        """A client of the one SDO channel to ``node_id`` on this bus (shared by every driver,
+        so requests to a node never overlap), with its own ``timeout`` and ``retries``."""
         channel = self._sdo.get(node_id)
         if channel is None:
-            channel = self._sdo[node_id] = SdoChannel(self, node_id, timeout, retries)
-        return channel
+            channel = self._sdo[node_id] = SdoChannel(self, node_id)
+        return SdoClient(channel, timeout, retries)
 
     def produce_sync(self, period: float) -> Timer:
         """Send SYNC (COB-ID 80h, no data) every ``period`` s, for devices in synchronous mode
         (PKP rev 1.5 §10); ``cancel()`` the returned timer to stop."""
         sync = Frame(SYNC, b"")
         return self.call_every(period, lambda: self.send(sync))
-
-    # -- timers and calls on the bus thread ----------------------------------------------------
-
-    def call_later(self, delay: float, callback: Callable[[], None]) -> Timer:
-        return self._schedule(Timer(self.clock() + delay, None, callback))
-
-    def call_every(self, period: float, callback: Callable[[], None], first: float = 0.0) -> Timer:
-        if period <= 0:
-            raise ValueError(f"period must be > 0 seconds, got {period}")
-        return self._schedule(Timer(self.clock() + first, period, callback))
-
-    def _schedule(self, timer: Timer) -> Timer:
-        self._inbox.put(timer)
-        return timer
-
-    def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
-        """Run ``action`` on this bus's thread and return its result."""
-        if self._thread is None or self.on_own_thread:
-            return action()
-        future: Future[T] = Future()
-        self._inbox.put((action, future))
-        return future.result(timeout)
-
-    def _run(self) -> None:
-        while True:
-            now = self.clock()
-            wait = self._timers[0][0] - now if self._timers else 0.5
-            item: Any = None
-            if wait > 0:
-                try:
-                    item = self._inbox.get(timeout=min(wait, 0.5))
-                except queue.Empty:
-                    item = None
-            while True:
-                if item is _STOP:
-                    return
-                if item is not None:
-                    self._handle(item)
-                try:
-                    item = self._inbox.get_nowait()
-                except queue.Empty:
-                    break
-            self._run_timers()
-
-    def _handle(self, item: Any) -> None:
-        if isinstance(item, Timer):
-            heapq.heappush(self._timers, (item.due, next(self._seq), item))
-            return
-        first, second = item
-        if isinstance(first, Frame):
-            handlers = self._extended if first.extended else self._handlers.get(first.can_id, ())
-            for handler in list(handlers):
-                self._guard(handler, first, second)
-            return
-        action, future = first, second
-        try:
-            future.set_result(action())
-        except BaseException as error:
-            future.set_exception(error)
-
-    def _run_timers(self) -> None:
-        timers = self._timers
-        while timers and timers[0][0] <= self.clock():
-            due, _, timer = heapq.heappop(timers)
-            if timer.cancelled:
-                continue
-            if timer.period is not None:
-                timer.due = max(due + timer.period, self.clock())
-                heapq.heappush(timers, (timer.due, next(self._seq), timer))
-            self._guard(timer.callback)
-
-    @staticmethod
-    def _guard(callback: Callable[..., object], *args: object) -> None:
-        try:
-            callback(*args)
-        except Exception:
-            log.exception("a blinkcan handler raised; the host bus goes on")

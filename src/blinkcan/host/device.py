@@ -50,11 +50,6 @@ _ASKED = {NmtCommand.START: NmtState.OPERATIONAL, NmtCommand.STOP: NmtState.STOP
 IDENTITY_ENTRIES = ("device_type", "vendor_id", "model_id")
 
 
-def in_thread(action: Callable[[], object]) -> None:
-    """Run a blocking call (an SDO) off the bus thread, where handlers must not block."""
-    threading.Thread(target=action, name="blinkcan-sdo", daemon=True).start()
-
-
 def unreversed(version: str) -> str:
     """errata P5/P6: some firmware sends "10_V" for "V_01" and "2.2V" for "V2.2"; a value that
     ends in V and reads right reversed is reversed."""
@@ -125,11 +120,9 @@ class Device:
         """Set up; a subclass calls :meth:`confirm` (unless told not to) before any command."""
         self.node_id = check_node_id(node_id)
         self.description = description
-        self._owns_host = not isinstance(bus, HostBus)
-        self.host = bus if isinstance(bus, HostBus) else HostBus(bus)
-        self.host.start()
+        self.host = HostBus.attach(bus)  # shared by every driver on this bus
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
-        self.health = EventSource[HealthEvent]()
+        self.health = EventSource[HealthEvent](self.host.scheduler)
         self.nmt_state: NmtState | None = None  # as the device last reported it
         self._asked_state: NmtState | None = None  # what the last NMT command asked for
         self.alive: bool | None = None
@@ -425,8 +418,10 @@ class Device:
             unsubscribe()
         if self._watch is not None:
             self._watch.cancel()
-        if self._owns_host:
-            self.host.stop()
+        for value in list(vars(self).values()):
+            if isinstance(value, EventSource):
+                value.close()  # iterators over this driver's events end
+        self.host.release()
 
     def __enter__(self) -> Any:
         return self

@@ -36,7 +36,7 @@ from blinkcan.devices.keybox import (
     describe_keybox,
 )
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device, in_thread
+from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
@@ -89,7 +89,7 @@ class Keybox(Device):
                  sdo_timeout: float = 0.5, verify: bool = True) -> None:
         super().__init__(bus, node_id, describe_keybox("cia301", node_id),
                          sdo_timeout=sdo_timeout)
-        self.faults = EventSource[FaultEvent]()
+        self.faults = EventSource[FaultEvent](self.host.scheduler)
         self.fault_pins: frozenset[int] = frozenset()
         self.auto_start = start
         self.restore_outputs = restore_outputs
@@ -107,8 +107,10 @@ class Keybox(Device):
         if start:
             self.start()
         if fault_poll is not None:
+            # one poll at a time per Keybox: polls of an absent device never pile up
             self._poller = self.host.call_every(
-                fault_poll, lambda: in_thread(self._poll_faults), first=fault_poll)
+                fault_poll, lambda: self.host.spawn(self._poll_faults, ("fault poll", node_id)),
+                first=fault_poll)
 
     # -- the driver's picture ---------------------------------------------------------------------
 
@@ -298,7 +300,7 @@ class Keybox(Device):
         if self.auto_start:
             self.start()
         if self.restore_outputs:
-            in_thread(self._restore)
+            self.host.spawn(self._restore, ("restore outputs", self.node_id))
 
     def _restore(self) -> None:
         """Switch on what is commanded when this runs, never what was commanded before: an

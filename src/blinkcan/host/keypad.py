@@ -27,7 +27,7 @@ from blinkcan.devices.keypad import (
     describe_keypad,
 )
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device, in_thread
+from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
@@ -76,7 +76,7 @@ class Keypad(Device):
                          sdo_timeout=sdo_timeout)
         self._generation = generation
         self.host_node_id = check_node_id(host_node_id)
-        self.keys = EventSource[KeyEvent]()
+        self.keys = EventSource[KeyEvent](self.host.scheduler)
         self.long_press = long_press
         self.auto_start = start
         self.restore = restore
@@ -314,6 +314,6 @@ class Keypad(Device):
         if self._indicator is not None:
             self.host.send(self._pdo_frame("indicator_brightness", {"level": self._indicator}))
         if self._backlight_colour is not None:
-            in_thread(self._restore_backlight)  # the colour goes by SDO: off this thread
+            self.host.spawn(self._restore_backlight)  # the colour goes by SDO: off this thread
         elif self._backlight_level is not None:
             self.host.send(self._backlight_frame(self._backlight_level))

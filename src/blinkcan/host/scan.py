@@ -5,7 +5,6 @@ answer. Models are recognised from the device descriptions' own 1000h values.
 
 from __future__ import annotations
 
-import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -16,7 +15,7 @@ from blinkcan.devices.keypad import VENDOR_ID, describe_keypad
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import unreversed
-from blinkcan.host.sdo import SdoChannel
+from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.sdo_client import SdoError
@@ -38,7 +37,7 @@ class Found:
     heard: bool = False  # a boot-up or heartbeat was seen during the scan
 
 
-def _text(channel: SdoChannel, index: int) -> str | None:
+def _text(channel: SdoClient, index: int) -> str | None:
     try:
         return channel.upload(index, 0).decode("ascii", "replace")
     except SdoError:
@@ -48,9 +47,7 @@ def _text(channel: SdoChannel, index: int) -> str | None:
 def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
          node_ids: range = range(NODE_ID_MIN, NODE_ID_MAX + 1)) -> list[Found]:
     """Blink (and other CANopen) devices on ``bus``, by node id."""
-    host = bus if isinstance(bus, HostBus) else HostBus(bus)
-    owned = not isinstance(bus, HostBus)
-    host.start()
+    host = HostBus.attach(bus)
     heard: set[int] = set()
 
     def hear(frame: Frame, now: float) -> None:
@@ -58,7 +55,7 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
 
     removers = [host.subscribe(HEARTBEAT + node, hear) for node in node_ids]
     try:
-        time.sleep(listen)
+        host.sleep(listen)
 
         def probe(node: int) -> Found | None:
             channel = host.sdo(node, timeout=timeout, retries=0)
@@ -77,11 +74,13 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
                          unreversed(hardware) if hardware else None,
                          unreversed(software) if software else None, node in heard)
 
-        with ThreadPoolExecutor(max_workers=32) as pool:
-            found = [f for f in pool.map(probe, node_ids) if f is not None]
+        if host.simulated:  # one thread drives the simulation: probe in turn
+            found = [f for f in map(probe, node_ids) if f is not None]
+        else:
+            with ThreadPoolExecutor(max_workers=32) as pool:
+                found = [f for f in pool.map(probe, node_ids) if f is not None]
     finally:
         for remove in removers:
             remove()
-        if owned:
-            host.stop()
+        host.release()
     return sorted(found, key=lambda f: f.node_id)

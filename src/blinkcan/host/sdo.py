@@ -1,12 +1,27 @@
-"""One SDO channel per node: one request at a time, a timeout and a bounded retry.
+"""One SDO channel per node: one request at a time, a timeout, a bounded retry, and replies
+that only ever complete the request they answer.
 
 Real keypads drop an SDO request that arrives while they are still answering the previous one
 (errata.md, field reports), so requests to one node are serialised here, whichever thread or
 driver makes them.
+
+Late replies. An SDO reply carries no transaction number: the acknowledge of ``on(4)`` (write
+2001h/04) is byte for byte the acknowledge of ``off(4)``. So after a request timed out, its
+reply may still come and would complete the next request to the same object. What we do:
+
+1. On a timeout the client sends the abort CiA 301 provides (80h, 0504 0000h "SDO protocol
+   timed out") and marks the channel *out of step*. The timeout error says that a write may or
+   may not have been applied (``SdoTimeoutError.uncertain``).
+2. Before the next request to that node, the channel gets back in step: it reads 1000h/00 and
+   discards every reply until the answer to that read (an upload reply or abort for 1000h/00).
+   An SDO server answers in order and never reorders (a busy one drops), so once that answer
+   is in, nothing older can arrive. Replies discarded are counted in ``late_replies``.
+3. A reply that comes while no request is outstanding is discarded and counted too.
 """
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING
@@ -14,6 +29,7 @@ from typing import TYPE_CHECKING
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import SDO_RX, SDO_TX
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.sdo import multiplexer
 from blinkcan.protocol.sdo_client import (
     DownloadTransfer,
     SdoError,
@@ -23,6 +39,11 @@ from blinkcan.protocol.sdo_client import (
 
 if TYPE_CHECKING:
     from blinkcan.host.bus import HostBus
+
+log = logging.getLogger(__name__)
+
+# the object every CANopen device has (CiA 301 §7.5.2.1): read to get back in step
+_RESYNC_MUX = multiplexer(0x1000, 0)
 
 
 class SdoChannel:
@@ -34,40 +55,58 @@ class SdoChannel:
         self.node_id = node_id
         self.timeout = timeout
         self.retries = retries
+        self.late_replies = 0
         self._lock = threading.Lock()
-        self._event = threading.Event()
+        self._state_lock = threading.Lock()
+        self._signal = host.signal()
         self._reply = b""
+        self._awaiting = False
+        self._accept: Callable[[bytes], bool] | None = None
+        self._out_of_step = False
         self._request_id = SDO_RX + node_id
         host.subscribe_fast(SDO_TX + node_id, self._on_reply)
 
     def _on_reply(self, frame: Frame, now: float) -> None:
-        self._reply = frame.data
-        self._event.set()
+        data = frame.data
+        with self._state_lock:
+            if not self._awaiting or (self._accept is not None and not self._accept(data)):
+                self.late_replies += 1
+                log.debug("node %02Xh: SDO reply %s discarded (no request awaits it)",
+                          self.node_id, data.hex(" "))
+                return
+            self._awaiting = False
+            self._reply = data
+            self._signal.set()
 
-    def upload(self, index: int, subindex: int) -> bytes:
-        transfer = self._run(lambda: UploadTransfer(index, subindex))
+    def upload(self, index: int, subindex: int, *, timeout: float | None = None,
+               retries: int | None = None) -> bytes:
+        transfer = self._run(lambda: UploadTransfer(index, subindex), timeout, retries)
         assert isinstance(transfer, UploadTransfer)
         return transfer.value
 
-    def download(self, index: int, subindex: int, data: bytes) -> None:
-        self._run(lambda: DownloadTransfer(index, subindex, data))
+    def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
+                 retries: int | None = None) -> None:
+        self._run(lambda: DownloadTransfer(index, subindex, data), timeout, retries)
 
-    def _run(self, make: Callable[[], UploadTransfer | DownloadTransfer]
-             ) -> UploadTransfer | DownloadTransfer:
+    def _run(self, make: Callable[[], UploadTransfer | DownloadTransfer],
+             timeout: float | None, retries: int | None) -> UploadTransfer | DownloadTransfer:
         """Run a fresh transfer per attempt; a timeout is retried, anything else raised."""
-        if self.host.on_own_thread:
+        if self.host.in_handler:
             raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
+        timeout = self.timeout if timeout is None else timeout
+        retries = self.retries if retries is None else retries
         with self._lock:
-            for attempt in range(self.retries + 1):
+            for attempt in range(retries + 1):
                 transfer = make()
                 try:
-                    self._transfer(transfer)
+                    if self._out_of_step:
+                        self._resync(timeout, transfer)
+                    self._transfer(transfer, timeout)
                     return transfer
-                except SdoTimeoutError:
-                    abort = transfer.abort_request(AbortCode.SDO_PROTOCOL_TIMED_OUT)
-                    self.host.send(Frame(self._request_id, abort))
-                    if attempt == self.retries:
+                except SdoTimeoutError as error:
+                    if attempt == retries:
                         raise
+                    log.debug("node %02Xh: %s; retrying", self.node_id, error)
                 except SdoError as error:
                     if error.node_id is None:
                         error.node_id = self.node_id
@@ -75,13 +114,81 @@ class SdoChannel:
                     raise
             raise AssertionError("unreachable")
 
-    def _transfer(self, transfer: UploadTransfer | DownloadTransfer) -> None:
+    def _exchange(self, request: bytes, timeout: float,
+                  accept: Callable[[bytes], bool] | None = None) -> bytes | None:
+        """Send ``request`` and wait for the reply it gets; None on a timeout."""
+        with self._state_lock:
+            self._signal.clear()
+            self._accept = accept
+            self._awaiting = True
+        self.host.send(Frame(self._request_id, request))
+        self.host.wait(self._signal, timeout)
+        with self._state_lock:
+            self._awaiting = False
+            self._accept = None
+            if self.host.closed:
+                raise SdoError("the bus was shut down", self.node_id,
+                               int.from_bytes(request[1:3], "little"), request[3])
+            if not self._signal.is_set():
+                return None
+            return self._reply
+
+    def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
         request: bytes | None = transfer.start()
         while request is not None:
-            self._event.clear()
-            self.host.send(Frame(self._request_id, request))
-            if not self._event.wait(self.timeout):
-                raise SdoTimeoutError(f"no reply within {self.timeout} s", self.node_id,
-                                      transfer.index, transfer.subindex)
-            request = transfer.on_reply(self._reply)
+            reply = self._exchange(request, timeout)
+            if reply is None:
+                self._out_of_step = True
+                self.host.send(Frame(self._request_id,
+                                     transfer.abort_request(AbortCode.SDO_PROTOCOL_TIMED_OUT)))
+                raise self._timeout(transfer, timeout)
+            request = transfer.on_reply(reply)
 
+    def _resync(self, timeout: float, transfer: UploadTransfer | DownloadTransfer) -> None:
+        """Read 1000h/00, discarding every reply until its own (see the module docstring)."""
+        request = b"\x40" + _RESYNC_MUX + b"\x00\x00\x00\x00"
+
+        def answers_resync(data: bytes) -> bool:
+            return len(data) >= 4 and data[1:4] == _RESYNC_MUX and (
+                data[0] >> 5 == 2 or data[0] == 0x80)
+
+        if self._exchange(request, timeout, answers_resync) is None:
+            raise SdoTimeoutError(
+                f"no reply within {timeout} s (node {self.node_id:02X}h did not answer a read "
+                "of 1000h after an earlier timeout; nothing was sent for this request)",
+                self.node_id, transfer.index, transfer.subindex)
+        self._out_of_step = False
+
+    def _timeout(self, transfer: UploadTransfer | DownloadTransfer, timeout: float
+                 ) -> SdoTimeoutError:
+        if isinstance(transfer, DownloadTransfer):
+            error = SdoTimeoutError(
+                f"no reply within {timeout} s: the write may or may not have been applied",
+                self.node_id, transfer.index, transfer.subindex)
+            error.uncertain = True
+            return error
+        return SdoTimeoutError(f"no reply within {timeout} s", self.node_id, transfer.index,
+                               transfer.subindex)
+
+
+class SdoClient:
+    """A driver's handle on a node's shared :class:`SdoChannel`, with its own timeout and
+    retries (so one driver or ``scan`` never changes another's)."""
+
+    def __init__(self, channel: SdoChannel, timeout: float, retries: int) -> None:
+        self.channel = channel
+        self.node_id = channel.node_id
+        self.timeout = timeout
+        self.retries = retries
+
+    def upload(self, index: int, subindex: int, *, timeout: float | None = None,
+               retries: int | None = None) -> bytes:
+        return self.channel.upload(
+            index, subindex, timeout=self.timeout if timeout is None else timeout,
+            retries=self.retries if retries is None else retries)
+
+    def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
+                 retries: int | None = None) -> None:
+        self.channel.download(
+            index, subindex, data, timeout=self.timeout if timeout is None else timeout,
+            retries=self.retries if retries is None else retries)

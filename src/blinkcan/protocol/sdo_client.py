@@ -47,7 +47,10 @@ class SdoAbortError(SdoError):
 
 
 class SdoTimeoutError(SdoError):
-    """No reply within the timeout, after the retries."""
+    """No reply within the timeout, after the retries. ``uncertain``: a write whose effect is
+    unknown (the device may have applied it and its acknowledge been late or lost)."""
+
+    uncertain: bool = False
 
 
 class SdoProtocolError(SdoError):

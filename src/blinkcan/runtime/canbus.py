@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import collections
+import threading
 from typing import Any
 
 import can
@@ -51,3 +53,66 @@ def open_bus(interface: str | None = None, channel: str | None = None,
     if config.get("interface") == "virtual":
         config.setdefault("channel", "blinkcan")
     return can.Bus(**config)
+
+
+def echoes_own_frames(bus: can.BusABC) -> bool:
+    """Whether ``bus`` hands its own sent frames back as received ones: python-can's
+    ``udp_multicast`` does (multicast loopback reaches every socket of the group on this
+    machine, the sender's included), and python-can cannot switch that off."""
+    return type(bus).__name__ == "UdpMulticastBus"
+
+
+class OwnFrames:
+    """Recognises a bus's own frames when the bus echoes them (see :func:`echoes_own_frames`).
+
+    Frames sent are remembered by content for ``window`` seconds; a received frame equal to one
+    of them is the echo and is consumed. An equal frame from another node within that window is
+    indistinguishable from the echo; it is consumed instead and the echo passes: the receiver
+    sees the same content either way. Thread-safe: senders and the reader may differ.
+    """
+
+    def __init__(self, bus: can.BusABC, window: float = 2.0) -> None:
+        self.active = echoes_own_frames(bus)
+        self.window = window
+        self._pending: collections.Counter[tuple[int, bytes, bool]] = collections.Counter()
+        self._order: collections.deque[tuple[float, tuple[int, bytes, bool]]] = (
+            collections.deque())
+        self._lock = threading.Lock()
+
+    def sent(self, frame: Frame, now: float) -> None:
+        if not self.active:
+            return
+        key = (frame.can_id, frame.data, frame.extended)
+        with self._lock:
+            self._expire(now)
+            self._pending[key] += 1
+            self._order.append((now, key))
+
+    def is_echo(self, frame: Frame, now: float) -> bool:
+        if not self.active:
+            return False
+        key = (frame.can_id, frame.data, frame.extended)
+        with self._lock:
+            self._expire(now)
+            count = self._pending.get(key, 0)
+            if not count:
+                return False
+            if count == 1:
+                del self._pending[key]
+            else:
+                self._pending[key] = count - 1
+            for i, (_, pending) in enumerate(self._order):
+                if pending == key:
+                    del self._order[i]
+                    break
+            return True
+
+    def _expire(self, now: float) -> None:
+        order, pending = self._order, self._pending
+        while order and now - order[0][0] > self.window:
+            _, key = order.popleft()
+            count = pending.get(key, 0)
+            if count <= 1:
+                pending.pop(key, None)
+            else:
+                pending[key] = count - 1

@@ -1,9 +1,12 @@
-"""Run twins on a python-can bus: the only place where twins meet threads and clocks.
+"""Run twins on a bus: the only place where twins meet threads and clocks.
 
-A python-can ``Notifier`` reads the bus and hands each frame to the twins at once, on its own
-thread; the emulator's thread runs the timers and the actions of other threads. A lock makes
-them take turns, so twins are only ever called one at a time. (Handing frames over to the
-emulator's thread instead would add a thread switch to every request; see the benchmarks.)
+The emulator runs on a scheduler (``runtime.scheduler``). On a python-can bus that is a
+real-time scheduler: a ``Notifier`` reads the bus and hands each frame to the twins at once, on
+its own thread; the scheduler's thread runs the timers and the actions of other threads. A lock
+makes them take turns, so twins are only ever called one at a time. (Handing frames over to the
+scheduler's thread instead would add a thread switch to every request; see the benchmarks.)
+On a ``SimulatedBus`` the emulator runs in the simulation's virtual time instead: frames and
+timers are events of the simulated scheduler, with no thread at all (``blinkcan.testing``).
 Rules:
 - Frames a twin sends go on the bus and, because a bus does not echo its own frames, are also
   delivered to the other twins of this emulator that listen to that COB-ID.
@@ -12,6 +15,8 @@ Rules:
   request that reaches a twin still busy answering the previous one is dropped, as real keypads
   do (errata.md, field reports).
 - An exception in a twin is logged with its traceback and never stops the loop.
+- Frames the emulator sent never come back to it as received ones, also on python-can's
+  ``udp_multicast``, which echoes them (``runtime.canbus.OwnFrames``).
 """
 
 from __future__ import annotations
@@ -19,27 +24,23 @@ from __future__ import annotations
 import heapq
 import itertools
 import logging
-import queue
 import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable
-from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 import can
 
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import to_frame, to_message
+from blinkcan.runtime.canbus import OwnFrames, to_frame, to_message
+from blinkcan.runtime.scheduler import RealTimeScheduler, Scheduler, Timer
+from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.twin.base import CanopenTwin
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
-
-_STOP = object()
-_WAKE = object()
-_MAX_IDLE_WAIT = 0.5
 
 
 @dataclass
@@ -81,14 +82,17 @@ class Emulator:
         self.twins: list[CanopenTwin] = list(twins)
         self.response_delay = response_delay
         self.stats = EmulatorStats()
-        self._clock = clock
+        self.scheduler: Scheduler = (bus.scheduler if isinstance(bus, SimulatedBus)
+                                     else RealTimeScheduler("blinkcan-emulator", clock))
+        self._clock = self.scheduler.clock
         self._given_notifier = notifier
         self._notifier: can.Notifier | None = None
-        self._inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._joined: can.Notifier | None = None
+        self._detach: Callable[[], None] | None = None
         self._listener = _Listener(self)
+        self._own = OwnFrames(bus)
         self._lock = threading.RLock()
-        self._planned_wakeup: float | None = None
-        self._thread: threading.Thread | None = None
+        self._planned: tuple[float, Timer] | None = None
         self._running = False
         self._timers: list[tuple[float, int, int]] = []  # (deadline, seq, twin index)
         self._deadline: list[float | None] = [None] * len(self.twins)
@@ -104,30 +108,45 @@ class Emulator:
     # -- lifecycle --------------------------------------------------------------------------
 
     def start(self) -> Emulator:
-        if self._thread is not None:
+        if self._running:
             raise RuntimeError("emulator already started")
         self._running = True
-        if self._given_notifier is not None:
-            self._given_notifier.add_listener(self._listener)
+        self.scheduler.start()
+        bus = self.bus
+        if isinstance(bus, SimulatedBus):
+            self._detach = bus.add_frame_listener(self._from_simulation)
         else:
-            self._notifier = can.Notifier(self.bus, [self._listener], timeout=0.1)
-        self._thread = threading.Thread(target=self._run, name="blinkcan-emulator", daemon=True)
-        self._thread.start()
+            notifier = self._given_notifier
+            if notifier is None:
+                found = can.Notifier.find_instances(bus)
+                notifier = found[0] if found else None
+            if notifier is not None:
+                notifier.add_listener(self._listener)
+                self._joined = notifier
+            else:
+                self._notifier = can.Notifier(bus, [self._listener], timeout=0.1)
         self.run(self._power_on_all)
         return self
 
     def stop(self) -> None:
-        if self._thread is None:
+        if not self._running:
             return
         self._running = False
-        self._inbox.put(_STOP)
-        self._thread.join(timeout=5)
-        self._thread = None
+        if self._planned is not None:
+            self._planned[1].cancel()
+            self._planned = None
+        if self._detach is not None:
+            self._detach()
+            self._detach = None
         if self._notifier is not None:
             self._notifier.stop()
             self._notifier = None
-        elif self._given_notifier is not None:
-            self._given_notifier.remove_listener(self._listener)
+        elif self._joined is not None:
+            if self._listener in self._joined.listeners:
+                self._joined.remove_listener(self._listener)
+            self._joined = None
+        if not self.scheduler.simulated:
+            self.scheduler.stop()
 
     def __enter__(self) -> Emulator:
         return self.start()
@@ -138,16 +157,43 @@ class Emulator:
     # -- acting on twins from other threads --------------------------------------------------
 
     def run(self, action: Callable[[float], T], timeout: float = 5.0) -> T:
-        """Run ``action(now)`` on the emulator thread and return its result. A list of frames
+        """Run ``action(now)`` on the emulator's loop and return its result. A list of frames
         it returns is sent, as if the device had sent it."""
-        if self._thread is None:
+        if not self._running:
             raise RuntimeError("emulator not started")
-        if threading.current_thread() is self._thread:
+
+        def perform() -> T:
             with self._lock:
-                return self._perform(action)
-        future: Future[T] = Future()
-        self._inbox.put((action, future))
-        return future.result(timeout)
+                result = self._perform(action)
+                self._arm()
+                return result
+
+        return self.scheduler.run(perform, timeout)
+
+    def add(self, twin: CanopenTwin) -> CanopenTwin:
+        """One more twin on this bus; powered on at once when the emulator runs."""
+        with self._lock:
+            self.twins.append(twin)
+            self._deadline.append(None)
+            self._busy_until.append(0.0)
+            self._routes_seen.append(None)
+            self._index_dirty = True
+            index = len(self.twins) - 1
+        if self._running:
+
+            def power_on(now: float) -> list[Frame]:
+                frames = self._call(index, twin.power_on, now)
+                self._reschedule(index)
+                self._emit(index, frames, now)
+                return []
+
+            self.run(power_on)
+        return twin
+
+    @property
+    def pending_replies(self) -> int:
+        """Replies held back by ``response_delay`` and not yet sent."""
+        return len(self._delayed)
 
     def press(self, twin: Any, key: int) -> list[Frame]:
         return self.run(lambda now: twin.press(key, now))
@@ -164,7 +210,7 @@ class Emulator:
     def power_cycle(self, twin: CanopenTwin, off_time: float = 0.0) -> list[Frame]:
         self.power_off(twin)
         if off_time:
-            time.sleep(off_time)
+            self.scheduler.sleep(off_time)
         return self.power_on(twin)
 
     def snapshot(self, twin: CanopenTwin) -> dict[str, Any]:
@@ -186,48 +232,41 @@ class Emulator:
             return
         with self._lock:
             now = self._clock()
-            self.stats.frames_received += 1
-            if self.on_frame is not None:
-                self.on_frame(frame, False, now)
-            self._deliver(frame, None, now)
-            wake = self._next_wakeup()
-        planned = self._planned_wakeup
-        if wake is not None and (planned is None or wake < planned):
-            self._inbox.put(_WAKE)  # a timer now comes earlier than the loop planned for
+            if self._own.active and self._own.is_echo(frame, now):
+                return
+            self._received(frame, now)
 
-    def _run(self) -> None:
-        inbox = self._inbox
-        while self._running:
-            with self._lock:
-                wake = self._next_wakeup()
-                self._planned_wakeup = wake
-            wait = _MAX_IDLE_WAIT if wake is None else wake - self._clock()
-            item: Any = None
-            if wait > 0:
-                try:
-                    item = inbox.get(timeout=min(wait, _MAX_IDLE_WAIT))
-                except queue.Empty:
-                    item = None
-            with self._lock:
-                while True:
-                    if item is _STOP:
-                        return
-                    if item is not None and item is not _WAKE:
-                        self._handle(item)
-                    try:
-                        item = inbox.get_nowait()
-                    except queue.Empty:
-                        break
+    def _from_simulation(self, frame: Frame, now: float) -> None:
+        with self._lock:
+            self._received(frame, now)
+
+    def _received(self, frame: Frame, now: float) -> None:
+        self.stats.frames_received += 1
+        if self.on_frame is not None:
+            self.on_frame(frame, False, now)
+        self._deliver(frame, None, now)
+        self._arm()
+
+    def _arm(self) -> None:
+        """Keep one scheduler timer at the earliest twin deadline or delayed reply."""
+        if not self._running:
+            return
+        wake = self._next_wakeup()
+        planned = self._planned
+        if planned is not None:
+            if wake is not None and planned[0] <= wake:
+                return  # the planned tick comes first; it re-arms
+            planned[1].cancel()
+            self._planned = None
+        if wake is not None:
+            self._planned = (wake, self.scheduler.call_at(wake, self._tick))
+
+    def _tick(self) -> None:
+        with self._lock:
+            self._planned = None
+            if self._running:
                 self._run_timers(self._clock())
-
-    def _handle(self, item: Any) -> None:
-        action, future = item
-        try:
-            result = self._perform(action)
-        except BaseException as error:  # the caller gets it; the loop goes on
-            future.set_exception(error)
-        else:
-            future.set_result(result)
+                self._arm()
 
     def _perform(self, action: Callable[[float], T]) -> T:
         now = self._clock()
@@ -289,7 +328,11 @@ class Emulator:
     def _emit(self, source: int, frames: list[Frame], now: float) -> None:
         for frame in frames:
             try:
-                self.bus.send(to_message(frame, now))
+                if isinstance(self.bus, SimulatedBus):
+                    self.bus.send_frame(frame)
+                else:
+                    self._own.sent(frame, now)
+                    self.bus.send(to_message(frame, now))
                 self.stats.frames_sent += 1
                 if self.on_frame is not None:
                     self.on_frame(frame, True, now)

@@ -7,6 +7,17 @@ reads a clock or touches a bus. A twin that is powered off, or not addressed, re
 
 Device twins subclass :class:`CanopenTwin` and add their application behaviour through the
 ``_on_*`` hooks; they never reimplement NMT, SDO or heartbeat.
+
+Non-volatile memory: a stored setting is written to the NVM before the twin acknowledges it.
+When the NVM cannot take it (a file that cannot be written), the SDO write aborts with
+0606 0000h "access failed due to a hardware error" and memory is left unchanged, so nothing is
+acknowledged that a power cycle would lose. Why 0606 0000h and not 0800 0020h: the request was
+valid and the device failed to store it, which is what a failing EEPROM reports; 0800 0020h
+"data cannot be transferred or stored" is already this project's answer to a request the device
+refuses (a wrong restore signature, errata), and a host should tell the two apart. An NVM file
+that turns out corrupt at a reset is refused and kept as found: the twin boots with the settings
+it last stored, and every stored write aborts 0606 0000h until a reset finds the file good again
+(``snapshot()["nvm_error"]`` says why).
 """
 
 from __future__ import annotations
@@ -34,7 +45,7 @@ from blinkcan.protocol.nmt import (
 )
 from blinkcan.protocol.sdo_server import SdoServer
 from blinkcan.twin.dictionary import ObjectStore
-from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
+from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm, NvmError
 
 _Route = Callable[[Frame, float], list[Frame]]
 _new_tuple = tuple.__new__
@@ -78,17 +89,26 @@ class CanopenTwin:
     """The CANopen side of a Blink device; see the module docstring."""
 
     def __init__(self, description: DeviceDescription, node_id: int,
-                 nvm: str | os.PathLike[str] | Nvm | None = None) -> None:
+                 nvm: str | os.PathLike[str] | Nvm | None = None,
+                 settings: Mapping[str, Value] | None = None) -> None:
         check_node_id(node_id)
         self.description = description
         self.factory_node_id = node_id
         self._store = ObjectStore(description.table, node_id)
-        self._nvm = open_nvm(nvm, description)
-        stored = self._nvm.load()  # a corrupt or foreign file fails here, before anything runs
-        if stored is None:
-            self._nvm.save(self._factory_settings())
+        configured = self._checked_settings(settings or {})
+        self._nvm = open_nvm(nvm, description)  # a file in use by another twin fails here
+        try:
+            stored = self._nvm.load()  # a corrupt or foreign file fails here, before anything runs
+            if stored is None or configured:  # built as configured: as if written earlier
+                stored = {**(stored or self._factory_settings()), **configured}
+                self._nvm.save(stored)
+        except NvmError:
+            self._nvm.close()
+            raise
+        #: why the NVM is refused since the last reset (a corrupt file), or None
+        self._nvm_fault: str | None = None
         self._store.load(node_id, stored)
-        self._store.on_stored_change = self._persist
+        self._store.persist = self._save_settings
         self._sdo = SdoServer(self._store)
         self._powered = False
         self._nmt = NmtState.BOOT_UP
@@ -158,6 +178,11 @@ class CanopenTwin:
         self._powered = True
         return self._boot(now, application=True)
 
+    def close(self) -> None:
+        """Release the NVM file (its lock), e.g. before another twin opens it. Stored writes
+        abort afterwards; the twin can still run."""
+        self._nvm.close()
+
     def power_off(self) -> None:
         """Remove power: live state is lost, stored settings are kept."""
         self._powered = False
@@ -225,11 +250,29 @@ class CanopenTwin:
             "bitrate": self.bitrate,
             "heartbeat_ms": self._store.get_int("producer_heartbeat_time"),
             "settings": self._store.stored_values(),
+            **({"nvm_error": self._nvm_fault} if self._nvm_fault else {}),
             **self._consumer_snapshot(),
             **self._snapshot(),
         }
 
     # -- boot and NMT -----------------------------------------------------------------------
+
+    def _checked_settings(self, settings: Mapping[str, Value]) -> dict[str, Value]:
+        """Stored settings a twin is built with (as if configured earlier), by object name;
+        ValueError for a name that is not a stored setting or a value out of its range."""
+        table = self.description.table
+        stored_names = sorted(entry.name for entry in table if entry.stored)
+        checked: dict[str, Value] = {}
+        for name, value in settings.items():
+            if name not in stored_names:
+                raise ValueError(f"{name!r} is not a stored setting of this "
+                                 f"{self.description.kind}; stored settings: "
+                                 f"{', '.join(stored_names)}")
+            entry = table[name]
+            if not entry.accepts(value):
+                raise ValueError(f"{name} takes {entry.describe_valid()}, not {value!r}")
+            checked[name] = value
+        return checked
 
     def _factory_settings(self) -> dict[str, Value]:
         return {
@@ -238,20 +281,45 @@ class CanopenTwin:
             if entry.stored
         }
 
-    def _persist(self) -> None:
-        self._nvm.save(self._store.stored_values())
+    def _save_settings(self, settings: dict[str, Value]) -> AbortCode | None:
+        """Write ``settings`` to the NVM; 0606 0000h if it cannot (see the module docstring)."""
+        if self._nvm_fault is not None:
+            return AbortCode.HARDWARE_ERROR
+        try:
+            self._nvm.save(settings)
+        except (NvmError, OSError):
+            return AbortCode.HARDWARE_ERROR
+        return None
 
-    def _restore_factory_settings(self) -> None:
+    def _persist(self) -> AbortCode | None:
+        return self._save_settings(self._store.stored_values())
+
+    def _stored_settings(self) -> dict[str, Value] | None:
+        """The stored settings to boot with: the NVM's; if it cannot be read now, the ones
+        last stored, and the NVM is refused until a reset reads it again (never replaced)."""
+        try:
+            stored = self._nvm.load()
+        except NvmError as error:
+            self._nvm_fault = str(error)
+            return self._store.stored_values()
+        self._nvm_fault = None
+        return stored
+
+    def _restore_factory_settings(self) -> AbortCode | None:
         """Stored settings back to factory values; they take effect at the next reset, and
-        reads return them already (errata: "a read returns the stored value")."""
-        for name, value in self._factory_settings().items():
-            self._store.set(name, value)
-        self._persist()
+        reads return them already (errata: "a read returns the stored value"). Nothing
+        changes if the NVM cannot take them."""
+        factory = self._factory_settings()
+        refusal = self._save_settings(factory)
+        if refusal is None:
+            for name, value in factory.items():
+                self._store.set(name, value)
+        return refusal
 
     def _boot(self, now: float, application: bool) -> list[Frame]:
         """Power-on or reset: CiA 301 initialisation, then the boot-up frame and pre-operational."""
         if application:  # reset node / power-on: node id, bit rate and live values re-applied
-            self._store.load(self.factory_node_id, self._nvm.load())
+            self._store.load(self.factory_node_id, self._stored_settings())
             self._node_id = self._store.get_int("node_id")
             self._bitrate_code = self._store.get_int("baud_rate")
         self._sdo.reset()
@@ -373,8 +441,7 @@ class CanopenTwin:
     def _on_restore(self, value: int) -> AbortCode | None:
         if value != RESTORE_SIGNATURE:  # errata: a wrong signature aborts 0800 0020h
             return AbortCode.CANNOT_TRANSFER
-        self._restore_factory_settings()  # applied at the next reset (errata K18, G5)
-        return None
+        return self._restore_factory_settings()  # applied at the next reset (errata K18, G5)
 
     def _on_consumer_lost(self, now: float) -> None:
         """What the device switches off when the watched heartbeat is lost."""

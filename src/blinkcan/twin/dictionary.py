@@ -4,6 +4,12 @@ This is where SDO requests meet the table: existence, access, length and range a
 in CiA 301 order (object, sub-index, access, length, value), then the twin's write hook for the
 entry may refuse the value or act on it. Values are cached in their wire encoding, so an upload
 is one dictionary look-up.
+
+A stored setting is persisted *before* it is committed: if the twin's non-volatile memory cannot
+take it, the write is refused with the persister's abort code and memory is left as it was, so
+a retry is tried again rather than acknowledged as "unchanged" (an unchanged stored value is not
+written again, as devices spare their EEPROM). If the entry's hook then refuses the value, the
+previous settings are persisted back.
 """
 
 from __future__ import annotations
@@ -15,6 +21,8 @@ from blinkcan.protocol.abort import AbortCode
 
 #: A write hook: called with the new value before it is stored; returns an abort code to refuse.
 WriteHook = Callable[[int], "AbortCode | None"]
+#: Persists the stored settings as they are to become; returns an abort code when it cannot.
+Persister = Callable[[dict[str, Value]], "AbortCode | None"]
 
 
 class _Slot:
@@ -72,8 +80,8 @@ class ObjectStore:
             self._by_name[entry.name] = slot
         self._indices = frozenset(entry.index.to_bytes(2, "little") for entry in table)
         self._stored = [(name, slot) for name, slot in self._by_name.items() if slot.entry.stored]
-        #: called after a stored entry changed through SDO (the twin persists its settings)
-        self.on_stored_change: Callable[[], None] | None = None
+        #: persists the stored settings before a write through SDO or RPDO changes one
+        self.persist: Persister | None = None
 
     # -- Python side ----------------------------------------------------------------------
 
@@ -103,18 +111,22 @@ class ObjectStore:
         return self._commit(slot, value)
 
     def _commit(self, slot: _Slot, value: Value) -> AbortCode | None:
-        previous = slot.value  # before the hook, which may set the entry itself
+        # an unchanged stored value is not written again (as devices spare their EEPROM)
+        persist = self.persist if (slot.entry.stored and slot.keeps_value
+                                   and value != slot.value) else None
+        if persist is not None:
+            refusal = persist({**self.stored_values(), slot.entry.name: value})
+            if refusal is not None:
+                return refusal  # nothing changed: the retry is tried again
         if slot.hook is not None:
             refusal = slot.hook(value)  # type: ignore[arg-type]
             if refusal is not None:
+                if persist is not None:
+                    persist(self.stored_values())  # the file back to what memory holds
                 return refusal
             if not slot.keeps_value:
                 return None
-        changed = value != previous
         _store_value(slot, value)
-        # an unchanged stored value is not written again (as devices spare their EEPROM)
-        if changed and slot.entry.stored and self.on_stored_change is not None:
-            self.on_stored_change()
         return None
 
     def entries(self) -> Iterator[ObjectEntry]:

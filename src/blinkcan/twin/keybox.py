@@ -11,7 +11,7 @@ Where the manual is silent about outputs, the twin is fail-safe (blinkcan decisi
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from blinkcan.devices.keybox import (
@@ -23,6 +23,7 @@ from blinkcan.devices.keybox import (
     describe_keybox,
 )
 from blinkcan.devices.model import Quirks
+from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.frame import Frame
@@ -47,13 +48,14 @@ class KeyboxTwin(CanopenTwin):
         quirks: Quirks = "firmware",
         nvm: str | os.PathLike[str] | Nvm | None = None,
         low_side: Iterable[int] = (),
+        settings: Mapping[str, Value] | None = None,
     ) -> None:
         low = frozenset(low_side)
         if not low <= set(LOW_SIDE_CAPABLE):
             raise ValueError(f"only pins {LOW_SIDE_CAPABLE} can be built low-side, not "
                              f"{sorted(low - set(LOW_SIDE_CAPABLE))}")
         description = describe_keybox(quirks, node_id)
-        super().__init__(description, node_id, nvm)
+        super().__init__(description, node_id, nvm, settings)
         self.outputs = Outputs(low)
         self._shown_states: list[PinState | None] = [None] * PIN_COUNT
         self._inputs_changed = True

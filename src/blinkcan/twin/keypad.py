@@ -5,13 +5,14 @@ On top of :class:`CanopenTwin`: the key-state TPDO with its tick timer, the LED 
 2001h/2002h as views of it (their sub-index layout differs by generation), brightness and
 backlight, the startup LED show, DEMO mode, the switch to J1939 and back; generation 2 adds
 SYNC (held RPDOs, cyclic TPDO), the backlight colour in the PDO, the node id in use at once,
-and, from the base, the consumer heartbeat and restore defaults.
+and, from the base, the consumer heartbeat and restore defaults. In J1939 mode
+(spec/pkp-2600-si-j1939.md) the keypad is :class:`~blinkcan.twin.keypad_j1939.J1939Keypad`.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
@@ -24,11 +25,14 @@ from blinkcan.devices.keypad import (
     TICK_PERIOD_S,
     describe_keypad,
 )
+from blinkcan.devices.keypad_j1939 import DEFAULT_NAME, NVM_PREFIX, STORED_SETTINGS
 from blinkcan.devices.model import Quirks
+from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState, heartbeat_frame, parse_nmt
 from blinkcan.twin.base import CanopenTwin, next_due
 from blinkcan.twin.keypad_display import (
@@ -39,12 +43,10 @@ from blinkcan.twin.keypad_display import (
     ShowPlayer,
     render_key,
 )
-from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.keypad_j1939 import J1939Keypad
+from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
 
-#: PKP §44 / errata "Protocol switch": J1939 PGN EF00h to DA 21h, any priority and source.
-J1939_RETURN_ID_MASK = 0x03FFFF00
-J1939_RETURN_ID = 0x00EF2100
-J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")
+PROTOCOLS = {"canopen": PROTOCOL_CANOPEN, "j1939": PROTOCOL_J1939}
 
 
 def check_key(key: int) -> int:
@@ -56,6 +58,9 @@ class KeypadTwin(CanopenTwin):
 
     ``node_id`` is the unit's factory node id; ``nvm`` a path to keep its stored settings in
     (or None for memory). ``manual`` selects the firmware generation ("1.1" or "1.5").
+    ``protocol`` ("canopen" or "j1939") is the factory protocol, used while the NVM holds
+    none (a stored protocol wins, as a stored node id does); ``name`` is the J1939 NAME it
+    claims its address with (J-5).
     """
 
     def __init__(
@@ -64,9 +69,26 @@ class KeypadTwin(CanopenTwin):
         quirks: Quirks = "firmware",
         nvm: str | os.PathLike[str] | Nvm | None = None,
         manual: str = "1.1",
+        protocol: str = "canopen",
+        name: J1939Name | bytes = DEFAULT_NAME,
+        settings: Mapping[str, Value] | None = None,
     ) -> None:
+        if protocol not in PROTOCOLS:
+            raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, not {protocol!r}")
         description = describe_keypad(manual, quirks, node_id)
-        super().__init__(description, node_id, nvm)
+        if nvm is None:
+            nvm = MemoryNvm()
+        elif isinstance(nvm, (str, os.PathLike)):  # J1939 settings live in the same file
+            nvm = JsonFileNvm(nvm, description.model, description.generation, description.table,
+                              {NVM_PREFIX + key: f.valid for key, f in STORED_SETTINGS.items()})
+        j1939_name = name if isinstance(name, J1939Name) else J1939Name.from_bytes(name)
+        self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939)
+        fresh = nvm.load() is None  # a corrupt or foreign file fails here
+        super().__init__(description, node_id, nvm, settings)
+        self._j1939_keypad.settings.update(self._stored_j1939_settings(self._nvm.load() or {}))
+        if protocol == "j1939" and fresh:
+            self._store.set("can_protocol", PROTOCOL_J1939)
+            self._persist()
         self._key_pdo = description.pdo("key_state")
         self._key_cob_id = self._key_pdo.cob_id(node_id)
         self._keys = 0
@@ -87,8 +109,8 @@ class KeypadTwin(CanopenTwin):
         store = self._store
         store.set_hook("tpdo1_event_timer", self._on_event_timer)
         store.set_hook("can_protocol", self._on_can_protocol)
-        for name in self._led_views:
-            store.set_hook(name, self._led_view_hook(name), keeps_value=False)
+        for view in self._led_views:
+            store.set_hook(view, self._led_view_hook(view), keeps_value=False)
         if self._generation2:
             store.set_hook("node_id", self._on_node_id)
             store.set_hook("tpdo1_transmission_type", self._on_tpdo_type)
@@ -117,11 +139,13 @@ class KeypadTwin(CanopenTwin):
             return []
         self._keys = keys
         self._store.set("keys_pressed", keys)
+        if self._j1939:
+            return self._j1939_keypad.key_changed(key, down, keys, now)
         if down and self._demo is not None:
             self._demo.press(key, now)
         # PKP §10: sent on every change while operational (event-driven FEh); in SYNC mode
         # only at the SYNCs (rev 1.5 §44a, errata G3)
-        if self._j1939 or self._nmt is not NmtState.OPERATIONAL or self._tpdo_synchronous():
+        if self._nmt is not NmtState.OPERATIONAL or self._tpdo_synchronous():
             return []
         return [self._key_state_frame(now)]
 
@@ -282,6 +306,7 @@ class KeypadTwin(CanopenTwin):
         self._show = None
         self._demo = None
         self._periodic_next = None
+        self._j1939_keypad.power_off()
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
         self._schedule_periodic(self._store.get_int("tpdo1_event_timer"), now)
@@ -304,21 +329,17 @@ class KeypadTwin(CanopenTwin):
         return None
 
     def _switch_to_j1939(self, now: float) -> list[Frame]:
-        self._j1939 = True
         self._on_power_off()
-        self._boot(now, application=True)
-        self._nmt = NmtState.BOOT_UP
-        self._heartbeat_next = None
-        return []
+        return self._boot(now, application=True)  # J-1: restarts in J1939 mode
 
     def _on_extended(self, frame: Frame, now: float) -> list[Frame]:
         if not self._j1939:
             return []
-        if (frame.can_id & J1939_RETURN_ID_MASK) != J1939_RETURN_ID:
-            return []
-        if frame.data != J1939_RETURN_DATA:
-            return []
-        # errata "Protocol switch": back to CANopen with CANopen factory defaults
+        frames = self._j1939_keypad.receive(frame, now)
+        if not self._j1939_keypad.wants_canopen:
+            return frames
+        # §27, J-1, errata "Protocol switch": back to CANopen with CANopen factory defaults;
+        # the J1939 settings stay stored
         self._j1939 = False
         self._restore_factory_settings()
         self._store.set("can_protocol", PROTOCOL_CANOPEN)
@@ -328,18 +349,56 @@ class KeypadTwin(CanopenTwin):
 
     def _boot(self, now: float, application: bool) -> list[Frame]:
         if application:
-            stored = self._nvm.load() or {}
+            stored = self._stored_settings() or {}
             self._j1939 = stored.get("can_protocol", PROTOCOL_CANOPEN) == PROTOCOL_J1939
-        if self._j1939:  # J1939 mode: CANopen silent; only the way back is answered
+        if self._j1939:  # J1939 mode: CANopen silent, the J1939 keypad speaks
+            stored = self._stored_settings() or {}
             super()._boot(now, application)
             self._routes = {}
             self._nmt = NmtState.BOOT_UP
             self._heartbeat_next = None
-            self._show = None
-            return []
+            self._show = self._demo = self._periodic_next = None
+            self._j1939_keypad.settings.update(self._stored_j1939_settings(stored))
+            return self._j1939_keypad.power_on(now, self._keys)
         return super()._boot(now, application)
 
+    @staticmethod
+    def _stored_j1939_settings(stored: dict[str, Any]) -> dict[str, int]:
+        prefix = len(NVM_PREFIX)
+        return {key[prefix:]: value for key, value in stored.items()
+                if key.startswith(NVM_PREFIX) and key[prefix:] in STORED_SETTINGS}
+
+    def _save_settings(self, settings: dict[str, Value]) -> AbortCode | None:
+        return self._save_with_j1939(settings, self._j1939_keypad.settings)
+
+    def _save_with_j1939(self, settings: dict[str, Value], j1939: dict[str, int]
+                         ) -> AbortCode | None:
+        """The CANopen and the J1939 settings share the NVM: each write keeps the other's."""
+        return super()._save_settings(
+            {**settings, **{NVM_PREFIX + key: value for key, value in j1939.items()}})
+
+    def _save_j1939(self, j1939: dict[str, int]) -> bool:
+        return self._save_with_j1939(self._store.stored_values(), j1939) is None
+
+    @property
+    def bitrate(self) -> int:
+        """The bit rate in use: CANopen's 2010h code, or J1939's 6Fh code (J-3)."""
+        if self._j1939:
+            return self._j1939_keypad.bitrate
+        return super().bitrate
+
+    @property
+    def protocol(self) -> str:
+        return "j1939" if self._j1939 else "canopen"
+
+    @property
+    def j1939(self) -> J1939Keypad:
+        """The J1939 side (settings, address), whichever protocol is in use."""
+        return self._j1939_keypad
+
     def _on_advance(self, now: float) -> list[Frame]:
+        if self._j1939:
+            return self._j1939_keypad.advance(now)
         frames: list[Frame] = []
         due = self._periodic_next
         if due is not None and now >= due:
@@ -350,6 +409,8 @@ class KeypadTwin(CanopenTwin):
         return frames
 
     def _deadlines(self) -> Iterable[float | None]:
+        if self._j1939:
+            return self._j1939_keypad.deadlines()
         now = self._now
         return (
             self._periodic_next,
@@ -362,6 +423,8 @@ class KeypadTwin(CanopenTwin):
     def displayed_leds(self, now: float | None = None) -> tuple[int, int]:
         """(on word, blink word) the keys show: the startup show, DEMO mode, or the objects."""
         now = self._now if now is None else now
+        if self._j1939:
+            return self._j1939_keypad.displayed_leds(now)
         if self._show is not None:
             step = self._show.step(now)
             if step is not None:
@@ -380,7 +443,9 @@ class KeypadTwin(CanopenTwin):
                 "level": self._store.get_int("backlight_brightness")}
 
     def _snapshot(self) -> dict[str, Any]:
-        if not self._powered or self._j1939:
+        if self._j1939:
+            return {**self._j1939_keypad.snapshot(), "blink_period_s": BLINK_PERIOD_S}
+        if not self._powered:
             on = blink = 0
         else:
             on, blink = self.displayed_leds()
@@ -404,4 +469,7 @@ class KeypadTwin(CanopenTwin):
             "demo": self._demo.describe() if self._demo is not None else None,
             "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
             "leds": dict(self._words),
+            # what the host last commanded, apart from what a show or DEMO mode displays
+            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
+                          for key in range(1, KEY_COUNT + 1)],
         }

@@ -1,28 +1,47 @@
 """Non-volatile memory of a twin: where its stored settings live across power cycles.
 
 ``None`` keeps them in the twin object; a path keeps them in a JSON file so they survive the
-process too. The file is written atomically (temporary file, fsync, rename), and a file that is
-corrupt or belongs to another model is refused with a clear error, never replaced.
+process too. The rules for the file, so that nothing a user stored is lost or replaced:
+
+- Written atomically: a temporary file beside it, fsync, rename. The temporary file has one
+  fixed name (``.NAME.tmp``), so one killed with ``kill -9`` mid-write is reclaimed by the next
+  write, and removed when the file is next opened.
+- One twin at a time: the opener holds an exclusive lock (``fcntl.flock`` on ``.NAME.lock``)
+  until :meth:`JsonFileNvm.close`, and a second opener, in this process or another, is refused
+  with an error naming the file and the holder's process id. The kernel drops the lock when its
+  holder dies, so a crash never leaves the file locked. (No locking where ``fcntl`` does not
+  exist, i.e. on Windows.)
+- A file that is corrupt, belongs to another model, or was changed by someone else since this
+  twin read or wrote it, is refused with a clear error, never replaced.
+- Every error is an :class:`NvmError` naming the file.
 
 This module is the pure core's one place of file I/O; it needs no clock and no bus.
 """
 
 from __future__ import annotations
 
+import contextlib
+import glob
 import json
 import os
-import tempfile
+import re
+import sys
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Protocol
+from typing import IO, Protocol
 
-from blinkcan.devices.objects import ObjectTable, Value
+from blinkcan.devices.objects import ObjectTable, Ranges, Value
+
+if sys.platform != "win32":
+    import fcntl
 
 FORMAT = "blinkcan-nvm"
 VERSION = 1
+_MKSTEMP_SUFFIX = re.compile(r"[a-z0-9_]{8}")
 
 
 class NvmError(ValueError):
-    """A non-volatile memory file that cannot be used."""
+    """A non-volatile memory file that cannot be used; the message names the file."""
 
 
 class Nvm(Protocol):
@@ -30,7 +49,13 @@ class Nvm(Protocol):
         """The stored settings, or None if nothing was ever stored."""
         ...
 
-    def save(self, settings: dict[str, Value]) -> None: ...
+    def save(self, settings: dict[str, Value]) -> None:
+        """Store ``settings``; raises :class:`NvmError` when they could not be stored."""
+        ...
+
+    def close(self) -> None:
+        """Let go of the memory (a file's lock); later use may fail."""
+        ...
 
 
 class MemoryNvm:
@@ -45,24 +70,94 @@ class MemoryNvm:
     def save(self, settings: dict[str, Value]) -> None:
         self._settings = dict(settings)
 
+    def close(self) -> None:
+        pass
+
 
 class JsonFileNvm:
-    """Settings in a JSON file tagged with the model and generation that wrote it."""
+    """Settings in a JSON file tagged with the model and generation that wrote it; see the
+    module docstring for the rules. Opening takes the file's lock (NvmError if taken).
+    ``others``: stored settings that are not objects of ``table`` (the keypad's J1939 ones)."""
 
     def __init__(self, path: str | os.PathLike[str], model: str, generation: str,
-                 table: ObjectTable) -> None:
+                 table: ObjectTable, others: Mapping[str, Ranges] | None = None) -> None:
         self.path = Path(path)
         self.model = model
         self.generation = generation
         self._table = table
+        self._others = dict(others or {})
+        self._temporary = self.path.with_name(f".{self.path.name}.tmp")
+        self._known: str | None = None  # the text this twin last read or wrote
+        self._lock: IO[str] | None = self._acquire()
+        self._remove_stale_temporaries()
+
+    def _remove_stale_temporaries(self) -> None:
+        """Temporary files of writers killed mid-write: ours (``.NAME.tmp``) and those of
+        earlier blinkcan versions (``.NAME.`` + eight ``tempfile.mkstemp`` characters)."""
+        stale = [self._temporary, *(
+            path for path in self.path.parent.glob(f".{glob.escape(self.path.name)}.????????")
+            if _MKSTEMP_SUFFIX.fullmatch(path.name[len(self.path.name) + 2:]))]
+        for path in stale:
+            with contextlib.suppress(OSError):
+                path.unlink(missing_ok=True)
+
+    # -- the lock ---------------------------------------------------------------------------
+
+    def _acquire(self) -> IO[str] | None:
+        lock_path = self.path.with_name(f".{self.path.name}.lock")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            stream = open(lock_path, "a+", encoding="utf-8")  # noqa: SIM115 held until close()
+        except OSError as error:
+            raise NvmError(f"cannot open NVM file {self.path}: {error.strerror}") from error
+        if sys.platform == "win32":
+            return stream
+        try:
+            fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            stream.seek(0)
+            holder = stream.read().strip() or "unknown"
+            stream.close()
+            raise NvmError(f"NVM file {self.path} is in use by another twin (process "
+                           f"{holder}); close that one first or use another file") from None
+        stream.seek(0)
+        stream.truncate()
+        stream.write(f"{os.getpid()}\n")
+        stream.flush()
+        return stream
+
+    def close(self) -> None:
+        """Release the lock; the file can then be opened by another twin or process."""
+        if self._lock is not None:
+            self._lock.close()  # closing the descriptor drops the flock
+            self._lock = None
+
+    def _check_open(self) -> None:
+        if self._lock is None:
+            raise NvmError(f"NVM file {self.path} was closed by this twin")
+
+    # -- reading ----------------------------------------------------------------------------
 
     def load(self) -> dict[str, Value] | None:
+        self._check_open()
+        text = self._read()
+        if text is None:
+            self._known = None
+            return None
+        settings = self._parse(text)
+        self._known = text
+        return settings
+
+    def _read(self) -> str | None:
         try:
-            text = self.path.read_text(encoding="utf-8")
+            return self.path.read_text(encoding="utf-8")
         except FileNotFoundError:
             return None
-        except OSError as error:
-            raise NvmError(f"cannot read NVM file {self.path}: {error.strerror}") from error
+        except (OSError, UnicodeDecodeError) as error:
+            reason = error.strerror if isinstance(error, OSError) else "not UTF-8 text"
+            raise NvmError(f"cannot read NVM file {self.path}: {reason}") from error
+
+    def _parse(self, text: str) -> dict[str, Value]:
         try:
             document = json.loads(text)
         except json.JSONDecodeError as error:
@@ -86,6 +181,12 @@ class JsonFileNvm:
     def _checked(self, settings: dict[str, object]) -> dict[str, Value]:
         checked: dict[str, Value] = {}
         for name, value in settings.items():
+            if name in self._others:
+                if not isinstance(value, int) or value not in self._others[name]:
+                    raise NvmError(f"{self.path}: {name} = {value!r} is not valid "
+                                   f"({self._others[name]})")
+                checked[name] = value
+                continue
             if name not in self._table or not self._table[name].stored:
                 raise NvmError(f"{self.path}: {name!r} is not a stored setting of a {self.model}")
             entry = self._table[name]
@@ -95,7 +196,13 @@ class JsonFileNvm:
             checked[name] = value
         return checked
 
+    # -- writing ----------------------------------------------------------------------------
+
     def save(self, settings: dict[str, Value]) -> None:
+        self._check_open()
+        if self._read() != self._known:
+            raise NvmError(f"NVM file {self.path} was changed by someone else since this twin "
+                           "read it; refusing to replace it (a reset of the twin loads it)")
         document = {
             "format": FORMAT,
             "version": VERSION,
@@ -104,15 +211,14 @@ class JsonFileNvm:
             "settings": dict(sorted(settings.items())),
         }
         text = json.dumps(document, indent=2) + "\n"
-        directory = self.path.parent
-        directory.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(prefix=f".{self.path.name}.", dir=directory)
         try:
-            with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            with open(self._temporary, "w", encoding="utf-8") as stream:
                 stream.write(text)
                 stream.flush()
                 os.fsync(stream.fileno())
-            os.replace(temporary, self.path)
-        except BaseException:
-            Path(temporary).unlink(missing_ok=True)
-            raise
+            os.replace(self._temporary, self.path)
+        except OSError as error:
+            with contextlib.suppress(OSError):
+                self._temporary.unlink(missing_ok=True)
+            raise NvmError(f"cannot write NVM file {self.path}: {error.strerror}") from error
+        self._known = text

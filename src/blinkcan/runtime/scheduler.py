@@ -1,0 +1,407 @@
+"""One scheduling abstraction for twins and drivers: timers, calls on the owning loop, waiting.
+
+Two implementations share one interface:
+
+- :class:`RealTimeScheduler`: an owning thread, a queue for other threads' calls and a timer
+  heap on ``time.monotonic``. This is what runs on real buses (and python-can's ``virtual``).
+- :class:`SimulatedScheduler`: no thread and no sleeping. A virtual clock jumps from one due
+  event to the next; events due at the same instant run in the order they were scheduled, so a
+  scenario gives the same frames at the same times on every run. A caller that waits (a driver
+  waiting for its SDO reply) runs the simulation itself until what it waits for happened or its
+  virtual timeout passed.
+
+Everything that waits goes through :meth:`Scheduler.wait` on a :class:`Signal` made by the same
+scheduler, and blocking work that must leave a handler goes through :meth:`Scheduler.spawn`,
+so drivers are written once for both kinds of time.
+"""
+
+from __future__ import annotations
+
+import collections
+import heapq
+import itertools
+import logging
+import queue
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Hashable
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any, Protocol, TypeVar
+
+log = logging.getLogger(__name__)
+T = TypeVar("T")
+
+_STOP = object()
+_MAX_IDLE_WAIT = 0.5
+_WORKERS = 4  # blocking work (SDO off a handler) per scheduler: bounded, never one per call
+
+
+class Signal(Protocol):
+    """Something a caller waits for: set once the awaited thing happened."""
+
+    def set(self) -> None: ...
+
+    def clear(self) -> None: ...
+
+    def is_set(self) -> bool: ...
+
+
+class Flag:
+    """A :class:`Signal` for one thread: a simulated scheduler's waits poll it."""
+
+    __slots__ = ("_set",)
+
+    def __init__(self) -> None:
+        self._set = False
+
+    def set(self) -> None:
+        self._set = True
+
+    def clear(self) -> None:
+        self._set = False
+
+    def is_set(self) -> bool:
+        return self._set
+
+
+class Timer:
+    """A scheduled call; :meth:`cancel` stops it (and its repetitions)."""
+
+    __slots__ = ("callback", "cancelled", "due", "period")
+
+    def __init__(self, due: float, period: float | None, callback: Callable[[], object]) -> None:
+        self.due = due
+        self.period = period
+        self.callback = callback
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+
+def guarded(callback: Callable[..., object], *args: object) -> None:
+    """Run a handler; an exception is logged with its traceback and the loop goes on."""
+    try:
+        callback(*args)
+    except Exception:
+        log.exception("a blinkcan handler raised; the loop goes on")
+
+
+class Scheduler(ABC):
+    """Timers and calls on one owning loop, with a clock that is real or simulated."""
+
+    simulated: bool = False
+
+    @abstractmethod
+    def clock(self) -> float:
+        """Seconds, monotonic: wall time or virtual time."""
+
+    @abstractmethod
+    def _push(self, timer: Timer) -> Timer:
+        """Put ``timer`` on the heap (from any thread)."""
+
+    @abstractmethod
+    def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
+        """Run ``action`` on the loop and return its result (at once when already there)."""
+
+    @abstractmethod
+    def signal(self) -> Signal:
+        """A fresh signal that :meth:`wait` can wait for."""
+
+    @abstractmethod
+    def wait(self, signal: Signal, timeout: float) -> bool:
+        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False)."""
+
+    @abstractmethod
+    def sleep(self, seconds: float) -> None:
+        """Let ``seconds`` of this scheduler's time pass (the simulation runs meanwhile)."""
+
+    @abstractmethod
+    def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
+        """Run blocking work (SDO transfers) outside the handlers; work with a ``key`` still
+        pending is not queued twice (a slow device never piles up polls)."""
+
+    @property
+    @abstractmethod
+    def in_loop(self) -> bool:
+        """True when called from the loop itself (a handler or timer)."""
+
+    @abstractmethod
+    def start(self) -> None:
+        """Start the loop (a no-op where the caller drives it)."""
+
+    @abstractmethod
+    def stop(self) -> None:
+        """Stop the loop; calls still queued fail."""
+
+    def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
+        return self._push(Timer(when, None, callback))
+
+    def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
+        return self._push(Timer(self.clock() + delay, None, callback))
+
+    def call_soon(self, callback: Callable[[], object]) -> Timer:
+        return self._push(Timer(self.clock(), None, callback))
+
+    def call_every(self, period: float, callback: Callable[[], object], first: float = 0.0
+                   ) -> Timer:
+        if period <= 0:
+            raise ValueError(f"period must be > 0 seconds, got {period}")
+        return self._push(Timer(self.clock() + first, period, callback))
+
+
+class _Heap:
+    """Due timers in order of time, then of scheduling (so equal times keep their order)."""
+
+    def __init__(self) -> None:
+        self.entries: list[tuple[float, int, Timer]] = []
+        self._seq = itertools.count()
+
+    def push(self, timer: Timer) -> None:
+        heapq.heappush(self.entries, (timer.due, next(self._seq), timer))
+
+    def next_due(self) -> float | None:
+        entries = self.entries
+        while entries and entries[0][2].cancelled:
+            heapq.heappop(entries)
+        return entries[0][0] if entries else None
+
+    def pop_due(self, now: float) -> Timer | None:
+        """The next timer due by ``now`` (re-armed first if it repeats), or None."""
+        entries = self.entries
+        while entries and entries[0][0] <= now:
+            due, _, timer = heapq.heappop(entries)
+            if timer.cancelled:
+                continue
+            if timer.period is not None:
+                timer.due = max(due + timer.period, now)
+                self.push(timer)
+            return timer
+        return None
+
+
+class RealTimeScheduler(Scheduler):
+    """An owning thread: timers on the wall clock, other threads' calls through a queue."""
+
+    def __init__(self, name: str = "blinkcan", clock: Callable[[], float] = time.monotonic
+                 ) -> None:
+        self.name = name
+        self._clock = clock
+        self._inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        self._heap = _Heap()
+        self._thread: threading.Thread | None = None
+        self._workers: ThreadPoolExecutor | None = None
+        self._pending: set[Hashable] = set()
+        self._pending_lock = threading.Lock()
+
+    def clock(self) -> float:
+        return self._clock()
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None
+
+    @property
+    def in_loop(self) -> bool:
+        return threading.current_thread() is self._thread
+
+    def start(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._loop, name=self.name, daemon=True)
+            self._thread.start()
+
+    def stop(self) -> None:
+        thread, self._thread = self._thread, None
+        if thread is None:
+            return
+        self._inbox.put(_STOP)
+        if threading.current_thread() is not thread:
+            thread.join(timeout=5)
+        if self._workers is not None:
+            self._workers.shutdown(wait=False, cancel_futures=True)
+            self._workers = None
+        while True:  # calls still queued will never run: fail them now
+            try:
+                item = self._inbox.get_nowait()
+            except queue.Empty:
+                break
+            if isinstance(item, tuple) and isinstance(item[1], Future):
+                item[1].set_exception(RuntimeError(f"{self.name} was stopped"))
+
+    def _push(self, timer: Timer) -> Timer:
+        self._inbox.put(timer)
+        return timer
+
+    def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
+        if self._thread is None or self.in_loop:
+            return action()
+        future: Future[T] = Future()
+        self._inbox.put((action, future))
+        return future.result(timeout)
+
+    def signal(self) -> Signal:
+        return threading.Event()
+
+    def wait(self, signal: Signal, timeout: float) -> bool:
+        assert isinstance(signal, threading.Event)
+        return signal.wait(timeout)
+
+    def sleep(self, seconds: float) -> None:
+        time.sleep(seconds)
+
+    def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
+        if key is not None:
+            with self._pending_lock:
+                if key in self._pending:
+                    return
+                self._pending.add(key)
+        if self._workers is None:
+            self._workers = ThreadPoolExecutor(_WORKERS, thread_name_prefix=f"{self.name}-work")
+
+        def work() -> None:
+            if key is not None:
+                with self._pending_lock:
+                    self._pending.discard(key)
+            guarded(action)
+
+        try:
+            self._workers.submit(work)
+        except RuntimeError:  # shut down meanwhile
+            log.debug("%s: work dropped, the scheduler is stopped", self.name)
+
+    def _loop(self) -> None:
+        inbox, heap = self._inbox, self._heap
+        while True:
+            due = heap.next_due()
+            wait = _MAX_IDLE_WAIT if due is None else due - self._clock()
+            item: Any = None
+            if wait > 0:
+                try:
+                    item = inbox.get(timeout=min(wait, _MAX_IDLE_WAIT))
+                except queue.Empty:
+                    item = None
+            while True:
+                if item is _STOP:
+                    return
+                if item is not None:
+                    self._handle(item)
+                try:
+                    item = inbox.get_nowait()
+                except queue.Empty:
+                    break
+            now = self._clock()
+            while (timer := heap.pop_due(now)) is not None:
+                guarded(timer.callback)
+
+    def _handle(self, item: Any) -> None:
+        if isinstance(item, Timer):
+            self._heap.push(item)
+            return
+        action, future = item
+        try:
+            future.set_result(action())
+        except BaseException as error:
+            future.set_exception(error)
+
+
+class SimulatedScheduler(Scheduler):
+    """Virtual time: one thread (the caller's), events in order, the clock jumps between them.
+
+    Not thread-safe by design: the thread that calls it (the test) is the loop. Blocking work
+    handed to :meth:`spawn` runs when no one is waiting, so it never interleaves with a
+    transfer the caller is in the middle of.
+    """
+
+    simulated = True
+
+    def __init__(self, start: float = 0.0) -> None:
+        self._now = start
+        self._heap = _Heap()
+        self._depth = 0  # handlers running (waits inside them nest)
+        self._base = 0  # depth at which the running background work started
+        self._waits = 0
+        self._background: collections.deque[tuple[Hashable | None, Callable[[], object]]] = (
+            collections.deque())
+
+    def clock(self) -> float:
+        return self._now
+
+    def start(self) -> None:
+        """Nothing to start: the callers drive the simulation."""
+
+    def stop(self) -> None:
+        """Nothing to stop; pending events stay (the simulation may go on)."""
+
+    @property
+    def in_loop(self) -> bool:
+        return self._depth > self._base
+
+    def _push(self, timer: Timer) -> Timer:
+        timer.due = max(timer.due, self._now)
+        self._heap.push(timer)
+        return timer
+
+    def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
+        return action()
+
+    def signal(self) -> Signal:
+        return Flag()
+
+    def wait(self, signal: Signal, timeout: float) -> bool:
+        self._waits += 1
+        try:
+            return self.run_until(signal.is_set, self._now + timeout)
+        finally:
+            self._waits -= 1
+            if not self._waits and self._background:
+                self.call_soon(self._run_background)
+
+    def sleep(self, seconds: float) -> None:
+        self.run_until(None, self._now + seconds)
+
+    def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
+        if key is not None and any(key == pending for pending, _ in self._background):
+            return
+        self._background.append((key, action))
+        self.call_soon(self._run_background)
+
+    def _run_background(self) -> None:
+        if self._waits:
+            return  # the wait's end schedules this again
+        base, self._base = self._base, self._depth
+        try:
+            while self._background and not self._waits:
+                _, action = self._background.popleft()
+                guarded(action)
+        finally:
+            self._base = base
+
+    def next_due(self) -> float | None:
+        return self._heap.next_due()
+
+    def step(self, until: float) -> bool:
+        """Run the next event due by ``until``; False when there is none (the clock stays)."""
+        due = self._heap.next_due()
+        if due is None or due > until:
+            return False
+        self._now = max(self._now, due)
+        timer = self._heap.pop_due(self._now)
+        if timer is not None:
+            self._depth += 1
+            try:
+                guarded(timer.callback)
+            finally:
+                self._depth -= 1
+        return True
+
+    def run_until(self, predicate: Callable[[], object] | None, until: float) -> bool:
+        """Run events in order until ``predicate()`` is true (True) or the clock reaches
+        ``until`` (False; the clock then stands at ``until``)."""
+        while True:
+            if predicate is not None and predicate():
+                return True
+            if not self.step(until):
+                break
+        self._now = max(self._now, until)
+        return bool(predicate()) if predicate is not None else True

@@ -1,0 +1,86 @@
+"""The pytest plugin (entry point ``pytest11``): fixtures for testing a controller on twins.
+
+Fixtures:
+- ``rig``: a :class:`~blinkcan.testing.Rig` in simulated time, closed after the test.
+- ``keypad_twin``: a PKP-2600-SI twin on the rig at node 15h, startup show off (so the LEDs
+  show what the controller commanded from the start).
+- ``keybox_twin``: a Keybox twin on the rig at node 0Ch.
+
+Marker: ``@pytest.mark.blinkcan(manual="1.5", quirks="cia301", keypad_node=0x15,
+keybox_node=0x0C, startup_show=False)`` chooses the twins a test gets.
+
+Golden traces: ``assert_matches_trace(rig.frames, path)``; run pytest with
+``--blinkcan-record`` to (re)write the traces instead of comparing (``golden_trace`` fixture).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from blinkcan.devices.keypad import SHOW_OFF
+from blinkcan.testing.golden import assert_matches_trace, record_trace
+from blinkcan.testing.rig import Rig
+from blinkcan.twin import KeyboxTwin, KeypadTwin
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--blinkcan-record", action="store_true", default=False,
+                     help="blinkcan: write golden traces instead of comparing with them")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers", "blinkcan(manual, quirks, keypad_node, keybox_node, startup_show): "
+        "the twins the blinkcan fixtures build")
+
+
+def _options(request: pytest.FixtureRequest) -> dict[str, Any]:
+    marker = request.node.get_closest_marker("blinkcan")
+    return dict(marker.kwargs) if marker is not None else {}
+
+
+@pytest.fixture
+def rig() -> Iterator[Rig]:
+    """Twins and drivers on one simulated bus, at virtual time 0."""
+    with Rig() as bench:
+        yield bench
+
+
+@pytest.fixture
+def keypad_twin(rig: Rig, request: pytest.FixtureRequest) -> KeypadTwin:
+    options = _options(request)
+    settings = {} if options.get("startup_show", False) else {"startup_led_show": SHOW_OFF}
+    twin = KeypadTwin(node_id=options.get("keypad_node", 0x15),
+                      quirks=options.get("quirks", "firmware"),
+                      manual=options.get("manual", "1.1"), settings=settings)
+    return rig.add(twin)
+
+
+@pytest.fixture
+def keybox_twin(rig: Rig, request: pytest.FixtureRequest) -> KeyboxTwin:
+    options = _options(request)
+    twin = KeyboxTwin(node_id=options.get("keybox_node", 0x0C),
+                      quirks=options.get("quirks", "firmware"))
+    return rig.add(twin)
+
+
+@pytest.fixture
+def golden_trace(request: pytest.FixtureRequest) -> Callable[..., None]:
+    """``golden_trace(rig.frames, "traces/watchdog.log")``: compare with the file (a path
+    relative to the test file), or write it when pytest runs with ``--blinkcan-record``."""
+    recording = bool(request.config.getoption("--blinkcan-record"))
+    here = Path(request.node.path).parent
+
+    def check(frames: Any, path: str, tolerance: float = 0.001) -> None:
+        target = here / path
+        if recording:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            record_trace(frames, target, replace=True)
+        else:
+            assert_matches_trace(frames, target, tolerance)
+
+    return check

@@ -1,0 +1,75 @@
+"""The fast candump reader gives what python-can's own reader gives, line for line."""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import can
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from blinkcan.formats.candump import read_candump
+from blinkcan.formats.logs import read_frames, read_log
+from blinkcan.protocol import Frame
+
+
+def _as_tuple(message: can.Message) -> tuple[object, ...]:
+    return (round(message.timestamp, 6), message.arbitration_id, message.is_extended_id,
+            message.is_remote_frame, message.is_error_frame, message.is_fd, message.dlc,
+            bytes(message.data))
+
+
+def _ours(text: str) -> list[tuple[object, ...]]:
+    found: list[tuple[object, ...]] = []
+    for timestamp, item in read_candump(io.StringIO(text)):
+        if isinstance(item, Frame):
+            found.append((round(timestamp, 6), item.can_id, item.extended, False, False, False,
+                          len(item.data), item.data))
+        else:
+            found.append(_as_tuple(item))
+    return found
+
+
+def _python_cans(path: Path) -> list[tuple[object, ...]]:
+    with can.LogReader(str(path)) as reader:
+        return [_as_tuple(message) for message in reader]
+
+
+_line = st.one_of(
+    st.builds(lambda i, d: f"{i:03X}#{d.hex().upper()}", st.integers(0, 0x7FF),
+              st.binary(max_size=8)),
+    st.builds(lambda i, d: f"{i:08X}#{d.hex()}", st.integers(0, 0x1FFFFFFF),
+              st.binary(max_size=8)),
+    st.builds(lambda i: f"{i:03X}#R", st.integers(0, 0x7FF)),
+    st.builds(lambda i, n: f"{i:03X}#R{n}", st.integers(0, 0x7FF), st.integers(0, 8)),
+    st.builds(lambda d: f"20000080#{d.hex()}", st.binary(min_size=8, max_size=8)),
+    st.builds(lambda i, d: f"{i:03X}##1{d.hex()}", st.integers(0, 0x7FF),
+              st.sampled_from([b"", bytes(12), bytes(range(64))])),
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 2e9, allow_nan=False), st.sampled_from(["can0", "vcan1"]),
+                          _line, st.sampled_from(["", " R", " T"])), max_size=20))
+def test_round_trip_against_python_cans_reader(lines: list[tuple[float, str, str, str]]
+                                                ) -> None:
+    text = "".join(f"({t:.6f}) {channel} {frame}{suffix}\n" for t, channel, frame, suffix in lines)
+    handle, name = tempfile.mkstemp(suffix=".log")
+    os.close(handle)
+    path = Path(name)
+    try:
+        path.write_text(text)
+        assert _ours(text) == _python_cans(path)
+    finally:
+        path.unlink(missing_ok=True)
+
+
+def test_blank_lines_are_skipped_as_python_can_does(tmp_path: Path) -> None:
+    path = tmp_path / "blank.log"
+    path.write_text("\n(1.0) can0 715#05\n   \n(2.0) can0 70C#R\n")
+    assert _ours(path.read_text()) == _python_cans(path)
+    assert [f for _, f in read_frames(path)] == [Frame(0x715, b"\x05")]
+    assert [type(item).__name__ for _, item in read_log(path)] == ["Frame", "Message"]

@@ -1,0 +1,107 @@
+"""The layer contract of DESIGN.md, checked on the source: which layer may import which.
+
+``cli -> web -> testing -> host · twin · decode · formats -> devices · runtime -> protocol``,
+plus the explicit rules: ``protocol/``, ``devices/`` and ``twin/`` import none of ``can``,
+``threading``, ``asyncio``, ``time``; ``host/``, ``decode/`` and ``formats/`` never import
+``twin/``; the pure core imports without python-can. Every import counts, also the ones inside a
+function. A new subpackage must be placed in ``ALLOWED`` before it can land.
+"""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import blinkcan
+
+PACKAGE = Path(blinkcan.__file__).parent
+PURE = frozenset({"protocol", "devices", "twin"})
+FORBIDDEN_IN_PURE = frozenset({"can", "threading", "asyncio", "time"})
+_BELOW_DRIVERS = frozenset({"protocol", "devices", "runtime"})
+#: layer -> the blinkcan layers its modules may import (its own included)
+ALLOWED: dict[str, frozenset[str]] = {
+    "protocol": frozenset({"protocol"}),
+    "devices": frozenset({"protocol", "devices"}),
+    "twin": frozenset({"protocol", "devices", "twin"}),
+    # runtime/ drives twins on a bus (DESIGN.md: "Emulator drives twins on a bus")
+    "runtime": frozenset({"protocol", "devices", "twin", "runtime"}),
+    "host": _BELOW_DRIVERS | {"host"},
+    "decode": frozenset({"protocol", "devices", "decode"}),
+    "formats": _BELOW_DRIVERS | {"formats"},
+    "testing": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing"},
+    "web": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing", "web"},
+    "cli": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing", "web", "cli"},
+    "__main__": frozenset({"cli"}),
+    "__init__": frozenset({"protocol", "host"}),  # lazily, on first use (PEP 562)
+}
+
+
+def _layer(path: Path) -> str:
+    relative = path.relative_to(PACKAGE)
+    return relative.parts[0] if len(relative.parts) > 1 else relative.stem
+
+
+def _imports(path: Path) -> list[tuple[int, str]]:
+    """(line, absolute module name) of every import in the file."""
+    found: list[tuple[int, str]] = []
+    package = ".".join(("blinkcan", *path.relative_to(PACKAGE).parent.parts))
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.extend((node.lineno, alias.name) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:  # relative: resolve against the file's package
+                base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                found.append((node.lineno, f"{base}.{node.module}" if node.module else base))
+            elif node.module:
+                found.append((node.lineno, node.module))
+    return found
+
+
+def _sources() -> list[Path]:
+    return sorted(PACKAGE.rglob("*.py"))
+
+
+def test_every_subpackage_has_a_place_in_the_layers() -> None:
+    unplaced = {_layer(path) for path in _sources()} - set(ALLOWED)
+    assert not unplaced, f"place {sorted(unplaced)} in tests/test_layers.py ALLOWED"
+
+
+@pytest.mark.parametrize("path", _sources(), ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_imports_follow_the_layers(path: Path) -> None:
+    layer = _layer(path)
+    allowed = ALLOWED.get(layer, frozenset())
+    wrong = []
+    for line, module in _imports(path):
+        parts = module.split(".")
+        if parts[0] == "blinkcan" and len(parts) > 1 and parts[1] not in allowed:
+            wrong.append(f"line {line}: {module} ({layer}/ may import {sorted(allowed)})")
+        if layer in PURE and parts[0] in FORBIDDEN_IN_PURE:
+            wrong.append(f"line {line}: {module} (the pure core does no I/O)")
+    assert not wrong, "\n".join(wrong)
+
+
+@pytest.mark.parametrize("module", ["blinkcan.protocol", "blinkcan.devices", "blinkcan.twin",
+                                    "blinkcan.decode", "blinkcan"])
+def test_pure_modules_import_without_python_can(module: str) -> None:
+    code = (f"import sys, {module}\n"
+            "bad = sorted({'can', 'threading', 'asyncio'} & set(sys.modules) - ALREADY)\n"
+            "assert not bad, bad\n")
+    # threading/asyncio may already be loaded by the interpreter itself: measure before
+    prelude = "import sys\nALREADY = set(sys.modules)\n"
+    result = subprocess.run([sys.executable, "-c", prelude + code], capture_output=True,
+                            text=True, check=False)
+    assert result.returncode == 0, result.stderr
+
+
+def test_the_drivers_load_on_first_use() -> None:
+    code = ("import sys, blinkcan\nassert 'blinkcan.host' not in sys.modules\n"
+            "from blinkcan import Keypad, Frame\nassert 'blinkcan.host' in sys.modules\n"
+            "print(Keypad.__name__, Frame.__name__)")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=False)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["Keypad", "Frame"]

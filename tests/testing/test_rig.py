@@ -1,0 +1,188 @@
+"""The testing kit: simulated time, the Rig, fault injection, golden traces."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import can
+import pytest
+
+from blinkcan import Keybox, Keypad
+from blinkcan.host import KeyEvent
+from blinkcan.protocol import Frame
+from blinkcan.runtime.scheduler import SimulatedScheduler
+from blinkcan.testing import Rig, TimedFrame, assert_matches_trace, frames_of, record_trace
+from blinkcan.twin import KeyboxTwin, KeypadTwin
+
+
+def test_simulated_scheduler_runs_events_in_time_then_schedule_order() -> None:
+    scheduler = SimulatedScheduler()
+    seen: list[tuple[float, str]] = []
+    scheduler.call_later(0.2, lambda: seen.append((scheduler.clock(), "b")))
+    scheduler.call_later(0.1, lambda: seen.append((scheduler.clock(), "a")))
+    scheduler.call_later(0.2, lambda: seen.append((scheduler.clock(), "c")))
+    scheduler.call_every(0.15, lambda: seen.append((scheduler.clock(), "tick")), first=0.15)
+    scheduler.run_until(None, 0.31)
+    assert seen == [(0.1, "a"), (0.15, "tick"), (0.2, "b"), (0.2, "c"), (0.3, "tick")]
+    assert scheduler.clock() == 0.31
+
+
+def test_a_wait_runs_the_simulation_until_its_signal_or_its_virtual_timeout() -> None:
+    scheduler = SimulatedScheduler()
+    signal = scheduler.signal()
+    scheduler.call_later(0.3, signal.set)
+    assert scheduler.wait(signal, 1.0)
+    assert scheduler.clock() == 0.3
+    assert not scheduler.wait(scheduler.signal(), 0.5)
+    assert scheduler.clock() == 0.8
+
+
+def test_background_work_never_runs_inside_a_wait() -> None:
+    scheduler = SimulatedScheduler()
+    order: list[str] = []
+    signal = scheduler.signal()
+
+    def handler() -> None:
+        scheduler.spawn(lambda: order.append("background"))
+        order.append("handler")
+
+    scheduler.call_later(0.1, handler)
+    scheduler.call_later(0.2, signal.set)
+    scheduler.wait(signal, 1.0)
+    order.append("wait returned")
+    scheduler.run_until(None, scheduler.clock())
+    assert order == ["handler", "wait returned", "background"]
+
+
+def _scenario() -> list[TimedFrame]:
+    with Rig() as rig:
+        keypad_twin = rig.add(KeypadTwin(node_id=0x15))
+        keybox_twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keypad, keybox = Keypad(rig.bus, 0x15), Keybox(rig.bus, 0x0C, watchdog=0.1)
+        keypad.set_heartbeat(0.05)
+        rig.tap(keypad_twin, 3, hold=0.9)
+        keybox.on(3)
+        rig.blow_fuse(keybox_twin, 3)
+        rig.advance(0.5)
+        keybox.stop_host_heartbeat()
+        rig.advance(0.5)
+        keypad.close()
+        keybox.close()
+        return list(rig.frames)
+
+
+def test_the_same_scenario_gives_the_same_frames_at_the_same_times() -> None:
+    first = _scenario()
+    assert len(first) > 40
+    for _ in range(19):
+        assert _scenario() == first
+
+
+def test_watchdog_trip_in_virtual_time() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C, watchdog=0.1)
+        keybox.on(4)
+        rig.advance(1.0)
+        assert twin.snapshot()["pins"][3]["state"] == "high"
+        keybox.stop_host_heartbeat()
+        tripped = rig.until(lambda: twin.snapshot()["pins"][3]["state"] == "off", timeout=1.0)
+        # KBX §28: consumer time 2 x 0.1 s after the last heartbeat (sent at 1.0 s)
+        assert 1.2 <= tripped <= 1.21
+        keybox.close()
+
+
+def test_long_press_in_virtual_time() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15))
+        keypad = Keypad(rig.bus, 0x15, long_press=0.8)
+        events: list[KeyEvent] = []
+        keypad.keys.subscribe(events.append)
+        rig.settle()
+        start = rig.now
+        rig.long_press(twin, 5, hold=1.0)
+        assert [(e.action, round(e.time - start, 6)) for e in events] == [
+            ("press", 0.0), ("long press", 0.8), ("release", 1.0)]
+        keypad.close()
+
+
+def test_iterating_events_runs_the_simulation() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15))
+        keypad = Keypad(rig.bus, 0x15)
+        rig.scheduler.call_later(0.5, lambda: rig.press(twin, 2))
+        event = next(keypad.events(timeout=1.0))
+        assert (event.key, event.action, event.time) == (2, "press", 0.5)
+        assert list(keypad.events(timeout=0.2)) == []
+        keypad.close()
+
+
+def test_twins_can_be_built_as_configured() -> None:
+    twin = KeypadTwin(settings={"startup_led_show": 0, "producer_heartbeat_time": 50})
+    frames = twin.power_on(0.0)
+    assert frames == [Frame(0x715, b"\x00")]
+    assert twin.snapshot()["startup_show"] is None
+    assert twin.advance(0.05) == [Frame(0x715, b"\x7f")]
+    with pytest.raises(ValueError, match="not a stored setting.*startup_led_show"):
+        KeypadTwin(settings={"show": 0})
+    with pytest.raises(ValueError, match="producer_heartbeat_time takes"):
+        KeypadTwin(settings={"producer_heartbeat_time": -1})
+
+
+def test_snapshot_tells_the_startup_show_from_what_was_commanded() -> None:
+    twin = KeypadTwin()
+    twin.power_on(0.0)
+    twin.receive(Frame(0x000, b"\x01\x15"), 0.0)
+    twin.receive(Frame(0x215, bytes.fromhex("0100000000")), 0.1)  # red 1
+    snapshot = twin.snapshot()
+    assert snapshot["startup_show"] is not None
+    assert snapshot["commanded"][0]["colour"] == "red"
+
+
+def test_fault_injection_on_the_wire() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15, settings={"producer_heartbeat_time": 100}))
+        restore = rig.stop_heartbeat(0x15)
+        start = rig.now
+        rig.advance(1.0)
+        assert not [f for t, f in rig.frames if t > start and f.can_id == 0x715]
+        restore()
+        rig.advance(0.25)
+        assert [f for t, f in rig.frames if t > start and f.can_id == 0x715]
+        rig.bus.send(can.Message(arbitration_id=0x000, data=[1, 0x15], is_extended_id=False))
+        rig.settle()
+        stop_delay = rig.delay(lambda frame: frame.can_id == 0x195, 0.05)
+        rig.press(twin, 1)
+        pressed = rig.now
+        rig.advance(0.1)
+        assert [t for t, f in rig.frames if f.can_id == 0x195] == [pytest.approx(pressed + 0.05)]
+        stop_delay()
+        rig.bus_down()
+        with pytest.raises(can.CanOperationError):
+            rig.bus.send(can.Message(arbitration_id=0x000, data=[1, 0], is_extended_id=False))
+        rig.bus_up()
+
+
+def test_the_controller_bus_is_a_python_can_bus() -> None:
+    with Rig() as rig:
+        rig.add(KeypadTwin(node_id=0x15))
+        rig.bus.send(can.Message(arbitration_id=0x615, data=bytes.fromhex("4000100000000000"),
+                                 is_extended_id=False))
+        reply = rig.bus.recv(timeout=0.1)
+        while reply is not None and reply.arbitration_id != 0x595:
+            reply = rig.bus.recv(timeout=0.1)
+        assert reply is not None
+        assert bytes(reply.data) == bytes.fromhex("4300100091010B00")
+
+
+def test_golden_trace_round_trip_and_mismatch(tmp_path: Path) -> None:
+    frames = _scenario()
+    trace = tmp_path / "scenario.log"
+    assert record_trace(frames, trace) == len(frames)
+    assert_matches_trace(frames, trace)
+    shifted = [TimedFrame(t + 0.002 if i == 5 else t, f) for i, (t, f) in enumerate(frames)]
+    with pytest.raises(AssertionError, match="frame 5"):
+        assert_matches_trace(shifted, trace)
+    with pytest.raises(AssertionError, match="the trace has"):
+        assert_matches_trace(frames[:-1], trace)
+    assert frames_of(frames[:1]) == [frames[0].frame]
