@@ -9,10 +9,10 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from toggle_controller import ToggleController
 
 from blinkcan.testing import Rig
 from blinkcan.twin import KeyboxTwin, KeypadTwin
+from toggle_controller import ToggleController
 
 
 @pytest.fixture

@@ -123,7 +123,7 @@ def test_twins_can_be_built_as_configured() -> None:
     assert frames == [Frame(0x715, b"\x00")]
     assert twin.snapshot()["startup_show"] is None
     assert twin.advance(0.05) == [Frame(0x715, b"\x7f")]
-    with pytest.raises(ValueError, match="not a stored setting.*startup_led_show"):
+    with pytest.raises(ValueError, match=r"not a stored setting.*startup_led_show"):
         KeypadTwin(settings={"show": 0})
     with pytest.raises(ValueError, match="producer_heartbeat_time takes"):
         KeypadTwin(settings={"producer_heartbeat_time": -1})
