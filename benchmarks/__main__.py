@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from benchmarks import decode_log, emulator_capacity, sdo_roundtrip, sdo_twin
+from benchmarks import decode_log, emulator_capacity, sdo_roundtrip, sdo_twin, simulated_time
 
 
 def main() -> None:
@@ -15,6 +15,7 @@ def main() -> None:
     sdo_roundtrip.main(smoke=args.smoke)
     emulator_capacity.main(smoke=args.smoke)
     decode_log.main(smoke=args.smoke)
+    simulated_time.main(smoke=args.smoke)
 
 
 main()

@@ -50,7 +50,7 @@ def decoder() -> Decoder:
     ("20C 01 00 02 00 00 00 00 00", "keybox 0Ch: outputs OFF: 1; HIGH: 2"),
     ("18C 18 00 00 00 00 00 00 00", "keybox 0Ch: outputs in FAULT: 4, 5"),
     ("18C 00 01 00 00 00 00 00 00", "keybox 0Ch: outputs in FAULT: 9"),
-    ("18EF2100 04 1B 80 00 FF FF FF FF", "J1939: keypads return to CANopen (PKP §44)"),
+    ("18EF2100 04 1B 80 00 FF FF FF FF", "keypad 21h: switch to CANopen (§27, PKP §44)"),
 ])
 def test_manual_frames_decode_to_their_meaning(decoder: Decoder, text: str, meaning: str) -> None:
     assert str(decoder.decode(frame(text))) == meaning

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import orjson
 
+from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keybox import describe_keybox
 from blinkcan.devices.keypad import KEY_COUNT, describe_keypad
@@ -39,7 +40,6 @@ _NMT_TEXT = {
 }
 _STATE_TEXT = {NmtState.STOPPED: "stopped", NmtState.OPERATIONAL: "operational",
                NmtState.PRE_OPERATIONAL: "pre-operational"}
-J1939_RETURN_DATA = bytes.fromhex("041B8000FFFFFFFF")  # PKP §44
 _JSON_CACHE_SIZE = 100_000
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
 
@@ -151,6 +151,8 @@ class Decoder:
         self._device_types = {d.table["device_type"].default: d for d in
                               (describe_keypad(), describe_keybox())}
         self._model_ids = {d.table["model_id"].default: d for d in self._device_types.values()}
+        #: keypads in J1939 mode, by address (decode/j1939.py)
+        self.j1939 = J1939KeypadDecoder()
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
@@ -211,6 +213,7 @@ class Decoder:
         key = (frame.can_id, frame.extended)
         self._pure.add(key)  # every route below but SDO and the key state is pure
         if frame.extended:
+            self._pure.discard(key)  # J1939 decoding learns keypad addresses
             return self._extended
         can_id = frame.can_id
         if can_id == NMT:
@@ -276,9 +279,11 @@ class Decoder:
                      {"state": state})
 
     def _extended(self, frame: Frame, time: float) -> Event:
-        if (frame.can_id & 0x03FFFF00) == 0x00EF2100 and frame.data == J1939_RETURN_DATA:
-            return Event(time, frame, Kind.J1939, "J1939: keypads return to CANopen (PKP §44)")
-        return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+        meaning = self.j1939.decode(frame)
+        if meaning is None:
+            return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+        return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
+                     "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})
 
     def _unknown(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F

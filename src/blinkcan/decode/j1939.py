@@ -1,0 +1,219 @@
+"""The keypad's J1939 traffic as what happened ("keypad 21h: key 5 pressed"). Pure.
+
+Everything is read from ``devices/keypad_j1939.py`` (command codes, fields, message layouts).
+Which addresses are keypads: 21h (the default, §5) and those learned from the bus: a keypad's
+own messages (heartbeat F9h, software revision reply), a source address command (70h), and an
+address claim with the keypad's NAME. The same command byte 01h means "key state" from the
+keypad and "set LED" to it, so the direction is told by the addresses: a frame to a keypad (or
+to all from a non-keypad) is a command, a frame from a keypad is a message.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from blinkcan.devices.keypad_j1939 import (
+    COLOUR_CODES,
+    COMMANDS_BY_CODE,
+    DEFAULT_ADDRESS,
+    DEFAULT_NAME,
+    HEADER,
+    HEARTBEAT,
+    KEY_MESSAGE,
+    NIBBLE_BLINK,
+    PGN_COMMAND,
+    PGN_LEDS_COLOUR_1,
+    PGN_LEDS_COLOUR_2,
+    SOFTWARE_REVISION_REPLY,
+    TIME_UNIT_S,
+    J1939Command,
+    LedState,
+    Persistence,
+    split_nibbles,
+)
+from blinkcan.devices.keypad_j1939 import (
+    LEVEL_MAX as J1939_LEVEL_MAX,
+)
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.j1939 import (
+    GLOBAL_ADDRESS,
+    NULL_ADDRESS,
+    PGN_ADDRESS_CLAIMED,
+    PGN_REQUEST,
+    J1939Name,
+    parse_id,
+)
+
+_SHOWS = {0: "off", 1: "complete", 2: "fast flash"}
+_MODES = {0: "single-LED commands only", 2: "single and multiple LED commands"}
+_BITRATES = {2: "500 kbit/s", 3: "250 kbit/s"}
+
+
+@dataclass(frozen=True)
+class J1939Meaning:
+    """What one extended frame meant. ``address`` is the keypad's (or the claimer's) address."""
+
+    text: str
+    address: int | None
+    keypad: bool
+    fields: dict[str, Any] = field(default_factory=dict)
+
+
+def colour_name(code: int) -> str:
+    return COLOUR_CODES.get(code, f"colour {code:02X}h")
+
+
+def led_text(key: int, colour: int, state: int, secondary: int) -> str:
+    """§7a as words: "LED 11 alternates red/green"."""
+    if state == LedState.OFF or (colour == 0 and state != LedState.ALTERNATE):
+        return f"LED {key} off"
+    if state == LedState.ON:
+        return f"LED {key} {colour_name(colour)}"
+    if state == LedState.BLINK:
+        return f"LED {key} blinks {colour_name(colour)}"
+    return f"LED {key} alternates {colour_name(colour)}/{colour_name(secondary)}"
+
+
+def _value_text(command: J1939Command, name: str, value: int) -> str:
+    if name == "on":
+        return "on" if value else "off"
+    if name == "level":
+        return f"{value}/{J1939_LEVEL_MAX}"
+    if name == "period":
+        return "unchanged" if value == 0xFF else f"{round(value * TIME_UNIT_S * 1000)} ms"
+    if name == "colour":
+        return colour_name(value)
+    if name == "show":
+        return _SHOWS[value]
+    if name == "mode":
+        return _MODES[value]
+    if name == "code":
+        return _BITRATES[value]
+    if name in ("address", "identifier"):
+        return "unchanged" if value == 0xFF else f"{value:02X}h"
+    return f"{value:02X}h"
+
+
+class J1939KeypadDecoder:
+    """Decodes PKP-2600-SI J1939 frames; remembers which addresses are keypads."""
+
+    def __init__(self, addresses: Iterable[int] = (DEFAULT_ADDRESS,)) -> None:
+        self.addresses = set(addresses)
+
+    def decode(self, frame: Frame) -> J1939Meaning | None:
+        """The meaning of an extended frame, or None for one that is not the keypad's."""
+        if not frame.extended:
+            return None
+        ident = parse_id(frame.can_id)
+        data = frame.data
+        if ident.pgn == PGN_ADDRESS_CLAIMED and len(data) == 8:
+            return self._claim(ident.source, J1939Name.from_bytes(data))
+        if ident.pgn == PGN_REQUEST and len(data) >= 3:
+            requested = int.from_bytes(data[:3], "little")
+            if requested == PGN_ADDRESS_CLAIMED:
+                target = "all" if ident.destination == GLOBAL_ADDRESS else \
+                    f"{ident.destination:02X}h"
+                return J1939Meaning(f"request for address claimed, to {target}",
+                                    ident.source, False, {"source": ident.source})
+            return None
+        if ident.pgn in (PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2):
+            if ident.destination not in self.addresses and ident.destination != GLOBAL_ADDRESS:
+                return None
+            return self._multiple_leds(ident.pgn, ident.destination, data)
+        if ident.pgn != PGN_COMMAND:
+            return None
+        # only a keypad sends a heartbeat or a software revision (§18, §11)
+        keypad_only = data[:2] == HEADER and len(data) == 8 and (
+            data[2] == HEARTBEAT or (data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF))
+        to_keypad = ident.destination in self.addresses or (
+            ident.destination == GLOBAL_ADDRESS and ident.source not in self.addresses)
+        if to_keypad and data[:2] == HEADER and not keypad_only:
+            return self._command(ident.destination, data)
+        if ident.source in self.addresses or keypad_only:
+            return self._message(ident.source, data)
+        return None
+
+    # -- from the keypad ----------------------------------------------------------------------
+
+    def _message(self, source: int, data: bytes) -> J1939Meaning | None:
+        if len(data) == 8 and data[0] == 0x00:  # §19 LED acknowledge
+            text = led_text(data[2], data[3], data[1], data[4])
+            return J1939Meaning(f"acknowledged: {text}", source, True,
+                                {"message": "led_acknowledge", "key": data[2]})
+        if len(data) != 8 or data[:2] != HEADER:
+            return None
+        code = data[2]
+        if code == KEY_MESSAGE:  # §6
+            key, pressed, identifier = data[3], data[4] == 0x01, data[5]
+            self.addresses.add(source)
+            return J1939Meaning(f"key {key} {'pressed' if pressed else 'released'}", source,
+                                True, {"message": "key", "key": key, "pressed": pressed,
+                                       "identifier": identifier})
+        if code == HEARTBEAT:  # §18
+            self.addresses.add(source)
+            keys = data[4] | (data[5] & 0x0F) << 8
+            held = [k for k in range(1, 13) if keys >> (k - 1) & 1]
+            listing = ", ".join(map(str, held)) if held else "none"
+            return J1939Meaning(f"heartbeat {data[3]}, keys held: {listing}", source, True,
+                                {"message": "heartbeat", "counter": data[3], "keys": held,
+                                 "identifier": data[7]})
+        if code == SOFTWARE_REVISION_REPLY and data[3] != 0xFF:  # §11
+            self.addresses.add(source)
+            revision = data[3:7].rstrip(b"\x00").decode("ascii", "replace")
+            return J1939Meaning(f"software revision {revision}", source, True,
+                                {"message": "software_revision", "revision": revision})
+        return None
+
+    # -- to the keypad ------------------------------------------------------------------------
+
+    def _command(self, destination: int, data: bytes) -> J1939Meaning:
+        command = COMMANDS_BY_CODE.get(data[2]) if len(data) > 2 else None
+        fields = command.decode(data) if command is not None else None
+        if command is None or fields is None:
+            return J1939Meaning("malformed command (the keypad ignores it)", destination, True,
+                                {"command": None})
+        if command.name == "single_led":
+            text = led_text(fields["key"], fields["colour"], fields["state"],
+                            fields["secondary"])
+        elif command.name == "software_revision":
+            text = "software revision request"
+        elif command.name == "switch_to_canopen":
+            text = "switch to CANopen (§27, PKP §44)"
+        else:
+            values = ", ".join(_value_text(command, name, value)
+                               for name, value in fields.items())
+            text = f"{command.label.lower()} {values}" if len(fields) == 1 else \
+                f"{command.label.lower()}: {values}"
+            if command.persistence is Persistence.TEMPORARY:
+                text += " until power-off"
+        if command.name == "source_address" and fields["address"] != 0xFF:
+            self.addresses.add(fields["address"])
+        return J1939Meaning(text, destination, True, {"command": command.name, **fields})
+
+    def _multiple_leds(self, pgn: int, destination: int, data: bytes) -> J1939Meaning:
+        which = 1 if pgn == PGN_LEDS_COLOUR_1 else 2
+        if len(data) != 8:
+            return J1939Meaning(f"LEDs colour {which}: malformed", destination, True)
+        by_colour: dict[str, list[int]] = {}
+        for key, nibble in enumerate(split_nibbles(data), start=1):
+            if nibble:
+                name = "blink" if nibble == NIBBLE_BLINK else colour_name(nibble)
+                by_colour.setdefault(name, []).append(key)
+        parts = "; ".join(f"{name} {', '.join(map(str, keys))}"
+                          for name, keys in by_colour.items()) or "none"
+        return J1939Meaning(f"LEDs colour {which}: {parts}", destination, True,
+                            {"command": f"leds_colour_{which}",
+                             "nibbles": split_nibbles(data)})
+
+    # -- address claim ------------------------------------------------------------------------
+
+    def _claim(self, source: int, name: J1939Name) -> J1939Meaning:
+        keypad = name == DEFAULT_NAME
+        if keypad and source != NULL_ADDRESS:
+            self.addresses.add(source)
+        text = "cannot claim an address" if source == NULL_ADDRESS else \
+            f"address claim {source:02X}h"
+        return J1939Meaning(f"{text}, NAME {name.to_bytes().hex(' ').upper()}", source, keypad,
+                            {"name": name.to_bytes().hex()})

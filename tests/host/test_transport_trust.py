@@ -1,0 +1,248 @@
+"""Issue #10 items 1, 6, 7, 8, 9, 11: what the transport under the drivers guarantees."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import random
+import threading
+import time
+import uuid
+from collections.abc import Iterator
+
+import can
+import pytest
+
+from blinkcan.host import AsyncKeypad, HostBus, Keybox, Keypad, SdoTimeoutError, scan
+from blinkcan.protocol import Frame
+from blinkcan.runtime import Emulator
+from blinkcan.testing import Rig
+from blinkcan.twin import KeyboxTwin, KeypadTwin
+
+
+def _pin(twin: KeyboxTwin, pin: int) -> str:
+    return str(twin.snapshot()["pins"][pin - 1]["state"])
+
+
+# -- 1. a late SDO reply completes no other request ------------------------------------------
+
+def test_a_late_acknowledge_is_never_credited_to_the_next_request() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C, sdo_timeout=0.5)
+        rig.busy(1.2)  # the Keybox answers 1.2 s late (and drops requests meanwhile)
+        with pytest.raises(SdoTimeoutError, match="may or may not have been applied") as error:
+            keybox.on(4)
+        assert error.value.uncertain
+        # the application reacts by switching it off: the late 60h of on(4) must not
+        # acknowledge this write, which the busy Keybox never carried out
+        with pytest.raises(SdoTimeoutError):
+            keybox.off(4)
+        rig.advance(3.0)
+        assert _pin(twin, 4) == "high"  # what really happened
+        rig.busy(0.0)
+        keybox.off(4)  # once the Keybox answers again, commands work
+        assert _pin(twin, 4) == "off"
+        channel = keybox.host._sdo[0x0C]
+        assert channel.late_replies >= 1
+        keybox.close()
+
+
+def test_a_timed_out_transfer_is_aborted_and_the_channel_gets_back_in_step() -> None:
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C, sdo_timeout=0.5)
+        rig.busy(0.7)
+        with pytest.raises(SdoTimeoutError):
+            keybox.on(5)
+        sent = [f for _, f in rig.frames if f.can_id == 0x60C]
+        assert Frame(0x60C, bytes.fromhex("8001200500000405")) in sent  # CiA 301 abort
+        rig.busy(0.0)
+        rig.advance(2.0)
+        start = rig.now
+        assert keybox.state(5) == "high"
+        requests = [f.data[:4] for t, f in rig.frames if t >= start and f.can_id == 0x60C]
+        assert requests[0] == bytes.fromhex("40001000")  # 1000h read to get back in step
+        keybox.close()
+
+
+def test_a_reply_nobody_asked_for_is_discarded() -> None:
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C)
+        rig.bus.send(can.Message(arbitration_id=0x58C, data=bytes.fromhex("6001200400000000"),
+                                 is_extended_id=False))
+        rig.settle()
+        assert keybox.host._sdo[0x0C].late_replies == 1
+        keybox.close()
+
+
+# -- 6. any number of drivers and scan on one python-can bus ---------------------------------
+
+Bench = tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]
+
+
+@pytest.fixture
+def bench() -> Iterator[Bench]:
+    channel = f"trust-{uuid.uuid4().hex}"
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    host_bus = can.Bus(interface="virtual", channel=channel)
+    keypad, keybox = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
+    emulator = Emulator(device_bus, [keypad, keybox]).start()
+    yield host_bus, emulator, keypad, keybox
+    emulator.stop()
+    host_bus.shutdown()
+    device_bus.shutdown()
+
+
+def test_two_drivers_and_scan_share_one_bus(bench: tuple[can.BusABC, Emulator, KeypadTwin,
+                                                          KeyboxTwin]) -> None:
+    bus, _emulator, _kp, keybox_twin = bench
+    keypad = Keypad(bus, 0x15, sdo_timeout=0.7)
+    keybox = Keybox(bus, 0x0C)
+    found = scan(bus, listen=0.05, timeout=0.1, node_ids=range(0x0B, 0x16))
+    assert [f.node_id for f in found] == [0x0C, 0x15]
+    assert keypad.sdo.timeout == 0.7  # scan changed nothing
+    assert keypad.sdo.retries == 1
+    keybox.on(3)
+    assert _pin(keybox_twin, 3) == "high"
+    assert keypad.host is keybox.host
+    assert len(can.Notifier.find_instances(bus)) == 1
+    keypad.close()
+    keybox.off(3)  # the other driver still works after one closed
+    keybox.close()
+    assert can.Notifier.find_instances(bus) == ()
+
+
+def test_a_driver_joins_the_notifier_that_already_reads_the_bus(
+        bench: tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]) -> None:
+    bus = bench[0]
+    heard: list[can.Message] = []
+    notifier = can.Notifier(bus, [heard.append], timeout=0.1)
+    try:
+        keybox = Keybox(bus, 0x0C)
+        keybox.on(1)
+        keybox.close()
+        assert heard
+        assert can.Notifier.find_instances(bus) == (notifier,)
+    finally:
+        notifier.stop()
+
+
+# -- 8. a broken bus is reported once and never spins ----------------------------------------
+
+def test_a_shut_down_bus_is_reported_once_and_stops_the_reader(
+        caplog: pytest.LogCaptureFixture) -> None:
+    bus = can.Bus(interface="virtual", channel=f"broken-{uuid.uuid4().hex}")
+    host = HostBus(bus).start()
+    bus.shutdown()
+    with caplog.at_level(logging.DEBUG, logger="blinkcan"):
+        time.sleep(0.5)
+    errors = [r for r in caplog.records if r.levelno >= logging.ERROR]
+    assert len(errors) == 1
+    assert "shut down" in errors[0].getMessage()
+    assert host.closed
+    assert not [t for t in threading.enumerate() if t.name.startswith("can.notifier")
+                and t.is_alive() and getattr(t, "_args", (None,))[0] is bus]
+    host.stop()
+
+
+# -- 9. asyncio never blocks the loop; iterators end -----------------------------------------
+
+def test_async_driver_never_blocks_the_event_loop(
+        bench: tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]) -> None:
+    bus, emulator, _kp, _kb = bench
+    emulator.response_delay = 0.3  # a slow keypad: each read takes 0.3 s
+
+    async def main() -> float:
+        ticks = 0
+        stop = asyncio.Event()
+
+        async def ticker() -> None:
+            nonlocal ticks
+            while not stop.is_set():
+                ticks += 1
+                await asyncio.sleep(0.01)
+
+        task = asyncio.create_task(ticker())
+        keypad = AsyncKeypad(bus, 0x15, sdo_timeout=1.0)
+        generation = await keypad.generation
+        stop.set()
+        await task
+        assert generation == "1.1"
+        await keypad.__aexit__(None, None, None)
+        return ticks
+
+    assert asyncio.run(main()) >= 20  # the loop ran all along (>= 0.3 s of 10 ms ticks)
+
+
+def test_an_abandoned_async_iterator_does_not_break_other_subscribers(
+        bench: tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]) -> None:
+    bus, emulator, keypad_twin, _kb = bench
+    keypad = Keypad(bus, 0x15)
+
+    async def abandon() -> None:
+        async_keypad = AsyncKeypad(keypad.host, 0x15)
+        await async_keypad.open()
+        async_keypad.events()  # never consumed; its loop closes below
+
+    asyncio.run(abandon())
+    events = keypad.events(timeout=1.0)
+    emulator.press(keypad_twin, 6)
+    assert next(events).key == 6
+    keypad.close()
+
+
+def test_events_end_when_the_driver_closes(
+        bench: tuple[can.BusABC, Emulator, KeypadTwin, KeyboxTwin]) -> None:
+    bus = bench[0]
+    keypad = Keypad(bus, 0x15)
+    events = keypad.events()
+    threading.Timer(0.2, keypad.close).start()
+    assert list(events) == []  # ends, instead of waiting forever
+
+    async def main() -> list[object]:
+        async_keypad = AsyncKeypad(bus, 0x15)
+        await async_keypad.open()
+        iterator = async_keypad.events()
+        asyncio.get_running_loop().call_later(0.2, async_keypad.device.close)
+        return [event async for event in iterator]
+
+    assert asyncio.run(main()) == []
+
+
+# -- 11. no bus hears its own frames as received ones ----------------------------------------
+
+def _multicast(channel: str, port: int) -> can.BusABC:
+    try:
+        return can.Bus(interface="udp_multicast", channel=channel, port=port, hop_limit=0)
+    except (OSError, ImportError, can.CanError) as error:
+        pytest.skip(f"udp_multicast unavailable here ({error})")
+
+
+@pytest.mark.multiprocess
+def test_udp_multicast_echo_is_not_taken_for_received_frames() -> None:
+    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    port = random.randint(40000, 60000)
+    device_bus, host_bus = _multicast(channel, port), _multicast(channel, port)
+    try:
+        seen: list[tuple[Frame, bool]] = []
+        emulator = Emulator(device_bus, [KeypadTwin(node_id=0x15)])
+        emulator.on_frame = lambda frame, sent, now: seen.append((frame, sent))
+        with emulator:
+            keypad = Keypad(host_bus, 0x15)
+            identity = keypad.identity()  # segmented 1008h: garbled if echoes came back
+            assert identity.device_name == "BlinkMarine"
+            own = keypad.host
+            got: list[Frame] = []
+            own.subscribe(0x000, lambda frame, now: got.append(frame))
+            keypad.start()
+            time.sleep(0.3)
+            assert got == []  # the host's own NMT start did not come back to it
+            keypad.close()
+        received = [frame for frame, sent in seen if not sent]
+        sent_frames = [frame for frame, sent in seen if sent]
+        assert not set(sent_frames) & set(received)  # nothing the emulator sent came back
+    finally:
+        device_bus.shutdown()
+        host_bus.shutdown()
