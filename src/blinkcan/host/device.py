@@ -418,10 +418,10 @@ class Device:
             unsubscribe()
         if self._watch is not None:
             self._watch.cancel()
+        self.host.release()  # first: whoever the end of an iterator wakes finds the bus let go
         for value in list(vars(self).values()):
             if isinstance(value, EventSource):
                 value.close()  # iterators over this driver's events end
-        self.host.release()
 
     def __enter__(self) -> Any:
         return self
