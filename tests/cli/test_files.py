@@ -144,7 +144,7 @@ def test_scan_lists_the_devices() -> None:
     (["decode", "x.log", "--device", "0x15=toaster"], "unknown device 'toaster'"),
     (["convert", "missing.log", "out.pcap"], "no such file"),
     (["export", "dbc", "toaster"], "unknown device"),
-    (["export", "eds", "keybox", "--manual", "1.1"], "one generation"),
+    (["export", "eds", "keybox", "--manual", "1.1"], "keybox generations are 1.0"),
     (["scan", "-i", "no-such-interface"], "cannot open the bus"),
 ])
 def test_mistakes_are_one_clear_line(args: list[str], message: str, tmp_path: Path,

@@ -120,8 +120,9 @@ def test_json_form_is_one_object_with_the_meaning(decoder: Decoder) -> None:
 
 
 @pytest.mark.parametrize(("spec", "message"), [
-    ("toaster", "known: keypad, pkp-2600-si, keybox"), ("keybox@2", "one generation"),
-    ("keypad@9.9", "keypad manual must be one of 1.1")])
+    ("toaster", r"known: pkp-2600-si \(keypad\), keybox"),
+    ("keybox@2", "keybox generations are 1.0, not '2'"),
+    ("keypad@9.9", "pkp-2600-si generations are 1.1, 1.5")])
 def test_unknown_device_names_are_refused(spec: str, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Decoder({1: spec})

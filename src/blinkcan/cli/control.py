@@ -13,6 +13,7 @@ from contextlib import contextmanager
 import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
+from blinkcan.devices.registry import model
 from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
 
 
@@ -20,13 +21,13 @@ from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
 def _device(kind: str, node_id: str | None, interface: str | None, channel: str | None,
             bitrate: int | None, start: bool = False) -> Iterator[Keypad | Keybox]:
     bus = cli_bus(interface, channel, bitrate)
+    node = parse_int(node_id) if node_id else model(kind).default_node_id
     try:
         try:
             if kind == "keypad":
-                device: Keypad | Keybox = Keypad(bus, parse_int(node_id) if node_id else 0x15,
-                                                 start=start)
+                device: Keypad | Keybox = Keypad(bus, node, start=start)
             else:
-                device = Keybox(bus, parse_int(node_id) if node_id else 0x0C, start=start)
+                device = Keybox(bus, node, start=start)
         except (IdentityError, SdoError) as error:
             raise click.ClickException(str(error)) from None
         try:

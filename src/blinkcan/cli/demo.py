@@ -119,7 +119,7 @@ SCRIPT = (
 
 
 def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, object],
-          log: deque[str]) -> Group:
+          log: deque[str], grid: tuple[tuple[int, ...], ...]) -> Group:
     keys = keypad["keys"]
     pins = keybox["pins"]
     assert isinstance(keys, list)
@@ -128,7 +128,7 @@ def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, 
         Text(header, style="cyan"),
         Text(title, style="bold"),
         keypad_panel(((k["key"], k["colour"], k["blink_colour"], k["pressed"]) for k in keys),
-                     f"keypad 15h, {keypad['nmt_state']} (~ blinking)"),
+                     f"keypad 15h, {keypad['nmt_state']} (~ blinking)", grid),
         keybox_panel(((p["pin"], p["state"], p["fuse"] == "blown") for p in pins),
                      f"Keybox 0Ch, {keybox['nmt_state']}"),
         Panel(Text("\n".join(log), style="grey70"), title="last frames on the bus", expand=False),
@@ -163,7 +163,8 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None) -> in
 
             def show(title: str) -> None:
                 live.update(_view(header, title, emulator.snapshot(keypad_twin),
-                                  emulator.snapshot(keybox_twin), log), refresh=True)
+                                  emulator.snapshot(keybox_twin), log,
+                                  keypad_twin.description.face.grid), refresh=True)
 
             controller = Controller(keypad, keybox)
             show("The keypad plays its startup LED show")

@@ -12,12 +12,12 @@ from rich.console import Console
 
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
 from blinkcan.decode import Decoder
+from blinkcan.devices.registry import parse_spec
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
-from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.nvm import NvmError
-from blinkcan.twin.registry import DEFAULT_NODE_IDS, twin_class
+from blinkcan.twin.registry import build_twin
 
 
 def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
@@ -30,17 +30,15 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
     for spec in devices:
         name, _, node_text = spec.partition(":")
         try:
-            cls = twin_class(name)
+            model = parse_spec(name)[0]
         except ValueError as error:
             raise click.BadParameter(str(error), param_hint="DEVICE") from None
         node = parse_int(node_text) if node_text else node_id
-        if node is None:
-            node = DEFAULT_NODE_IDS[name.lower()]
-        options: dict[str, object] = {"node_id": node, "quirks": quirks, "nvm": nvm}
-        if low_side and cls is KeyboxTwin:
+        options: dict[str, object] = {}
+        if low_side and model.description().face.low_side_capable:
             options["low_side"] = low_side
         try:
-            twins.append(cls(**options))  # type: ignore[arg-type]
+            twins.append(build_twin(name, node, quirks, nvm, **options))
         except (ValueError, TypeError) as error:
             raise click.ClickException(str(error)) from None
     return twins
@@ -65,7 +63,8 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
 def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quirks: str,
             response_delay: float, low_side: str, web: str | None, quiet: bool,
             interface: str | None, channel: str | None, bitrate: int | None) -> None:
-    """Run device twins on a CAN bus until Ctrl-C. DEVICE: keypad (pkp-2600-si) or keybox.
+    """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
+    (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5).
 
     \b
     blinkcan emulate keypad

@@ -27,7 +27,7 @@ def render(view: BusView, events: deque[Event]) -> Group:
         title = f"{node.device or 'node'} {node.node_id:02X}h, {node.state}"
         if node.device == "keypad":
             keys = ((k, lit, blink, k in node.held) for k, lit, blink in node.key_colours())
-            parts.append(keypad_panel(keys, title))
+            parts.append(keypad_panel(keys, title, node.face.grid))
         elif node.device == "keybox":
             pins = ((pin, state, False) for pin, state in node.outputs.items())
             parts.append(keybox_panel(pins, title))
@@ -51,7 +51,8 @@ def render(view: BusView, events: deque[Event]) -> Group:
 def command(devices: tuple[str, ...], log_file: str | None, duration: float | None, rows: int,
             interface: str | None, channel: str | None, bitrate: int | None) -> None:
     """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops."""
-    decoder, view = Decoder(parse_devices(devices)), BusView()
+    decoder = Decoder(parse_devices(devices))
+    view = BusView(decoder)
     events: deque[Event] = deque(maxlen=rows)
     console = Console(highlight=False)
 

@@ -1,4 +1,4 @@
-"""Drawing the devices in the terminal: the keypad's 2 x 6 keys and the Keybox's 13 outputs.
+"""Drawing the devices in the terminal: a keypad's keys in its model's grid, a Keybox's outputs.
 Shared by ``demo`` and ``monitor``; colours are also named, for plain terminals and logs."""
 
 from __future__ import annotations
@@ -23,13 +23,15 @@ def key_cell(key: int, lit: str, blink: str, held: bool = False) -> Text:
     return Text(f"[{key:>2} {label:<6}]", style=f"bold {style}" + (" underline" if held else ""))
 
 
-def keypad_panel(keys: Iterable[tuple[int, str, str, bool]], title: str) -> Panel:
-    """keys: (key, colour, blink colour, held) for keys 1..12."""
-    cells = [key_cell(*key) for key in keys]
-    grid = Table.grid(padding=(0, 1))
-    grid.add_row(*cells[:6])
-    grid.add_row(*cells[6:])
-    return Panel(grid, title=title, expand=False)
+def keypad_panel(keys: Iterable[tuple[int, str, str, bool]], title: str,
+                 grid: tuple[tuple[int, ...], ...]) -> Panel:
+    """keys: (key, colour, blink colour, held); ``grid``: the key numbers row by row as the
+    model's face shows them (0: no key)."""
+    cells = {key[0]: key_cell(*key) for key in keys}
+    table = Table.grid(padding=(0, 1))
+    for row in grid:
+        table.add_row(*(cells.get(number, Text("")) for number in row))
+    return Panel(table, title=title, expand=False)
 
 
 def keybox_panel(pins: Iterable[tuple[int, str, bool]], title: str) -> Panel:

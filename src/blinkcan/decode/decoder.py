@@ -20,15 +20,14 @@ import orjson
 
 from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.devices.colours import BacklightColour
-from blinkcan.devices.keybox import describe_keybox
-from blinkcan.devices.keypad import KEY_COUNT, describe_keypad
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.pdo import PdoLayout
-from blinkcan.devices.registry import describe_device
+from blinkcan.devices.registry import describe_device, identify
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo import EXPEDITED_UPLOAD_COMMAND
 
@@ -108,12 +107,7 @@ class Event(NamedTuple):
 
 def numbers(mask: int, offset: int = 1) -> list[int]:
     """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
-    found = []
-    while mask:
-        lowest = mask & -mask
-        found.append(lowest.bit_length() - 1 + offset)
-        mask ^= lowest
-    return found
+    return item_numbers(mask, offset)
 
 
 def listing(items: list[int]) -> str:
@@ -148,9 +142,8 @@ class Decoder:
         #: key-state routes: (node, shift, mask) of the keys in the frame
         self._keyed: dict[tuple[int, bool], tuple[int, int, int]] = {}
         self._json_bodies: dict[object, str] = {}
-        self._device_types = {d.table["device_type"].default: d for d in
-                              (describe_keypad(), describe_keybox())}
-        self._model_ids = {d.table["model_id"].default: d for d in self._device_types.values()}
+        #: nodes named from 1000h alone: 100Bh may still correct them (two keypads share it)
+        self._guessed: set[int] = set()
         #: keypads in J1939 mode, by address (decode/j1939.py)
         self.j1939 = J1939KeypadDecoder()
 
@@ -310,7 +303,8 @@ class Decoder:
         return route
 
     def _key_state(self, node: int, values: dict[str, int]) -> tuple[str, dict[str, Any]]:
-        keys = values["keys"] & ((1 << KEY_COUNT) - 1)
+        device = self.devices[node]
+        keys = values["keys"] & ((1 << device.face.keys) - 1)
         before = self._keys.get(node, 0)
         self._keys[node] = keys
         pressed, released = numbers(keys & ~before), numbers(before & ~keys)
@@ -449,13 +443,20 @@ class Decoder:
 
     def _learn(self, node: int, index: int, value: int | str) -> bool:
         """Name an unknown node's model from its identity; True when it was learned."""
-        if not self.learn or node in self.devices:
+        if not self.learn:
+            return False
+        known = self.devices.get(node)
+        if known is not None and node not in self._guessed:
             return False
         device = None
-        if index == 0x1000 and isinstance(value, int):
-            device = self._device_types.get(value)
+        if index == 0x1000 and isinstance(value, int) and known is None:
+            device = identify(device_type=value)  # the first model with this 1000h
+            self._guessed.add(node)
         elif index == 0x100B and isinstance(value, str):
-            device = self._model_ids.get(value)
+            device = identify(model_id=value)  # 100Bh names the model (MT M59)
+            self._guessed.discard(node)
+            if known is not None and (device is None or device.model == known.model):
+                return False
         if device is None:
             return False
         self.devices[node] = device

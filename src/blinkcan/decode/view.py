@@ -16,12 +16,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from blinkcan.decode.decoder import Event, Kind
+from blinkcan.decode.decoder import Decoder, Event, Kind
 from blinkcan.devices.colours import channel_name
-from blinkcan.devices.keybox import PIN_COUNT
-from blinkcan.devices.keypad import KEY_COUNT
+from blinkcan.devices.model import Face
+from blinkcan.devices.registry import describe_device
 
-KEYS, PINS = KEY_COUNT, PIN_COUNT
 _NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
                "enter pre-operational": "pre-operational"}
 _RESETS = ("reset node", "reset communication")
@@ -35,10 +34,15 @@ class NodeView:
     leds: dict[str, list[int]] = field(default_factory=dict)  # colour -> keys lit
     blink: dict[str, list[int]] = field(default_factory=dict)
     held: list[int] = field(default_factory=list)
-    outputs: dict[int, str] = field(default_factory=lambda: dict.fromkeys(range(1, PINS + 1),
-                                                                           "off"))
+    outputs: dict[int, str] = field(default_factory=dict)
+    face: Face = field(default_factory=Face)  # the model's keys and pins, once known
     #: the state the last NMT command to this node asked for (None: none seen, or a reset)
     asked: str | None = None
+
+    def know(self, face: Face) -> None:
+        if face != self.face:
+            self.face = face
+            self.outputs = dict.fromkeys(face.pin_numbers, "off")
 
     def outputs_off(self) -> None:
         """Fail-safe: every HIGH output OFF, FAULT latched."""
@@ -48,7 +52,7 @@ class NodeView:
     def reboot(self) -> None:
         """Power-on or reset: pre-operational, outputs OFF, no FAULT, LEDs dark, no key held."""
         self.state, self.leds, self.blink, self.held = "pre-operational", {}, {}, []
-        self.outputs = dict.fromkeys(range(1, PINS + 1), "off")
+        self.outputs = dict.fromkeys(self.face.pin_numbers, "off")
         self.asked = None
 
     def reported(self, state: str) -> None:
@@ -62,19 +66,32 @@ class NodeView:
         self.state = state
 
     def key_colours(self) -> list[tuple[int, str, str]]:
-        """(key, steady colour, blink colour) for keys 1..12."""
+        """(key, steady colour, blink colour) for every key of the model."""
         def colour(picture: dict[str, list[int]], key: int) -> str:
             channels = sum(bit for name, bit in (("red", 1), ("green", 2), ("blue", 4))
                            if key in picture.get(name, []))
             return channel_name(channels)
 
         return [(key, colour(self.leds, key), colour(self.blink, key))
-                for key in range(1, KEYS + 1)]
+                for key in self.face.key_numbers]
 
 
 class BusView:
-    def __init__(self) -> None:
+    """``decoder`` (the one making the events) tells each node's model; without it the
+    device names of the events are looked up in the model registry."""
+
+    def __init__(self, decoder: Decoder | None = None) -> None:
         self.nodes: dict[int, NodeView] = {}
+        self.decoder = decoder
+
+    def _face(self, node_id: int, device: str | None) -> Face | None:
+        description = self.decoder.device(node_id) if self.decoder is not None else None
+        if description is None and device is not None:
+            try:
+                description = describe_device(device)
+            except ValueError:
+                return None
+        return description.face if description is not None else None
 
     def node(self, node_id: int) -> NodeView:
         view = self.nodes.get(node_id)
@@ -100,6 +117,9 @@ class BusView:
             return
         view = self.node(event.node_id)
         view.device = event.device or view.device
+        face = self._face(event.node_id, view.device)
+        if face is not None:
+            view.know(face)
         fields = event.fields
         if event.kind is Kind.BOOT_UP:
             view.reboot()
@@ -121,13 +141,13 @@ class BusView:
             view.held = list(fields["held"])  # type: ignore[call-overload]
         elif name == "outputs":
             for pin in fields["off"]:  # type: ignore[attr-defined]
-                if view.outputs[pin] != "fault":
+                if view.outputs.get(pin) != "fault":
                     view.outputs[pin] = "off"
             for pin in fields["high"]:  # type: ignore[attr-defined]
-                if view.outputs[pin] != "fault":
+                if view.outputs.get(pin) != "fault":
                     view.outputs[pin] = "high"
         elif name == "faults":
-            for pin in range(1, PINS + 1):
+            for pin in view.face.pin_numbers:
                 if pin in fields["faults"]:  # type: ignore[operator]
                     view.outputs[pin] = "fault"
                 elif view.outputs[pin] == "fault":
@@ -138,10 +158,10 @@ class BusView:
         index, sub, value = fields.get("index"), fields.get("subindex"), fields.get("value")
         if view.device != "keybox" or not isinstance(value, int) or not isinstance(sub, int):
             return
-        if index == 0x2001 and 1 <= sub <= PINS and kind is Kind.SDO_WRITE:
+        if index == 0x2001 and sub in view.outputs and kind is Kind.SDO_WRITE:
             view.outputs[sub] = {0: "off", 1: "high", 2: "off"}.get(value, view.outputs[sub])
         elif index == 0x2008 and sub in (1, 2, 3):
             state = {1: "off", 2: "high", 3: "fault"}[sub]
-            for pin in range(1, PINS + 1):
+            for pin in view.face.pin_numbers:
                 if value >> (pin - 1) & 1:
                     view.outputs[pin] = state

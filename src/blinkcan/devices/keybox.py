@@ -15,7 +15,7 @@ from blinkcan.devices.common import (
     model_id,
     producer_heartbeat_time,
 )
-from blinkcan.devices.model import DeviceDescription, Quirks, check_quirks
+from blinkcan.devices.model import DeviceDescription, Face, Model, Quirks, check_quirks
 from blinkcan.devices.objects import (
     Access,
     NodeIdRelative,
@@ -145,6 +145,10 @@ def _pdos() -> tuple[PdoLayout, ...]:
     )
 
 
+#: KBX §5/§6: 13 outputs, PWM on 12 and 13, Ch2 and Ch5 may be built low-side
+FACE = Face(pins=PIN_COUNT, pwm_pins=PWM_PINS, low_side_capable=LOW_SIDE_CAPABLE)
+
+
 def describe_keybox(quirks: Quirks = "firmware", factory_node_id: int = DEFAULT_NODE_ID
                     ) -> DeviceDescription:
     check_quirks(quirks)
@@ -158,4 +162,24 @@ def describe_keybox(quirks: Quirks = "firmware", factory_node_id: int = DEFAULT_
         default_node_id=DEFAULT_NODE_ID,
         bitrates=BITRATES,
         consumer_heartbeat=CONSUMER_HEARTBEAT,
+        face=FACE,
+        title="Keybox",
+        eds_file="keybox.eds",
+        eds_date="04-18-2019",  # KBX §42: manual rev 1.0, 18/04/2019
     )
+
+
+def _describe(generation: str, quirks: Quirks, factory_node_id: int) -> DeviceDescription:
+    return describe_keybox(quirks, factory_node_id)
+
+
+KEYBOX = Model(
+    name=MODEL,
+    kind=KIND,
+    aliases=(),
+    generations=(GENERATION,),
+    default_node_id=DEFAULT_NODE_ID,
+    describe=_describe,
+    twin="blinkcan.twin.keybox:KeyboxTwin",
+    driver="blinkcan.host.keybox:Keybox",
+)

@@ -17,7 +17,7 @@ from blinkcan.devices.common import (
     model_id,
     producer_heartbeat_time,
 )
-from blinkcan.devices.model import DeviceDescription, Quirks, check_quirks
+from blinkcan.devices.model import DeviceDescription, Face, Model, Quirks, check_quirks
 from blinkcan.devices.objects import (
     Access,
     NodeIdRelative,
@@ -307,8 +307,10 @@ def describe_keypad(
         raise ValueError(f"keypad manual must be one of {valid}, not {generation!r}")
     check_quirks(quirks)
     table, pdos = _table(factory_node_id, quirks), _pdos()
+    eds_file, eds_date = "pkp-2600-si.eds", "02-05-2018"  # manual rev 1.1, 02/05/2018
     if generation == "1.5":
         table, pdos = _rev15_table(table, factory_node_id, quirks), _rev15_pdos(pdos)
+        eds_file, eds_date = "pkp-2600-si-rev1.5.eds", "10-25-2021"  # rev 1.5, 25/10/2021
     return DeviceDescription(
         model=MODEL,
         kind=KIND,
@@ -320,8 +322,32 @@ def describe_keypad(
         bitrates=BITRATES,
         nmt_aliases={0x00: NmtCommand.STOP},  # PKP §7 "old PKP sw compatibility", errata P12
         consumer_heartbeat=CONSUMER_HEARTBEAT if generation == "1.5" else None,
+        face=FACE,
+        title="PKP-2600-SI keypad",
+        eds_file=eds_file,
+        eds_date=eds_date,
         eds_defaults=_eds_led_mappings(generation),
     )
 
 
-__all__ = ["KEY_COUNT", "MODEL", "ObjectKind", "describe_keypad"]
+#: PKP §2: two rows of six keys, 1-6 on top; an RGB LED under every key (PKP §11)
+FACE = Face(
+    keys=KEY_COUNT,
+    grid=(tuple(range(1, 7)), tuple(range(7, 13))),
+    led_colours=("red", "green", "blue"),
+    led_keys=tuple(range(1, KEY_COUNT + 1)),
+)
+
+PKP_2600_SI = Model(
+    name=MODEL,
+    kind=KIND,
+    aliases=("keypad",),
+    generations=GENERATIONS,
+    default_node_id=DEFAULT_NODE_ID,
+    describe=describe_keypad,
+    twin="blinkcan.twin.keypad:KeypadTwin",
+    driver="blinkcan.host.keypad:Keypad",
+)
+
+
+__all__ = ["FACE", "KEY_COUNT", "MODEL", "PKP_2600_SI", "ObjectKind", "describe_keypad"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
@@ -21,6 +22,48 @@ def check_quirks(quirks: str) -> Quirks:
 
 
 @dataclass(frozen=True)
+class Encoder:
+    """A rotary encoder: its number, the key its push is, its ring LEDs (clockwise from six
+    o'clock) and the PDO that reports it."""
+
+    number: int
+    key: int
+    ring_leds: tuple[int, ...]
+    pdo: str
+
+
+@dataclass(frozen=True)
+class Face:
+    """What a person presses, turns, sees and wires on the device. Drivers check arguments,
+    the CLI and the panel draw it, from here alone.
+
+    ``grid`` holds key numbers row by row as seen from the front (0: no key there).
+    ``led_colours`` the LED channels under a key; ``led_keys`` the keys that have one (keys
+    whose LED bit is a hole in the PDO, such as an encoder's, do not).
+    """
+
+    keys: int = 0
+    grid: tuple[tuple[int, ...], ...] = ()
+    led_colours: tuple[str, ...] = ()
+    led_keys: tuple[int, ...] = ()
+    encoders: tuple[Encoder, ...] = ()
+    analog_inputs: int = 0
+    analog_volts_max: float = 0.0
+    digital_inputs: int = 0
+    pins: int = 0
+    pwm_pins: tuple[int, ...] = ()
+    low_side_capable: tuple[int, ...] = ()
+
+    @property
+    def key_numbers(self) -> range:
+        return range(1, self.keys + 1)
+
+    @property
+    def pin_numbers(self) -> range:
+        return range(1, self.pins + 1)
+
+
+@dataclass(frozen=True)
 class DeviceDescription:
     """One device model at one firmware generation, in one quirk profile (errata.md)."""
 
@@ -37,6 +80,12 @@ class DeviceDescription:
     nmt_aliases: dict[int, NmtCommand] = field(default_factory=dict)
     #: what 1016h/01 accepts, where the device has a consumer heartbeat (None: it has none)
     consumer_heartbeat: ConsumerHeartbeat | None = None
+    face: Face = Face()
+    #: "PKP-2600-SI keypad": how people call it
+    title: str = ""
+    #: the shipped EDS file's name and date (the manual revision's date, MM-DD-YYYY)
+    eds_file: str = ""
+    eds_date: str = "01-01-2024"
     #: entry name -> the default the EDS states instead of the table's, where a master that
     #: configures itself from the EDS must see another value than an SDO read returns
     eds_defaults: dict[str, int] = field(default_factory=dict)
@@ -62,3 +111,38 @@ class DeviceDescription:
                 return code
         valid = ", ".join(str(r) for r in sorted(set(self.bitrates.values())))
         raise ValueError(f"{self.model} does not run at {bitrate} bit/s; valid: {valid}")
+
+
+Describe = Callable[[str, Quirks, int], DeviceDescription]
+
+
+@dataclass(frozen=True)
+class Model:
+    """One entry of the model registry: names, generations, and which behaviour runs it.
+
+    ``describe(generation, quirks, factory_node_id)`` builds a description. ``twin`` and
+    ``driver`` name classes as ``"module:Class"``, imported only when used (the pure
+    ``devices/`` layer imports neither).
+    """
+
+    name: str
+    kind: str
+    aliases: tuple[str, ...]
+    generations: tuple[str, ...]
+    default_node_id: int
+    describe: Describe
+    twin: str
+    driver: str
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return (self.name, *self.aliases)
+
+    def description(self, generation: str | None = None, quirks: str = "firmware",
+                    factory_node_id: int | None = None) -> DeviceDescription:
+        generation = generation or self.generations[0]
+        if generation not in self.generations:
+            raise ValueError(f"{self.name} generations are {', '.join(self.generations)}, "
+                             f"not {generation!r}")
+        node = self.default_node_id if factory_node_id is None else factory_node_id
+        return self.describe(generation, check_quirks(quirks), node)

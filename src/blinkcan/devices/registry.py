@@ -1,36 +1,98 @@
-"""Device models by name: "keypad" (or "pkp-2600-si"), "keybox"; "keypad@1.1" names a
-generation. A dict, so other Blink models plug in later."""
+"""The one registry of device models: names and aliases -> :class:`Model`.
+
+As python-can's interface registry: the built-in models are ``"module:attribute"`` strings
+imported on first use, and other packages add models through the ``blinkcan.models``
+entry-point group (each entry point loads a :class:`Model`). Twins, drivers, scanner, decoder,
+file writers, CLI and panel all look models up here. ``"keypad@1.5"`` names a generation.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from functools import cache
+from importlib import import_module
 
-from blinkcan.devices.keybox import describe_keybox
-from blinkcan.devices.keypad import describe_keypad
-from blinkcan.devices.model import DeviceDescription, Quirks, check_quirks
+from blinkcan.devices.model import DeviceDescription, Model
 
+ENTRY_POINT_GROUP = "blinkcan.models"
 
-def _keypad(generation: str | None, quirks: Quirks) -> DeviceDescription:
-    return describe_keypad(generation or "1.1", quirks)
-
-
-def _keybox(generation: str | None, quirks: Quirks) -> DeviceDescription:
-    if generation is not None:
-        raise ValueError("the Keybox has one generation; write just 'keybox'")
-    return describe_keybox(quirks)
+#: the models blinkcan ships, in the order identity values are matched (first wins on a tie)
+BUILTIN_MODELS: tuple[str, ...] = (
+    "blinkcan.devices.keypad:PKP_2600_SI",
+    "blinkcan.devices.keybox:KEYBOX",
+)
 
 
-MODELS: dict[str, Callable[[str | None, Quirks], DeviceDescription]] = {
-    "keypad": _keypad,
-    "pkp-2600-si": _keypad,
-    "keybox": _keybox,
-}
+def _load(reference: str) -> Model:
+    module, _, attribute = reference.partition(":")
+    model = getattr(import_module(module), attribute)
+    if not isinstance(model, Model):
+        raise TypeError(f"{reference} is a {type(model).__name__}, not a blinkcan Model")
+    return model
+
+
+@cache
+def models() -> tuple[Model, ...]:
+    """Every registered model: the built-in ones first, then the entry points'."""
+    from importlib.metadata import entry_points  # noqa: PLC0415 (slow, and needed once)
+
+    found = [_load(reference) for reference in BUILTIN_MODELS]
+    for entry in entry_points(group=ENTRY_POINT_GROUP):
+        model = entry.load()
+        if not isinstance(model, Model):
+            raise TypeError(f"entry point {entry.name} ({entry.value}) is not a blinkcan Model")
+        found.append(model)
+    return tuple(found)
+
+
+@cache
+def _by_name() -> dict[str, Model]:
+    return {name.lower(): model for model in reversed(models()) for name in model.names}
+
+
+def model(name: str) -> Model:
+    """The model called ``name`` (or one of its aliases); ValueError naming the choices."""
+    try:
+        return _by_name()[name.lower()]
+    except (KeyError, AttributeError):
+        known = ", ".join(f"{m.name} ({', '.join(m.aliases)})" if m.aliases else m.name
+                          for m in models())
+        raise ValueError(f"unknown device {name!r}; known: {known} "
+                         "(optionally @generation)") from None
+
+
+def parse_spec(spec: str) -> tuple[Model, str]:
+    """"keypad@1.5" -> (the PKP-2600-SI, "1.5"); no generation: the model's first."""
+    name, _, generation = spec.partition("@")
+    found = model(name)
+    generation = generation or found.generations[0]
+    if generation not in found.generations:
+        raise ValueError(f"{found.name} generations are {', '.join(found.generations)}, "
+                         f"not {generation!r}")
+    return found, generation
 
 
 def describe_device(spec: str, quirks: str = "firmware") -> DeviceDescription:
     """"keypad", "keybox", "keypad@1.1" -> a description (ValueError naming the choices)."""
-    name, _, generation = spec.lower().partition("@")
-    if name not in MODELS:
-        raise ValueError(f"unknown device {spec!r}; known: {', '.join(MODELS)} "
-                         "(optionally @generation)")
-    return MODELS[name](generation or None, check_quirks(quirks))
+    found, generation = parse_spec(spec)
+    return found.description(generation, quirks)
+
+
+@cache
+def default_descriptions() -> tuple[DeviceDescription, ...]:
+    """Every model at every generation, firmware profile: what identity values are matched on."""
+    return tuple(m.description(g) for m in models() for g in m.generations)
+
+
+def identify(device_type: int | None = None, model_id: str | None = None
+             ) -> DeviceDescription | None:
+    """The description whose identity matches: 100Bh (model id) decides, 1000h (device type)
+    alone names the first model registered with it (two keypads share 000B0191h, MT M59)."""
+    for description in default_descriptions():
+        if model_id is not None and description.table["model_id"].default == model_id:
+            return description
+    if model_id is not None:
+        return None
+    for description in default_descriptions():
+        if description.table["device_type"].default == device_type:
+            return description
+    return None

@@ -23,11 +23,6 @@ from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.canopen_od import object_dictionary
 from blinkcan.formats.shipped import shipped_eds
 
-#: manual revision dates (revision histories), month-day-year as EDS writes them
-_DATES = {("pkp-2600-si", "1.1"): "02-05-2018", ("pkp-2600-si", "1.5"): "10-25-2021",
-          ("keybox", "1.0"): "04-18-2019"}
-
-
 _PDO_MAPPING = re.compile(r"^PDOMapping=0x([01])$", re.MULTILINE)
 
 
@@ -48,7 +43,7 @@ def _comments(description: DeviceDescription) -> str:
 def eds_text(description: DeviceDescription) -> str:
     od = object_dictionary(description)
     od.comments = _comments(description)
-    date = _DATES.get((description.model, description.generation), "01-01-2024")
+    date = description.eds_date  # the manual revision's date, month-day-year
     file_info = {
         "FileName": shipped_eds(description).name,
         "FileVersion": 1,

@@ -33,7 +33,7 @@ import can
 from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry, Value
-from blinkcan.devices.registry import MODELS, describe_device
+from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range
@@ -81,23 +81,6 @@ class WrongDeviceError(IdentityError):
 
 class NoDeviceError(IdentityError):
     """Nothing answered the identity reads at the node id."""
-
-
-def describe_what(description: DeviceDescription) -> str:
-    """"Keybox", "PKP-2600-SI keypad": a model as people name it, from its description."""
-    if description.model == description.kind:
-        return description.kind.capitalize()
-    return f"{description.model.upper()} {description.kind}"
-
-
-def _known_models() -> list[DeviceDescription]:
-    """One description per identity, from the one registry of models."""
-    found: dict[tuple[Value, ...], DeviceDescription] = {}
-    for name in MODELS:
-        description = describe_device(name, "cia301")
-        key = tuple(description.table[name].default_for(0) for name in IDENTITY_ENTRIES)
-        found.setdefault(key, description)
-    return list(found.values())
 
 
 @dataclass(frozen=True)
@@ -284,21 +267,23 @@ class Device:
         expected = {name: self.entry(name).default_for(self.node_id) for name in IDENTITY_ENTRIES}
         if found == expected:
             return
-        wanted = describe_what(self.description)
-        for model in _known_models():
-            if all(found[name] == model.table[name].default_for(self.node_id)
-                   for name in IDENTITY_ENTRIES):
-                raise WrongDeviceError(f"node {self.node_id:02X}h is a {describe_what(model)}, "
-                                       f"not a {wanted}")
+        device_type, model_id = found["device_type"], found["model_id"]
+        answered = identify(device_type if isinstance(device_type, int) else None,
+                            model_id if isinstance(model_id, str) else None)
+        if answered is not None and all(
+                found[name] == answered.table[name].default_for(self.node_id)
+                for name in IDENTITY_ENTRIES):
+            raise WrongDeviceError(f"node {self.node_id:02X}h is a {answered.title}, not a "
+                                   f"{self.description.title}")
 
         def show(value: Value | None) -> str:
             return "none" if value is None else f"{value:08X}h" if isinstance(value, int) \
                 else repr(value)
 
         raise WrongDeviceError(
-            f"node {self.node_id:02X}h is not a {wanted}: device type "
-            f"{show(found['device_type'])}, vendor {show(found['vendor_id'])}, model "
-            f"{show(found['model_id'])} answered")
+            f"node {self.node_id:02X}h is not a {self.description.title}: device type "
+            f"{show(device_type)}, vendor {show(found['vendor_id'])}, model {show(model_id)} "
+            "answered")
 
     def _confirm_or_close(self, verify: bool) -> None:
         """:meth:`confirm` (when ``verify``); on failure the driver lets go of the bus."""

@@ -25,14 +25,13 @@ from dataclasses import dataclass
 import can
 
 from blinkcan.devices.keybox import (
+    FACE,
     FAULT_PERIOD_UNIT_S,
-    PIN_COUNT,
     PIN_FAULT,
     PIN_HIGH,
     PIN_OFF,
     PIN_RESET,
     PWM_LEVEL_MAX,
-    PWM_PINS,
     describe_keybox,
 )
 from blinkcan.host.bus import HostBus, Timer
@@ -40,6 +39,7 @@ from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_mask, item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo_client import SdoError
 
@@ -60,14 +60,11 @@ _OUTPUTS_OFF_AFTER = (NmtCommand.STOP, NmtCommand.RESET_NODE, NmtCommand.RESET_C
 
 
 def _mask(pins: Iterable[int]) -> int:
-    mask = 0
-    for pin in pins:
-        mask |= 1 << (check_range("pin", pin, 1, PIN_COUNT) - 1)
-    return mask
+    return item_mask(pins, "pin", FACE.pins)
 
 
 def _pins(mask: int) -> frozenset[int]:
-    return frozenset(p for p in range(1, PIN_COUNT + 1) if mask >> (p - 1) & 1)
+    return frozenset(item_numbers(mask & ((1 << FACE.pins) - 1)))
 
 
 class Keybox(Device):
@@ -95,7 +92,7 @@ class Keybox(Device):
         self.restore_outputs = restore_outputs
         self.host_node_id = check_node_id(host_node_id)
         self._commanded: frozenset[int] = frozenset()
-        self._actual = dict.fromkeys(range(1, PIN_COUNT + 1), "off")
+        self._actual = dict.fromkeys(FACE.pin_numbers, "off")
         self._poller: Timer | None = None
         fault_pdo = self.description.pdo("faults")
         self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
@@ -142,7 +139,7 @@ class Keybox(Device):
         self._pin(pin, PIN_RESET)
 
     def _pin(self, pin: int, code: int) -> None:
-        check_range("pin", pin, 1, PIN_COUNT)
+        check_range("pin", pin, 1, FACE.pins)
         with self._command_lock:
             self.write(f"pin_{pin}_state", code)
             self._acknowledged({pin} if code == PIN_HIGH else set(),
@@ -185,15 +182,15 @@ class Keybox(Device):
     def set_pwm(self, pins: Iterable[int], duty: int) -> None:
         """PWM on pins 12 and/or 13 at ``duty`` 0..10 (x 10 %); pins not named leave PWM."""
         chosen = set(pins)
-        if not chosen <= set(PWM_PINS):
-            raise ValueError(f"PWM is on pins {PWM_PINS} only, not {sorted(chosen)}")
+        if not chosen <= set(FACE.pwm_pins):
+            raise ValueError(f"PWM is on pins {FACE.pwm_pins} only, not {sorted(chosen)}")
         check_range("PWM duty", duty, 0, PWM_LEVEL_MAX)
-        mask = sum(1 << i for i, pin in enumerate(PWM_PINS) if pin in chosen)
+        mask = sum(1 << i for i, pin in enumerate(FACE.pwm_pins) if pin in chosen)
         self.write("pwm", mask | duty << 8)
 
     def state(self, pin: int) -> str:
         """"off", "high" or "fault", read from the Keybox (the picture follows)."""
-        check_range("pin", pin, 1, PIN_COUNT)
+        check_range("pin", pin, 1, FACE.pins)
         state = STATE_NAMES[int(self.read(f"pin_{pin}_state"))]
         self.host.run(lambda: self._seen({pin: state}, self.host.clock()))
         return state
@@ -203,7 +200,7 @@ class Keybox(Device):
         high = _pins(int(self.read("output_high_mask")))
         fault = _pins(int(self.read("output_fault_mask")))
         states = {p: "fault" if p in fault else "high" if p in high else "off"
-                  for p in range(1, PIN_COUNT + 1)}
+                  for p in FACE.pin_numbers}
         self.host.run(lambda: self._seen(states, self.host.clock()))
         return states
 
@@ -219,7 +216,7 @@ class Keybox(Device):
     def inputs(self) -> dict[int, bool]:
         """The level on every pin (2003h/01, errata K21)."""
         levels = int(self.read("input_levels"))
-        return {p: bool(levels >> (p - 1) & 1) for p in range(1, PIN_COUNT + 1)}
+        return {p: bool(levels >> (p - 1) & 1) for p in FACE.pin_numbers}
 
     # -- faults -----------------------------------------------------------------------------------
 
@@ -235,7 +232,7 @@ class Keybox(Device):
 
     def _update_faults(self, mask: int, now: float) -> None:
         """The FAULT mask as the Keybox sent or read it: the whole truth about FAULT."""
-        pins = _pins(mask & ((1 << PIN_COUNT) - 1))
+        pins = _pins(mask)
         for pin in sorted(pins - self.fault_pins):
             self._enter_fault(pin, now)
         for pin in sorted(self.fault_pins - pins):

@@ -19,7 +19,6 @@ import can
 
 from blinkcan.devices.colours import BacklightColour, Channel, led_colour
 from blinkcan.devices.keypad import (
-    KEY_COUNT,
     LEVEL_MAX,
     SHOW_COMPLETE,
     SHOW_FAST_FLASH,
@@ -31,11 +30,11 @@ from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.sdo_client import SdoAbortError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
-_KEY_MASK = (1 << KEY_COUNT) - 1
 J1939_RETURN = Frame(0x18EF2100, bytes.fromhex("041B8000FFFFFFFF"), extended=True)  # PKP §44
 
 
@@ -146,10 +145,11 @@ class Keypad(Device):
         return self.keys.iterate(timeout)
 
     def _on_keys(self, frame: Frame, now: float) -> None:
-        if len(frame.data) < 2:  # errata P8: accept DLC >= 2
+        layout = self.description.pdo("key_state")
+        if len(frame.data) < layout.min_length:  # errata P8: accept DLC >= 2
             return
-        mask = int.from_bytes(frame.data[:2], "little") & _KEY_MASK
-        pressed = frozenset(k for k in range(1, KEY_COUNT + 1) if mask >> (k - 1) & 1)
+        mask = layout.decode(frame.data)["keys"] & ((1 << self.description.face.keys) - 1)
+        pressed = frozenset(item_numbers(mask))
         before, self.pressed = self.pressed, pressed
         for key in sorted(pressed - before):
             self.keys.emit(KeyEvent(key, PRESS, now))
@@ -173,7 +173,7 @@ class Keypad(Device):
 
         Colours: off, red, green, blue, yellow/amber, cyan, magenta, white.
         """
-        check_range("key", key, 1, KEY_COUNT)
+        check_range("key", key, 1, self.description.face.keys)
         steady = led_colour(colour)
         blinking = led_colour(blink) if blink is not None else Channel.NONE
         # the twin's phase model: phase A shows the "on" channels, phase B the on-and-not-
@@ -190,7 +190,7 @@ class Keypad(Device):
 
     def clear_leds(self) -> None:
         with self.batch():
-            for key in range(1, KEY_COUNT + 1):
+            for key in self.description.face.key_numbers:
                 self.set_led(key, "off")
 
     @contextlib.contextmanager

@@ -1,6 +1,6 @@
 """Find Blink devices on a bus: boot-up and heartbeat frames heard, then an SDO read of 1000h
 on every node id at once, and identity (1018h vendor 3E2h, 100Bh model, versions) of those that
-answer. Models are recognised from the device descriptions' own 1000h values.
+answer. Models are recognised from the registry's identity values (100Bh, else 1000h).
 """
 
 from __future__ import annotations
@@ -10,9 +10,7 @@ from dataclasses import dataclass
 
 import can
 
-from blinkcan.devices.keybox import describe_keybox
-from blinkcan.devices.keypad import VENDOR_ID, describe_keypad
-from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import unreversed
 from blinkcan.host.sdo import SdoClient
@@ -20,12 +18,11 @@ from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.sdo_client import SdoError
 
-_MODELS: tuple[DeviceDescription, ...] = (describe_keypad(), describe_keybox())
-
 
 @dataclass(frozen=True)
 class Found:
-    """A device that answered. ``kind`` is "keypad", "keybox" or None for a foreign device."""
+    """A device that answered. ``kind`` is "keypad", "keybox" or None for a foreign device;
+    ``model`` the registered model ("pkp-2600-si") or None."""
 
     node_id: int
     kind: str | None
@@ -35,6 +32,7 @@ class Found:
     hardware_version: str | None = None
     software_version: str | None = None
     heard: bool = False  # a boot-up or heartbeat was seen during the scan
+    model: str | None = None
 
 
 def _text(channel: SdoClient, index: int) -> str | None:
@@ -63,16 +61,19 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
                 device_type = int.from_bytes(channel.upload(0x1000, 0), "little")
             except SdoError:
                 return None
-            kinds = {d.table["device_type"].default: d.kind for d in _MODELS}
             try:
                 vendor = int.from_bytes(channel.upload(0x1018, 1), "little")
             except SdoError:
                 vendor = None
-            kind = kinds.get(device_type) if vendor == VENDOR_ID else None
+            model_id = _text(channel, 0x100B)
+            known = identify(device_type, model_id) or identify(device_type)
+            if known is not None and known.table["vendor_id"].default != vendor:
+                known = None
             hardware, software = _text(channel, 0x1009), _text(channel, 0x100A)
-            return Found(node, kind, device_type, vendor, _text(channel, 0x100B),
+            return Found(node, known.kind if known else None, device_type, vendor, model_id,
                          unreversed(hardware) if hardware else None,
-                         unreversed(software) if software else None, node in heard)
+                         unreversed(software) if software else None, node in heard,
+                         known.model if known else None)
 
         if host.simulated:  # one thread drives the simulation: probe in turn
             found = [f for f in map(probe, node_ids) if f is not None]

@@ -16,9 +16,9 @@ from typing import Any
 
 from blinkcan.devices.keybox import (
     DEFAULT_NODE_ID,
+    FACE,
     FAULT_PERIOD_UNIT_S,
-    LOW_SIDE_CAPABLE,
-    PIN_COUNT,
+    MODEL,
     PWM_LEVEL_MAX,
     describe_keybox,
 )
@@ -33,7 +33,7 @@ from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
 from blinkcan.twin.nvm import Nvm
 
 _STATE_NAMES = {PinState.OFF: "off", PinState.HIGH: "high", PinState.FAULT: "fault"}
-_PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in range(1, PIN_COUNT + 1))
+_PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in FACE.pin_numbers)
 
 
 class KeyboxTwin(CanopenTwin):
@@ -49,15 +49,19 @@ class KeyboxTwin(CanopenTwin):
         nvm: str | os.PathLike[str] | Nvm | None = None,
         low_side: Iterable[int] = (),
         settings: Mapping[str, Value] | None = None,
+        model: str = MODEL,
     ) -> None:
+        if model != MODEL:
+            raise ValueError(f"the Keybox twin runs model {MODEL!r}, not {model!r}")
         low = frozenset(low_side)
-        if not low <= set(LOW_SIDE_CAPABLE):
-            raise ValueError(f"only pins {LOW_SIDE_CAPABLE} can be built low-side, not "
-                             f"{sorted(low - set(LOW_SIDE_CAPABLE))}")
+        capable = FACE.low_side_capable
+        if not low <= set(capable):
+            raise ValueError(f"only pins {capable} can be built low-side, not "
+                             f"{sorted(low - set(capable))}")
         description = describe_keybox(quirks, node_id)
         super().__init__(description, node_id, nvm, settings)
         self.outputs = Outputs(low)
-        self._shown_states: list[PinState | None] = [None] * PIN_COUNT
+        self._shown_states: list[PinState | None] = [None] * FACE.pins
         self._inputs_changed = True
         self._fault_pdo: PdoLayout = description.pdo("faults")
         self._fault_cob_id = self._fault_pdo.cob_id(node_id)
@@ -65,7 +69,7 @@ class KeyboxTwin(CanopenTwin):
         self._fault_period = 0.0
         self._fault_frame_cache: Frame | None = None
         store = self._store
-        for pin in range(1, PIN_COUNT + 1):
+        for pin in FACE.pin_numbers:
             store.set_hook(f"pin_{pin}_state", self._pin_hook(pin), keeps_value=False)
         store.set_hook("output_off_mask", self._on_off_mask, keeps_value=False)
         store.set_hook("output_high_mask", self._on_high_mask, keeps_value=False)
@@ -227,7 +231,7 @@ class KeyboxTwin(CanopenTwin):
         outputs = self.outputs
         inputs = outputs.input_levels()
         pins = []
-        for pin in range(1, PIN_COUNT + 1):
+        for pin in FACE.pin_numbers:
             in_pwm = outputs.in_pwm(pin)
             pins.append({
                 "pin": pin,

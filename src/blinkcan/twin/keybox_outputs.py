@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from enum import Enum, IntEnum
 
-from blinkcan.devices.keybox import PIN_COUNT, PIN_MASK, PWM_PINS
+from blinkcan.devices.keybox import FACE
 from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.items import item_numbers
 
 
 class PinState(IntEnum):
@@ -52,21 +53,17 @@ TRANSITIONS: dict[tuple[PinState, PinEvent], PinState] = {
     (PinState.FAULT, PinEvent.FUSE_BLOWS): PinState.FAULT,
 }
 
-_PWM_BITS = {pin: 1 << i for i, pin in enumerate(PWM_PINS)}
+_PINS = FACE.pins
+_PWM_BITS = {pin: 1 << i for i, pin in enumerate(FACE.pwm_pins)}
 
 
 def check_pin(pin: int) -> int:
-    return check_range("pin", pin, 1, PIN_COUNT)
+    return check_range("pin", pin, 1, _PINS)
 
 
 def pins_of(mask: int) -> list[int]:
     """The pins (1..13) whose bits are set, lowest first."""
-    pins = []
-    while mask:
-        lowest = mask & -mask
-        pins.append(lowest.bit_length())
-        mask ^= lowest
-    return pins
+    return item_numbers(mask)
 
 
 class Outputs:
@@ -74,13 +71,13 @@ class Outputs:
 
     def __init__(self, low_side: frozenset[int] = frozenset()) -> None:
         self.low_side = low_side
-        self.fuse_ok = [True] * PIN_COUNT
-        self.external = [False] * PIN_COUNT
+        self.fuse_ok = [True] * _PINS
+        self.external = [False] * _PINS
         self.power_on()
 
     def power_on(self) -> None:
         """Every output OFF, no latched fault, no PWM (live state after power-on or reset)."""
-        self.state = [PinState.OFF] * PIN_COUNT
+        self.state = [PinState.OFF] * _PINS
         self.pwm_mask = 0  # bit 0 = pin 12, bit 1 = pin 13 (KBX §22)
         self.pwm_level = 0
 
@@ -176,7 +173,7 @@ class Outputs:
         """2003h/01 (errata K21): the external level, or a high-side output driven HIGH with
         its fuse intact; a low-side output driven HIGH pulls its pin to ground."""
         levels = 0
-        for i in range(PIN_COUNT):
+        for i in range(_PINS):
             pin = i + 1
             driven = self.state[i] is PinState.HIGH
             if driven and pin in self.low_side:
@@ -186,7 +183,7 @@ class Outputs:
             else:
                 level = self.external[i]
             levels |= level << i
-        return levels & PIN_MASK
+        return levels & ((1 << _PINS) - 1)
 
     def pwm_register(self) -> int:
         return self.pwm_mask | self.pwm_level << 8

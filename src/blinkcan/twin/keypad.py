@@ -17,16 +17,16 @@ from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keypad import (
-    KEY_COUNT,
     LED_FIELDS,
     LEVEL_MAX,
+    MODEL,
     PROTOCOL_CANOPEN,
     PROTOCOL_J1939,
     TICK_PERIOD_S,
     describe_keypad,
 )
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME, NVM_PREFIX, STORED_SETTINGS
-from blinkcan.devices.model import Quirks
+from blinkcan.devices.model import DeviceDescription, Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
@@ -49,10 +49,6 @@ from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
 PROTOCOLS = {"canopen": PROTOCOL_CANOPEN, "j1939": PROTOCOL_J1939}
 
 
-def check_key(key: int) -> int:
-    return check_range("key", key, 1, KEY_COUNT)
-
-
 class KeypadTwin(CanopenTwin):
     """A PKP-2600-SI that behaves on the bus as the manual describes.
 
@@ -63,6 +59,18 @@ class KeypadTwin(CanopenTwin):
     claims its address with (J-5).
     """
 
+    def __new__(cls, *args: Any, model: str = MODEL, **kwargs: Any) -> KeypadTwin:
+        """``KeypadTwin(model="pkp-3500-mt")`` builds the twin class the registry names."""
+        target: type[KeypadTwin] = cls
+        if model != MODEL:
+            from blinkcan.twin.registry import twin_class  # noqa: PLC0415 (it imports us)
+
+            found = twin_class(model)
+            if not issubclass(found, KeypadTwin):
+                raise ValueError(f"{model!r} is not a keypad")
+            target = found
+        return super().__new__(target)
+
     def __init__(
         self,
         node_id: int = 0x15,
@@ -72,10 +80,19 @@ class KeypadTwin(CanopenTwin):
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
         settings: Mapping[str, Value] | None = None,
+        model: str = MODEL,
     ) -> None:
+        if model != MODEL:
+            raise ValueError(f"the PKP-2600-SI twin runs model {MODEL!r}, not {model!r}")
+        self._init_keypad(describe_keypad(manual, quirks, node_id), node_id, nvm, protocol, name,
+                          settings)
+
+    def _init_keypad(self, description: DeviceDescription, node_id: int,
+                     nvm: str | os.PathLike[str] | Nvm | None, protocol: str = "canopen",
+                     name: J1939Name | bytes = DEFAULT_NAME,
+                     settings: Mapping[str, Value] | None = None) -> None:
         if protocol not in PROTOCOLS:
             raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, not {protocol!r}")
-        description = describe_keypad(manual, quirks, node_id)
         if nvm is None:
             nvm = MemoryNvm()
         elif isinstance(nvm, (str, os.PathLike)):  # J1939 settings live in the same file
@@ -89,6 +106,8 @@ class KeypadTwin(CanopenTwin):
         if protocol == "j1939" and fresh:
             self._store.set("can_protocol", PROTOCOL_J1939)
             self._persist()
+        manual = description.generation
+        self._face = description.face
         self._key_pdo = description.pdo("key_state")
         self._key_cob_id = self._key_pdo.cob_id(node_id)
         self._keys = 0
@@ -118,16 +137,19 @@ class KeypadTwin(CanopenTwin):
     # -- physical side ------------------------------------------------------------------------
 
     def press(self, key: int, now: float) -> list[Frame]:
-        """Press key 1..12; returns the key-state PDO if the keypad sends one."""
-        return self._set_key(check_key(key), True, now)
+        """Press a key (1..12 on the PKP-2600-SI); returns the key-state PDO if one is sent."""
+        return self._set_key(self.check_key(key), True, now)
 
     def release(self, key: int, now: float) -> list[Frame]:
-        """Release key 1..12."""
-        return self._set_key(check_key(key), False, now)
+        """Release a key."""
+        return self._set_key(self.check_key(key), False, now)
+
+    def check_key(self, key: int) -> int:
+        return check_range("key", key, 1, self._face.keys)
 
     @property
     def keys_pressed(self) -> frozenset[int]:
-        return frozenset(k for k in range(1, KEY_COUNT + 1) if self._keys >> (k - 1) & 1)
+        return frozenset(k for k in self._face.key_numbers if self._keys >> (k - 1) & 1)
 
     def _set_key(self, key: int, down: bool, now: float) -> list[Frame]:
         if not self._powered:
@@ -451,7 +473,7 @@ class KeypadTwin(CanopenTwin):
             on, blink = self.displayed_leds()
         keys = [
             {"key": key, "pressed": bool(self._keys >> (key - 1) & 1), **render_key(on, blink, key)}
-            for key in range(1, KEY_COUNT + 1)
+            for key in self._face.key_numbers
         ]
         indicator = self._store.get_int("indicator_brightness")
         if self._demo is not None:
@@ -471,5 +493,5 @@ class KeypadTwin(CanopenTwin):
             "leds": dict(self._words),
             # what the host last commanded, apart from what a show or DEMO mode displays
             "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
-                          for key in range(1, KEY_COUNT + 1)],
+                          for key in self._face.key_numbers],
         }

@@ -1,10 +1,12 @@
 """What the keypad shows: LED words rendered per key, the startup LED show and DEMO mode.
 
-An LED word is the 36-bit picture of PKP §11: red bits 0-11, green 12-23, blue 24-35 (bit k-1 of
-each colour is key k). Blinking follows one model (PKP §12, §17 "if the blink message is sent when
-the LED is already ON, the LED blinks in alternative mode"): each blink period has two phases; a
-channel that is on and not blinking is lit in both, on and blinking in phase A only, blinking
-only in phase B only. So red on + red/green blink alternates red and green (errata P9).
+An LED word is the picture of PKP §11: ``width`` bits per colour, red first, then green, then
+blue (bit k-1 of each colour is key k); the PKP-2600-SI's width is 12 (36 bits).
+
+Blinking follows one model (PKP §12, §17 "if the blink message is sent when the LED is already
+ON, the LED blinks in alternative mode"): each blink period has two phases; a channel that is
+on and not blinking is lit in both, on and blinking in phase A only, blinking only in phase B
+only. So red on + red/green blink alternates red and green (errata P9).
 
 Durations the manuals do not give (blink period, show steps) are blinkcan decisions, named here.
 """
@@ -14,40 +16,42 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel, channel_name
-from blinkcan.devices.keypad import KEY_COUNT, LEVEL_MAX, SHOW_COMPLETE, SHOW_FAST_FLASH
+from blinkcan.devices.keypad import FACE, LEVEL_MAX, SHOW_COMPLETE, SHOW_FAST_FLASH
 
 BLINK_PERIOD_S = 0.5  # one phase A + one phase B; not in the manual
-_KEY_MASK = (1 << KEY_COUNT) - 1
-ALL_KEYS = _KEY_MASK
+#: the PKP-2600-SI's shows and DEMO mode below light its keys, one LED bit per key
+_KEYS = FACE.keys
+ALL_KEYS = (1 << _KEYS) - 1
 
 
-def led_word(red: int, green: int, blue: int) -> int:
-    mask = _KEY_MASK
-    return (red & mask) | (green & mask) << KEY_COUNT | (blue & mask) << (2 * KEY_COUNT)
+def led_word(red: int, green: int, blue: int, width: int = _KEYS) -> int:
+    mask = (1 << width) - 1
+    return (red & mask) | (green & mask) << width | (blue & mask) << (2 * width)
 
 
-def fill(keys_mask: int, channels: int) -> int:
+def fill(keys_mask: int, channels: int, width: int = _KEYS) -> int:
     """An LED word lighting ``keys_mask`` in ``channels``."""
     return led_word(
         keys_mask if channels & Channel.RED else 0,
         keys_mask if channels & Channel.GREEN else 0,
         keys_mask if channels & Channel.BLUE else 0,
+        width,
     )
 
 
-def key_channels(word: int, key: int) -> int:
-    """The channels of ``key`` (1..12) lit in an LED word."""
+def key_channels(word: int, key: int, width: int = _KEYS) -> int:
+    """The channels of ``key`` lit in an LED word of ``width`` bits per colour."""
     bit = key - 1
     return (
         (word >> bit) & 1
-        | ((word >> (KEY_COUNT + bit)) & 1) << 1
-        | ((word >> (2 * KEY_COUNT + bit)) & 1) << 2
+        | ((word >> (width + bit)) & 1) << 1
+        | ((word >> (2 * width + bit)) & 1) << 2
     )
 
 
-def render_key(on: int, blink: int, key: int) -> dict[str, object]:
+def render_key(on: int, blink: int, key: int, width: int = _KEYS) -> dict[str, object]:
     """One key's LEDs for snapshot(): steady colour, blink colour, the two blink phases."""
-    lit, blinking = key_channels(on, key), key_channels(blink, key)
+    lit, blinking = key_channels(on, key, width), key_channels(blink, key, width)
     phase_b = (lit & ~blinking) | (blinking & ~lit)
     return {
         "colour": channel_name(lit),
@@ -69,7 +73,7 @@ def _complete_show() -> tuple[ShowStep, ...]:
     steps = [
         ShowStep(0.06, fill((1 << count) - 1, channel))
         for channel in (Channel.RED, Channel.GREEN, Channel.BLUE)
-        for count in range(1, KEY_COUNT + 1)
+        for count in range(1, _KEYS + 1)
     ]
     steps.append(ShowStep(0.3, fill(ALL_KEYS, Channel.RED | Channel.GREEN | Channel.BLUE)))
     return tuple(steps)
@@ -189,7 +193,7 @@ class DemoMode:
             return ShowPlayer(STARTUP_SHOWS[SHOW_COMPLETE], now, loop=True)
         if self.step == 1:
             steps = tuple(
-                ShowStep(_SEQUENCE_STEP_S, (1 << count) - 1) for count in range(1, KEY_COUNT + 1)
+                ShowStep(_SEQUENCE_STEP_S, (1 << count) - 1) for count in range(1, _KEYS + 1)
             )
             return ShowPlayer(steps, now, loop=True)
         return None

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel
-from blinkcan.devices.keypad import KEY_COUNT
+from blinkcan.devices.keypad import FACE
 from blinkcan.devices.keypad_j1939 import (
     BITRATES,
     COMMANDS_BY_CODE,
@@ -66,7 +66,8 @@ from blinkcan.twin.keypad_display import (
     render_key,
 )
 
-_KEY_BITS = (1 << KEY_COUNT) - 1
+_KEYS = FACE.keys  # the PKP-2600-SI's keys (its J1939 mode, pkp-2600-si-j1939.md)
+_KEY_BITS = (1 << _KEYS) - 1
 _LED_PGNS = (PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2)
 
 
@@ -100,7 +101,7 @@ class J1939Keypad:
         self.address = self.settings["source_address"]
         self._keys = 0
         self._words = {"led_on": 0, "led_blink": 0}
-        self._nibbles = ([0] * KEY_COUNT, [0] * KEY_COUNT)
+        self._nibbles = ([0] * _KEYS, [0] * _KEYS)
         self._live = {"led_brightness": 0, "backlight_level": 0}
         self._claimer: AddressClaimer | None = None
         self._heartbeat_next: float | None = None
@@ -129,7 +130,7 @@ class J1939Keypad:
         self.address = settings["source_address"]
         self._keys = keys
         self._words = {"led_on": 0, "led_blink": 0}
-        self._nibbles = ([0] * KEY_COUNT, [0] * KEY_COUNT)
+        self._nibbles = ([0] * _KEYS, [0] * _KEYS)
         self._live = {live: settings[stored] for live, stored in POWER_ON_FROM.items()}
         steps = STARTUP_SHOWS.get(settings["startup_led_show"])  # §12
         self._show = ShowPlayer(steps, now) if steps is not None else None
@@ -202,7 +203,7 @@ class J1939Keypad:
             return []
         self._demo = None
         self._nibbles[which][:] = split_nibbles(data)
-        for key in range(1, KEY_COUNT + 1):
+        for key in range(1, _KEYS + 1):
             self._show_look(key, nibbles_to_look(self._nibbles[0][key - 1],
                                                  self._nibbles[1][key - 1]))
         return []
@@ -303,7 +304,7 @@ class J1939Keypad:
 
     def _all_key_messages(self) -> list[Frame]:
         identifier = self.settings["identifier"]  # J-7: keys 1-12 in order, one frame each
-        return [frame for key in range(1, KEY_COUNT + 1)
+        return [frame for key in range(1, _KEYS + 1)
                 for frame in self._send(key_message(key, bool(self._keys >> (key - 1) & 1),
                                                     identifier))]
 
@@ -370,7 +371,7 @@ class J1939Keypad:
         now = self._now
         on, blink = self.displayed_leds(now) if self._powered else (0, 0)
         keys = [{"key": key, "pressed": bool(self._keys >> (key - 1) & 1),
-                 **render_key(on, blink, key)} for key in range(1, KEY_COUNT + 1)]
+                 **render_key(on, blink, key)} for key in range(1, _KEYS + 1)]
         colour = BacklightColour(self.settings["backlight_colour"])
         backlight: dict[str, object] = {"colour": colour.label,
                                         "level": self._live["backlight_level"]}

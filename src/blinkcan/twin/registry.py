@@ -1,24 +1,44 @@
-"""Device models by name: ``"keypad"`` or ``"pkp-2600-si"`` -> its twin class.
-
-A dict, so other Blink models can be added later without touching the CLI.
-"""
+"""Twins by device name: the model registry (``devices/registry.py``) says which twin class runs
+a model; this imports it on first use and builds twins from specs such as ``"keypad@1.5"``."""
 
 from __future__ import annotations
 
-from blinkcan.twin.base import CanopenTwin
-from blinkcan.twin.keybox import KeyboxTwin
-from blinkcan.twin.keypad import KeypadTwin
+import os
+from importlib import import_module
+from typing import Any
 
-TWIN_CLASSES: dict[str, type[CanopenTwin]] = {
-    "keypad": KeypadTwin,
-    "pkp-2600-si": KeypadTwin,
-    "keybox": KeyboxTwin,
-}
-DEFAULT_NODE_IDS: dict[str, int] = {"keypad": 0x15, "pkp-2600-si": 0x15, "keybox": 0x0C}
+from blinkcan.devices.model import Model
+from blinkcan.devices.registry import model, parse_spec
+from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.nvm import Nvm
+
+
+def _twin_class(found: Model) -> type[CanopenTwin]:
+    module, _, name = found.twin.partition(":")
+    cls = getattr(import_module(module), name)
+    if not (isinstance(cls, type) and issubclass(cls, CanopenTwin)):
+        raise TypeError(f"{found.name}: {found.twin} is not a CanopenTwin class")
+    return cls
 
 
 def twin_class(name: str) -> type[CanopenTwin]:
-    try:
-        return TWIN_CLASSES[name.lower()]
-    except KeyError:
-        raise ValueError(f"unknown device {name!r}; known: {', '.join(TWIN_CLASSES)}") from None
+    """The twin class of a model name or alias ("keypad", "pkp-3500-mt@1.3")."""
+    return _twin_class(model(name.partition("@")[0]))
+
+
+def build_twin(spec: str, node_id: int | None = None, quirks: str = "firmware",
+               nvm: str | os.PathLike[str] | Nvm | None = None, **options: Any) -> CanopenTwin:
+    """A twin of ``spec`` ("keypad", "keypad@1.5", "keybox"), at its default node id unless
+    one is given. ``options`` go to the twin class (``low_side`` for a Keybox)."""
+    found, generation = parse_spec(spec)
+    arguments: dict[str, Any] = {
+        "node_id": found.default_node_id if node_id is None else node_id,
+        "quirks": quirks, "nvm": nvm, "model": found.name, **options,
+    }
+    if len(found.generations) > 1:
+        arguments["manual"] = generation
+    return _twin_class(found)(**arguments)
+
+
+def default_node_id(name: str) -> int:
+    return model(name.partition("@")[0]).default_node_id

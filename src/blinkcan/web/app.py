@@ -3,8 +3,9 @@ the actions a person can take (press a key, blow a fuse, power-cycle).
 
 State comes from the twins' ``snapshot()`` on the emulator's thread, at most 30 times a
 second, and only goes out when it changed, so the panel never slows the emulation. Actions go
-through the same physical-side methods tests use. Every request is validated: a key 1-12, a
-pin 1-13, a known action for that device; anything else is a 400 with the reason.
+through the same physical-side methods tests use. Every request is validated: a key or pin the
+device's model has (its description's face), a known action for that device; anything else is a
+400 with the reason. Each device's face (key grid, pins) goes to the page with its state.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import json
 import time
 from collections import deque
 from collections.abc import AsyncIterator, Callable
+from dataclasses import asdict
 from importlib import resources
 from typing import Any
 
@@ -24,11 +26,10 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from blinkcan.decode import Decoder
-from blinkcan.devices.keybox import PIN_COUNT
-from blinkcan.devices.keypad import KEY_COUNT
+from blinkcan.devices.model import Face
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
-from blinkcan.twin import KeyboxTwin, KeypadTwin
+from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
 
 MAX_UPDATES_PER_S = 30
@@ -45,7 +46,8 @@ ACTIONS: dict[str, tuple[tuple[str, ...], str | None, Callable[[Any, Any, float]
     "power_off": (("keypad", "keybox"), None, lambda t, v, now: t.power_off()),
     "power_on": (("keypad", "keybox"), None, lambda t, v, now: t.power_on(now)),
 }
-_RANGES = {"key": (1, KEY_COUNT), "pin": (1, PIN_COUNT)}
+#: argument -> how many of it a model's face has
+_COUNTS: dict[str, Callable[[Face], int]] = {"key": lambda f: f.keys, "pin": lambda f: f.pins}
 
 
 class Panel:
@@ -55,6 +57,7 @@ class Panel:
         self.emulator = emulator
         self.decoder = Decoder({t.node_id: t.description for t in emulator.twins})
         self.frames: deque[dict[str, Any]] = deque(maxlen=FRAMES_KEPT)
+        self._faces: dict[str, dict[str, Any]] = {}
         previous = emulator.on_frame
 
         def record(frame: Frame, sent: bool, now: float) -> None:
@@ -67,6 +70,10 @@ class Panel:
 
     def state(self) -> dict[str, Any]:
         devices = self.emulator.run(lambda now: [t.snapshot() for t in self.emulator.twins])
+        for twin, device in zip(self.emulator.twins, devices, strict=True):
+            description = twin.description
+            device["model"], device["title"] = description.model, description.title
+            device["face"] = self._faces.setdefault(description.model, asdict(description.face))
         return {"devices": devices, "frames": list(self.frames)}
 
     def twin(self, node_id: object) -> CanopenTwin:
@@ -81,7 +88,7 @@ class Panel:
         if not isinstance(request, dict):
             raise ValueError("send a JSON object: {node, action, key|pin}")
         twin = self.twin(request.get("node"))
-        kind = "keypad" if isinstance(twin, KeypadTwin) else "keybox"
+        kind = twin.description.kind
         action = request.get("action")
         if action not in ACTIONS:
             raise ValueError(f"unknown action {action!r}; known: {', '.join(ACTIONS)}")
@@ -91,7 +98,7 @@ class Panel:
         value = None
         if argument is not None:
             value = request.get(argument)
-            low, high = _RANGES[argument]
+            low, high = 1, _COUNTS[argument](twin.description.face)
             if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
                 raise ValueError(f"{argument} must be {low}..{high}, not {value!r}")
         self.emulator.run(lambda now: perform(twin, value, now))

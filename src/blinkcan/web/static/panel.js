@@ -41,20 +41,21 @@ function headerView(node) {
   const facts = element("div", { class: "facts" });
   return { parts: [power, title, facts], update(device) {
     power.textContent = device.powered ? "power off" : "power on";
-    title.textContent = device.kind === "keypad"
-      ? `PKP-2600-SI keypad ${hex(node)} · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}`
-      : `Keybox ${hex(node)}`;
+    title.textContent = `${device.title} ${hex(node)}` +
+      (device.kind === "keypad" ? ` · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}` : "");
     facts.innerHTML = `NMT <b data-test="nmt-${node}">${device.nmt_state}</b> · ` +
       `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
       (device.quirks === "cia301" ? " · CiA 301 profile" : "");
   } };
 }
 
-function keypadView(node) {
+function keypadView(node, face) {
   const head = headerView(node);
   const grid = element("div", { class: "keypad" });
-  const cells = [];
-  for (let number = 1; number <= 12; number++) {
+  grid.style.gridTemplateColumns = `repeat(${Math.max(...face.grid.map((row) => row.length))}, 4.2rem)`;
+  const cells = new Map();  // key number -> its elements
+  for (const number of face.grid.flat()) {
+    if (!number) { grid.appendChild(element("div", { class: "gap" })); continue; }
     const led = element("div", { class: "led" });
     const cell = element("div", { class: "key", "data-test": `key-${number}` },
                          [led, element("span", { class: "num", text: number })]);
@@ -66,13 +67,13 @@ function keypadView(node) {
       const key = current.get(node).keys[number - 1];
       if (key.pressed) release(event);
     });
-    cells.push({ cell, led });
+    cells.set(number, { cell, led });
     grid.appendChild(cell);
   }
   const footer = element("div", { class: "facts" });
   const root = element("div", { class: "device", "data-test": `device-${node}` },
                        [...head.parts, grid, footer]);
-  return { kind: "keypad", root, update(device) {
+  return { model: null, root, update(device) {
     head.update(device);
     root.classList.toggle("off-power", !device.powered);
     const glow = BACKLIGHT[device.backlight.colour];
@@ -80,8 +81,9 @@ function keypadView(node) {
     grid.style.boxShadow = glow && device.backlight.level > 0 ? `0 0 ${spread}px ${spread / 2}px ${glow}` : "none";
     const brightness = 0.35 + 0.65 * (device.indicator_brightness / 63);
     const phase = Math.floor(Date.now() / (1000 * device.blink_period_s / 2)) % 2;
-    device.keys.forEach((key, i) => {
-      const { cell, led } = cells[i];
+    device.keys.forEach((key) => {
+      if (!cells.has(key.key)) return;
+      const { cell, led } = cells.get(key.key);
       const colour = key.phases[phase];
       cell.classList.toggle("pressed", key.pressed);
       cell.dataset.phases = key.phases.join(",");
@@ -97,11 +99,11 @@ function keypadView(node) {
   } };
 }
 
-function keyboxView(node) {
+function keyboxView(node, face) {
   const head = headerView(node);
   const grid = element("div", { class: "keybox" });
   const cells = [];
-  for (let number = 1; number <= 13; number++) {
+  for (let number = 1; number <= face.pins; number++) {
     const state = element("div", { class: "state", "data-test": `state-${number}` });
     const fuse = element("button", { "data-test": `fuse-${number}` });
     fuse.onclick = () => act(node, current.get(node).pins[number - 1].fuse === "blown"
@@ -118,7 +120,7 @@ function keyboxView(node) {
   const consumer = element("div", { class: "facts" });
   const root = element("div", { class: "device", "data-test": `device-${node}` },
                        [...head.parts, grid, consumer]);
-  return { kind: "keybox", root, update(device) {
+  return { model: null, root, update(device) {
     head.update(device);
     root.classList.toggle("off-power", !device.powered);
     device.pins.forEach((pin, i) => {
@@ -143,8 +145,9 @@ function render() {
   latest.devices.forEach((device) => {
     current.set(device.node_id, device);
     let view = views.get(device.node_id);
-    if (!view || view.kind !== device.kind) {
-      view = device.kind === "keypad" ? keypadView(device.node_id) : keyboxView(device.node_id);
+    if (!view || view.model !== device.model) {
+      view = (device.face.keys ? keypadView : keyboxView)(device.node_id, device.face);
+      view.model = device.model;
       views.set(device.node_id, view);
       devices.appendChild(view.root);
     }
