@@ -1,4 +1,6 @@
-"""Twins in an Emulator on a virtual bus, a HostBus for the drivers, and a sniffer."""
+"""Twins in an Emulator, a HostBus for the drivers, and a sniffer: on a virtual bus in real
+time (the threaded path), or on blinkcan.testing's simulated bus (``simulated_rig``), where
+waits and sleeps run virtual time."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 from blinkcan.host import HostBus
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator, to_frame
+from blinkcan.testing import Rig as Bench
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
 
@@ -32,17 +35,30 @@ class Rig:
     host: HostBus
     keypad: KeypadTwin
     keybox: KeyboxTwin
-    sniffer: can.BusABC
+    sniffer: can.BusABC | _Sniffer
     generation: str = "1.1"
+    bench: Bench | None = None  # set when the rig runs in simulated time
     channel: str = ""  # the virtual channel, for a command line pointed at this bus
 
     @property
     def firmware(self) -> str:
         return "V2.8" if self.generation == "1.5" else "V2.2"
 
+    def sleep(self, seconds: float) -> None:
+        if self.bench is not None:
+            self.bench.advance(seconds)
+        else:
+            time.sleep(seconds)
+
+    def wait_until(self, condition: Callable[[], object], timeout: float = 2.0) -> None:
+        if self.bench is not None:
+            self.bench.until(condition, timeout)
+        else:
+            wait_until(condition, timeout)
+
     def sniffed(self, settle: float = 0.05) -> list[Frame]:
         """Frames seen on the bus since the last call."""
-        time.sleep(settle)
+        self.sleep(settle)
         frames = []
         while (message := self.sniffer.recv(0)) is not None:
             frame = to_frame(message)
@@ -71,8 +87,39 @@ def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
     emulator = Emulator(buses[0], [keypad, keybox])
     host = HostBus(buses[1])
     with emulator, host:
-        rig = Rig(emulator, host, keypad, keybox, buses[2], generation, channel)
+        rig = Rig(emulator, host, keypad, keybox, buses[2], generation, channel=channel)
         rig.sniffed()
         yield rig
     for bus in buses:
         bus.shutdown()
+
+
+def simulated_rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    """The same rig in simulated time (use as a fixture body, with the same params)."""
+    quirks, generation = request.param
+    with Bench() as bench:
+        keypad = bench.add(quiet_keypad(quirks, manual=generation))
+        keybox = bench.add(KeyboxTwin(quirks=quirks))
+        host = HostBus(bench.bus)
+        with host:
+            rig = Rig(bench.emulator, host, keypad, keybox, _Sniffer(bench), generation,
+                      bench=bench)
+            rig.sniffed()
+            yield rig
+
+
+class _Sniffer:
+    """The frames on a simulated wire since the last call, like a listening bus."""
+
+    def __init__(self, bench: Bench) -> None:
+        self._bench = bench
+        self._seen = 0
+
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        frames = self._bench.frames
+        if self._seen >= len(frames):
+            return None
+        when, frame = frames[self._seen]
+        self._seen += 1
+        return can.Message(arbitration_id=frame.can_id, data=frame.data,
+                           is_extended_id=frame.extended, timestamp=when)

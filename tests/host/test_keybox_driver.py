@@ -1,13 +1,18 @@
-"""The Keybox driver against the Keybox twin, in both quirk profiles."""
+"""The Keybox driver against the Keybox twin, in both quirk profiles, in simulated time."""
 
 from __future__ import annotations
 
-import time
+from collections.abc import Iterator
 
 import pytest
 
 from blinkcan.host import FaultEvent, Keybox
-from tests.host.conftest import Rig, wait_until
+from tests.host.conftest import Rig, simulated_rig
+
+
+@pytest.fixture(params=[("firmware", "1.1"), ("cia301", "1.1")], ids=["firmware", "cia301"])
+def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    yield from simulated_rig(request)
 
 
 def test_outputs_states_pwm_and_inputs(rig: Rig) -> None:
@@ -42,7 +47,7 @@ def test_a_blown_fuse_raises_a_fault_event_and_reset_clears_it(rig: Rig) -> None
 def test_outputs_go_off_when_the_host_heartbeat_stops(rig: Rig) -> None:
     keybox = Keybox(rig.host, watchdog=0.15)  # margin: a busy machine delays heartbeats
     keybox.on(4)
-    time.sleep(0.4)  # the heartbeat keeps it on
+    rig.sleep(0.4)  # the heartbeat keeps it on
     assert keybox.state(4) == "high"
     events = keybox.health_events(timeout=2.0)
     keybox.stop_host_heartbeat()
@@ -68,7 +73,7 @@ def test_fault_events_reach_callbacks(rig: Rig) -> None:
     keybox.set_outputs(high=[10, 11])
     rig.emulator.run(lambda now: rig.keybox.blow_fuse(10, now))
     rig.emulator.run(lambda now: rig.keybox.blow_fuse(11, now))
-    wait_until(lambda: len(seen) == 2)
+    rig.wait_until(lambda: len(seen) == 2)
     assert [(e.pin, e.fault) for e in seen] == [(10, True), (11, True)]
 
 

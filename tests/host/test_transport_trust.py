@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import inspect
 import logging
 import random
 import threading
@@ -16,8 +17,12 @@ import pytest
 from blinkcan.host import AsyncKeypad, HostBus, Keybox, Keypad, SdoTimeoutError, scan
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
+from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.testing import Rig
 from blinkcan.twin import KeyboxTwin, KeypadTwin
+
+# drivers confirm the device by default; an absent one is driven only when told not to
+_NO_VERIFY = {"verify": False} if "verify" in inspect.signature(Keybox).parameters else {}
 
 
 def _pin(twin: KeyboxTwin, pin: int) -> str:
@@ -70,8 +75,10 @@ def test_a_reply_nobody_asked_for_is_discarded() -> None:
     with Rig() as rig:
         rig.add(KeyboxTwin(node_id=0x0C))
         keybox = Keybox(rig.bus, 0x0C)
-        rig.bus.send(can.Message(arbitration_id=0x58C, data=bytes.fromhex("6001200400000000"),
-                                 is_extended_id=False))
+        stray = SimulatedBus(rig.network, "another node")  # not the controller's own frame
+        stray.send(can.Message(arbitration_id=0x58C, data=bytes.fromhex("6001200400000000"),
+                               is_extended_id=False))
+        stray.shutdown()
         rig.settle()
         assert keybox.host._sdo[0x0C].late_replies == 1
         keybox.close()
@@ -246,3 +253,22 @@ def test_udp_multicast_echo_is_not_taken_for_received_frames() -> None:
     finally:
         device_bus.shutdown()
         host_bus.shutdown()
+
+
+# -- 7. polling an absent device never piles up threads --------------------------------------
+
+def test_fault_polls_of_an_absent_keybox_stay_bounded() -> None:
+    bus = can.Bus(interface="virtual", channel=f"absent-{uuid.uuid4().hex}")
+    try:
+        before = threading.active_count()
+        keybox = Keybox(bus, 0x0C, fault_poll=0.05, sdo_timeout=0.2, **_NO_VERIFY)
+        counts = []
+        for _ in range(3):
+            time.sleep(0.5)
+            counts.append(threading.active_count() - before)
+        keybox.close()
+        # the bus loop, the notifier and one poll worker: no growth over 1.5 s (was +20/s)
+        assert max(counts) <= 4
+        assert counts[-1] <= counts[0]
+    finally:
+        bus.shutdown()

@@ -1,12 +1,13 @@
-"""Across processes: ``blinkcan emulate`` in a child process, this process as the host, on
-python-can's ``udp_multicast`` interface."""
+"""Across processes: ``blinkcan emulate`` in a child process, this process (or ``blinkcan
+scan`` in another) as the host, on python-can's ``udp_multicast`` interface with hop limit 0:
+delivered between the processes of this machine, never sent on a network."""
 
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import random
+import socket
 import subprocess
 import sys
 import time
@@ -15,6 +16,7 @@ from collections.abc import Iterator
 import can
 import pytest
 
+from blinkcan.cli.bus_options import DEFAULT_GROUP
 from blinkcan.protocol import Frame
 from blinkcan.runtime import to_frame, to_message
 
@@ -23,27 +25,38 @@ pytestmark = pytest.mark.multiprocess
 
 def _multicast_bus(channel: str, port: int) -> can.BusABC:
     try:
-        return can.Bus(interface="udp_multicast", channel=channel, port=port,
+        return can.Bus(interface="udp_multicast", channel=channel, port=port, hop_limit=0,
                        receive_own_messages=False)
     except (OSError, ImportError, can.CanError) as error:
         pytest.skip(f"udp_multicast unavailable here ({error}); on a machine without a default "
                     "route run: ip route add 224.0.0.0/4 dev lo")
 
 
+def _random_group() -> str:
+    return f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+
+
+def _child_environment() -> dict[str, str]:
+    """This environment without python-can configuration: the command line's default bus."""
+    environment = {name: value for name, value in os.environ.items()
+                   if not name.startswith("CAN_")}
+    return {**environment, "PYTHONUNBUFFERED": "1", "COLUMNS": "200"}
+
+
 @contextlib.contextmanager
-def emulated(*devices: str) -> Iterator[tuple[can.BusABC, subprocess.Popen[bytes]]]:
+def emulated(*devices: str, channel: str | None = None
+             ) -> Iterator[tuple[can.BusABC, subprocess.Popen[bytes]]]:
     """``blinkcan emulate DEVICES`` in a child process on a fresh multicast group, and this
     process's bus on the same group; both closed afterwards."""
     # A group and a port of its own: Linux hands multicast to every socket on the port, so
     # two test runs on one machine would otherwise hear each other.
-    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    channel = channel or _random_group()
     port = random.randint(40000, 60000)
     host = _multicast_bus(channel, port)
     child = subprocess.Popen(
         [sys.executable, "-m", "blinkcan", "emulate", *devices, "-q", "-i", "udp_multicast",
-         "-c", channel],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        env={**os.environ, "PYTHONUNBUFFERED": "1", "CAN_CONFIG": json.dumps({"port": port})},
+         "-c", channel, "--bus-kwargs", f"port={port}", "hop_limit=0"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=_child_environment(),
     )
     try:
         yield host, child
@@ -102,3 +115,76 @@ def test_drivers_in_this_process_twins_in_another() -> None:
         finally:
             keybox.close()
             keypad.close()
+
+
+def test_emulate_and_scan_in_two_processes_find_each_other_on_the_default_bus() -> None:
+    """No bus options but a port of the test's own: the command line's default bus, named in
+    the banner, crosses processes."""
+    port = random.randint(40000, 60000)
+    blinkcan = [sys.executable, "-m", "blinkcan"]
+    emulator = subprocess.Popen([*blinkcan, "emulate", "keypad", "keybox", "-q",
+                                 "--bus-kwargs", f"port={port}"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                env=_child_environment())
+    try:
+        assert emulator.stdout is not None
+        banner = emulator.stdout.readline()
+        assert f"on udp_multicast {DEFAULT_GROUP}:{port} (hop limit 0, this machine only)" in (
+            banner), banner
+        scan = subprocess.run([*blinkcan, "scan", "--bus-kwargs", f"port={port}"],
+                              check=False, capture_output=True, text=True, timeout=60,
+                              env=_child_environment())
+    finally:
+        emulator.terminate()
+        emulator.communicate(timeout=10)
+    assert scan.returncode == 0, scan.stdout + scan.stderr
+    rows = [line for line in scan.stdout.splitlines() if "h " in line]
+    assert any("0Ch" in row and "keybox" in row for row in rows), scan.stdout
+    assert any("15h" in row and "keypad" in row for row in rows), scan.stdout
+
+
+def _capture() -> socket.socket:
+    try:
+        capture = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.ntohs(0x0003))
+    except (AttributeError, OSError) as error:
+        pytest.skip(f"no packet capture here ({error})")
+    capture.setblocking(False)
+    return capture
+
+
+def test_the_multicast_frames_never_leave_the_machine() -> None:
+    """A capture on every interface while the twins boot and answer: IGMP reports for the group
+    go out (that is how the kernel joins it, and shows the capture sees outgoing packets), the
+    CAN frames in UDP to the group's port do not."""
+    capture = _capture()
+    channel = _random_group()
+    group = socket.inet_aton(channel)
+    try:
+        with emulated("keypad:0x22", channel=channel) as (host, _):
+            end = time.monotonic() + 20
+            while time.monotonic() < end:
+                message = host.recv(0.5)
+                if message is not None and message.arbitration_id == 0x722:
+                    break
+            else:
+                pytest.fail("the twin did not boot in the child process")
+            outgoing = _outgoing_packets(capture)
+    finally:
+        capture.close()
+    own_group = [packet for packet in outgoing if group in packet]
+    if not any(packet[9] == 2 for packet in own_group):  # IP protocol 2: IGMP
+        pytest.skip("the capture saw no IGMP report of the group; cannot judge")
+    assert [packet for packet in own_group if packet[9] == 17] == [], (
+        "UDP to the multicast group left the machine")
+
+
+def _outgoing_packets(capture: socket.socket) -> list[bytes]:
+    """IPv4 packets sent out of interfaces other than loopback (from the IP header on)."""
+    packets: list[bytes] = []
+    while True:
+        try:
+            data, (interface, protocol, kind, *_) = capture.recvfrom(65535)
+        except BlockingIOError:
+            return packets
+        if interface != "lo" and protocol == 0x0800 and kind == socket.PACKET_OUTGOING:
+            packets.append(data[14:])

@@ -186,3 +186,17 @@ def test_golden_trace_round_trip_and_mismatch(tmp_path: Path) -> None:
     with pytest.raises(AssertionError, match="the trace has"):
         assert_matches_trace(frames[:-1], trace)
     assert frames_of(frames[:1]) == [frames[0].frame]
+
+
+def test_no_endpoint_receives_its_own_frames() -> None:
+    with Rig() as rig:
+        rig.add(KeypadTwin(node_id=0x15))
+        rig.settle()
+        rig.bus.clear_received()
+        rig.bus.send(can.Message(arbitration_id=0x000, data=[1, 0x15], is_extended_id=False))
+        rig.advance(0.1)
+        received = []
+        while (message := rig.bus.recv(0)) is not None:
+            received.append(message.arbitration_id)
+        assert 0x000 not in received
+        assert rig.emulator.stats.frames_received == 1  # the twins heard the NMT start once

@@ -4,7 +4,8 @@ A trace is lines: ``> 615 40 00 20 01 …`` sends a frame, ``< 595 4B …`` is t
 device must send in reply (``??`` matches any byte), ``< -`` says it stays silent,
 ``press 4`` / ``release 4`` act on the keys, ``blow_fuse 4`` / ``replace_fuse 4`` /
 ``set_input 4 1`` on the Keybox's pins, ``wait 0.5`` advances time, ``on``/``off`` switch
-power. Every frame the device sends must be listed.
+power; any other verb calls the twin's method of that name with its numbers and the time
+(``turn 1 -3``, ``set_analog 2 3.0``). Every frame the device sends must be listed.
 """
 
 from __future__ import annotations
@@ -63,6 +64,10 @@ class Bench:
             elif verb == "off":
                 self._check_drained(raw)
                 self.twin.power_off()
+            elif callable(getattr(self.twin, verb, None)) and not verb.startswith("_"):
+                self._check_drained(raw)
+                numbers = [float(a) if "." in a else int(a, 0) for a in rest.split()]
+                self.pending = getattr(self.twin, verb)(*numbers, self.now)
             else:
                 raise ValueError(f"unknown trace line {raw!r}")
         self._check_drained("end of trace")

@@ -1,5 +1,6 @@
 """``blinkcan keypad ...`` and ``blinkcan keybox ...``: one-shot control and configuration on
-top of the host drivers. Changing a node id or bit rate asks for confirmation (``--yes``).
+top of the host drivers. Every action prints what it did; changing a node id or bit rate and
+restoring factory defaults ask for confirmation first (``--yes`` does not ask).
 
 Every command, PDO-only ones included (``keypad led``), first confirms which device answers at
 the node id (the drivers' identity check): nothing answering, or another kind of device, is one
@@ -12,23 +13,25 @@ from contextlib import contextmanager
 
 import click
 
-from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
+from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.devices.registry import model
 from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
 
+#: what the group passes to its commands: the device kind and its node id
+Target = tuple[str, int]
+
 
 @contextmanager
-def _device(kind: str, node_id: str | None, interface: str | None, channel: str | None,
-            bitrate: int | None, start: bool = False) -> Iterator[Keypad | Keybox]:
-    bus = cli_bus(interface, channel, bitrate)
-    node = parse_int(node_id) if node_id else model(kind).default_node_id
+def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
+    kind, node_id = target
+    bus = cli_bus()
     try:
         try:
             if kind == "keypad":
-                device: Keypad | Keybox = Keypad(bus, node, start=start)
+                device: Keypad | Keybox = Keypad(bus, node_id, start=start)
             else:
-                device = Keybox(bus, node, start=start)
-        except (IdentityError, SdoError) as error:
+                device = Keybox(bus, node_id, start=start)
+        except (IdentityError, SdoError, ValueError) as error:
             raise click.ClickException(str(error)) from None
         try:
             yield device
@@ -38,6 +41,12 @@ def _device(kind: str, node_id: str | None, interface: str | None, channel: str 
             device.close()
     finally:
         bus.shutdown()
+
+
+def _done(target: Target, what: str) -> None:
+    """One line saying what an action did, e.g. ``keybox 0Ch: output 4 HIGH``."""
+    kind, node_id = target
+    click.echo(f"{kind} {node_id:02X}h: {what}")
 
 
 def _info(device: Keypad | Keybox) -> None:
@@ -51,128 +60,196 @@ def _info(device: Keypad | Keybox) -> None:
 
 
 def _confirm(what: str, yes: bool) -> None:
-    if not yes and not click.confirm(f"{what} at the next reset of the device. Go on?"):
+    if not yes and not click.confirm(f"{what}. Go on?"):
         raise click.Abort()
 
 
-@click.group("keypad")
-@click.option("--node-id", default=None, help="The keypad's node id (default 15h).")
-@bus_options
-@click.pass_context
-def keypad(ctx: click.Context, node_id: str | None, interface: str | None, channel: str | None,
-           bitrate: int | None) -> None:
-    """One-shot control of a PKP-2600-SI keypad."""
-    ctx.obj = ("keypad", node_id, interface, channel, bitrate)
+def _group(kind: str, title: str) -> click.Group:
+    default = model(kind).default_node_id
+
+    @click.group(kind, help=f"One-shot control of {title}.")
+    @click.option("--node-id", type=NODE_ID, default=default,
+                  help=f"The {kind}'s node id (default {default:02X}h).")
+    @bus_options
+    @click.pass_context
+    def group(ctx: click.Context, node_id: int) -> None:
+        ctx.obj = (kind, node_id)
+
+    return group
 
 
-@click.group("keybox")
-@click.option("--node-id", default=None, help="The Keybox's node id (default 0Ch).")
-@bus_options
-@click.pass_context
-def keybox(ctx: click.Context, node_id: str | None, interface: str | None, channel: str | None,
-           bitrate: int | None) -> None:
-    """One-shot control of a Keybox."""
-    ctx.obj = ("keybox", node_id, interface, channel, bitrate)
+keypad = _group("keypad", "a PKP-2600-SI keypad")
+keybox = _group("keybox", "a Keybox")
 
 
 for group in (keypad, keybox):
     @group.command("info")
+    @bus_options
     @click.pass_obj
-    def info(obj: tuple[str, str | None, str | None, str | None, int | None]) -> None:
+    def info(target: Target) -> None:
         """Identity: name, model, versions (un-reversed), serial, vendor."""
-        with _device(*obj) as device:
+        with _device(target) as device:
             _info(device)
 
     @group.command("heartbeat")
-    @click.argument("milliseconds", type=int)
+    @click.argument("milliseconds", type=click.IntRange(0, 0xFFFF))
+    @bus_options
     @click.pass_obj
-    def heartbeat(obj: tuple[str, str | None, str | None, str | None, int | None],
-                  milliseconds: int) -> None:
+    def heartbeat(target: Target, milliseconds: int) -> None:
         """Producer heartbeat period in ms (0 = off)."""
-        with _device(*obj) as device:
+        with _device(target) as device:
             device.set_heartbeat(milliseconds / 1000)
+        _done(target, f"heartbeat every {milliseconds} ms" if milliseconds else "heartbeat off")
 
     @group.command("set-node-id")
-    @click.argument("new_id")
+    @click.argument("new_id", type=NODE_ID)
     @click.option("--yes", is_flag=True, help="Do not ask.")
+    @bus_options
     @click.pass_obj
-    def set_node_id(obj: tuple[str, str | None, str | None, str | None, int | None],
-                    new_id: str, yes: bool) -> None:
-        """Store a new node id (applies at the next reset)."""
-        node = parse_int(new_id)
-        _confirm(f"The {obj[0]} will move to node {node:02X}h", yes)
-        with _device(*obj) as device:
-            device.set_node_id(node, confirm=True)
+    def set_node_id(target: Target, new_id: int, yes: bool) -> None:
+        """Store a new node id (applies at the next reset; generation 2 keypads: at once)."""
+        _confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
+        with _device(target) as device:
+            device.set_node_id(new_id, confirm=True)
+        _done(target, f"node id {new_id:02X}h stored")
 
     @group.command("set-baud")
-    @click.argument("bitrate", type=int)
+    @click.argument("bit_rate", metavar="BITRATE", type=int)
     @click.option("--yes", is_flag=True, help="Do not ask.")
+    @bus_options
     @click.pass_obj
-    def set_baud(obj: tuple[str, str | None, str | None, str | None, int | None], bitrate: int,
-                 yes: bool) -> None:
+    def set_baud(target: Target, bit_rate: int, yes: bool) -> None:
         """Store a bit rate in bit/s, with this model's own code (applies at the next reset)."""
-        _confirm(f"The {obj[0]} will leave this bus for {bitrate} bit/s", yes)
-        with _device(*obj) as device:
-            device.set_bitrate(bitrate, confirm=True)
+        _confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next reset",
+                 yes)
+        with _device(target) as device:
+            device.set_bitrate(bit_rate, confirm=True)
+        _done(target, f"bit rate {bit_rate} bit/s stored, in use after the next reset")
+
+    @group.command("restore-defaults")
+    @click.option("--yes", is_flag=True, help="Do not ask.")
+    @bus_options
+    @click.pass_obj
+    def restore_defaults(target: Target, yes: bool) -> None:
+        """Every stored setting back to factory values (1011h), applied at the next reset."""
+        _confirm(f"Every stored setting of the {target[0]} (node id, bit rate, heartbeat...) "
+                 "goes back to its factory value at the next reset", yes)
+        with _device(target) as device:
+            device.restore_factory_defaults(confirm=True)
+        _done(target, "factory defaults restored; they apply at the next reset")
+
+
+def _blink_words(colour: str, blink: str | None) -> str:
+    if blink is None:
+        return colour
+    if colour in (blink, "off"):
+        return f"blinking {blink}"
+    return f"{colour} alternating with {blink}"
 
 
 @keypad.command("led")
 @click.argument("key", type=int)
 @click.argument("colour")
-@click.option("--blink", default=None, help="Blink colour (with COLOUR: alternate).")
+@click.option("--blink", is_flag=False, flag_value="", default=None, metavar="[COLOUR]",
+              help="Blink: alone, COLOUR blinks on and off; with another colour, the LED "
+                   "alternates between the two.")
+@bus_options
 @click.pass_obj
-def led(obj: tuple[str, str | None, str | None, str | None, int | None], key: int, colour: str,
-        blink: str | None) -> None:
+def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     """Light KEY (1-12) in COLOUR (off, red, green, blue, amber, cyan, magenta, white). Starts
-    the keypad; other keys go dark (a one-shot command knows no earlier picture)."""
-    with _device(*obj, start=True) as device:
+    the keypad; other keys go dark (a one-shot command knows no earlier picture).
+
+    \b
+    blinkcan keypad led 3 red
+    blinkcan keypad led 3 blue --blink          (blue, blinking)
+    blinkcan keypad led 3 red --blink green     (red and green alternating)
+    """
+    blink = colour if blink == "" else blink
+    with _device(target, start=True) as device:
         assert isinstance(device, Keypad)
         device.set_led(key, colour, blink=blink)
+    _done(target, f"key {key} {_blink_words(colour, blink)}")
 
 
 @keypad.command("backlight")
 @click.option("--colour", default=None, help="Backlight colour (red ... yellow/green).")
 @click.option("--level", type=int, default=None, help="0-63 (0 = off).")
+@bus_options
 @click.pass_obj
-def backlight(obj: tuple[str, str | None, str | None, str | None, int | None],
-              colour: str | None, level: int | None) -> None:
+def backlight(target: Target, colour: str | None, level: int | None) -> None:
     """Backlight colour and level."""
-    with _device(*obj, start=True) as device:
+    if colour is None and level is None:
+        raise click.UsageError("name a --colour, a --level or both")
+    with _device(target, start=True) as device:
         assert isinstance(device, Keypad)
         device.set_backlight(colour, level)
+    parts = ([f"colour {colour}"] if colour is not None else []) + (
+        [f"level {level}"] if level is not None else [])
+    _done(target, f"backlight {', '.join(parts)}")
 
 
 @keypad.command("brightness")
 @click.argument("level", type=int)
+@bus_options
 @click.pass_obj
-def brightness(obj: tuple[str, str | None, str | None, str | None, int | None],
-               level: int) -> None:
+def brightness(target: Target, level: int) -> None:
     """Indicator LED brightness 0-63."""
-    with _device(*obj, start=True) as device:
+    with _device(target, start=True) as device:
         assert isinstance(device, Keypad)
         device.set_brightness(level)
+    _done(target, f"indicator brightness {level}")
 
 
-def _pin_command(name: str, action: str, doc: str) -> None:
+def _pin_command(name: str, action: str, doc: str, done: str) -> None:
     @keybox.command(name, help=doc)
     @click.argument("pin", type=int)
+    @bus_options
     @click.pass_obj
-    def command(obj: tuple[str, str | None, str | None, str | None, int | None],
-                pin: int) -> None:
-        with _device(*obj) as device:
+    def command(target: Target, pin: int) -> None:
+        with _device(target) as device:
             getattr(device, action)(pin)
+        _done(target, done.format(pin=pin))
 
 
-_pin_command("on", "on", "Output PIN (1-13) HIGH.")
-_pin_command("off", "off", "Output PIN OFF.")
-_pin_command("reset", "reset", "RESET output PIN out of FAULT.")
+_pin_command("on", "on", "Output PIN (1-13) HIGH.", "output {pin} HIGH")
+_pin_command("off", "off", "Output PIN OFF.", "output {pin} OFF")
+_pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} RESET (now OFF)")
+
+
+@keybox.command("pwm")
+@click.argument("pins")
+@click.argument("duty")
+@bus_options
+@click.pass_obj
+def pwm(target: Target, pins: str, duty: str) -> None:
+    """PWM on PINS (12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps of 10.
+    Pins not named leave PWM.
+
+    \b
+    blinkcan keybox pwm 12 5
+    blinkcan keybox pwm 12,13 30%
+    """
+    chosen = [parse_int(pin) for pin in pins.split(",") if pin.strip()]
+    if duty.strip().endswith("%"):
+        percent = parse_int(duty.strip()[:-1])
+        if percent % 10:
+            raise click.BadParameter(f"{duty} is not a step of 10 %", param_hint="DUTY")
+        tenths = percent // 10
+    else:
+        tenths = parse_int(duty)
+    with _device(target) as device:
+        assert isinstance(device, Keybox)
+        device.set_pwm(chosen, tenths)
+    names = " and ".join(str(pin) for pin in chosen)
+    _done(target, f"output {names} PWM at {tenths * 10} %")
 
 
 @keybox.command("states")
+@bus_options
 @click.pass_obj
-def states(obj: tuple[str, str | None, str | None, str | None, int | None]) -> None:
+def states(target: Target) -> None:
     """Every output's state, and the input levels."""
-    with _device(*obj) as device:
+    with _device(target) as device:
         assert isinstance(device, Keybox)
         outputs, inputs = device.states(), device.inputs()
         for pin in outputs:
@@ -180,10 +257,11 @@ def states(obj: tuple[str, str | None, str | None, str | None, int | None]) -> N
 
 
 @keybox.command("faults")
+@bus_options
 @click.pass_obj
-def faults(obj: tuple[str, str | None, str | None, str | None, int | None]) -> None:
+def faults(target: Target) -> None:
     """The outputs in FAULT."""
-    with _device(*obj) as device:
+    with _device(target) as device:
         assert isinstance(device, Keybox)
         found = [pin for pin, state in device.states().items() if state == "fault"]
         click.echo(", ".join(map(str, found)) if found else "no output in FAULT")

@@ -7,11 +7,11 @@ from __future__ import annotations
 import signal
 import threading
 import time
-from pathlib import Path
 
 import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus
+from blinkcan.cli.targets import check_target, writing
 from blinkcan.formats.logs import FrameWriter, LogError, read_messages
 
 
@@ -22,8 +22,9 @@ from blinkcan.formats.logs import FrameWriter, LogError, read_messages
 def convert(source: str, target: str, force: bool) -> None:
     """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap.
     Remote and error frames are kept; what TARGET's format cannot carry is counted and named."""
+    check_target(target, force)
     try:
-        with FrameWriter(target, replace=force) as writer:
+        with writing(target), FrameWriter(target, replace=force) as writer:
             for message in read_messages(source):
                 writer.write_message(message)
     except LogError as error:
@@ -46,20 +47,18 @@ def _raise_stop(signum: int, frame: object) -> None:
 @click.option("--duration", type=float, default=None, help="Seconds to record (default: Ctrl-C).")
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 @bus_options
-def record(target: str, duration: float | None, force: bool, interface: str | None,
-           channel: str | None, bitrate: int | None) -> None:
+def record(target: str, duration: float | None, force: bool) -> None:
     """Record a live bus to a file: .pcap for Wireshark, or any python-can log format.
     Frames are streamed to disk; Ctrl-C or SIGTERM stops and keeps everything so far."""
-    if Path(target).exists() and not force:
-        raise click.ClickException(f"{target} exists; pass --force to replace it")
-    bus = cli_bus(interface, channel, bitrate)
+    check_target(target, force)
+    bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
     previous = {}
     if threading.current_thread() is threading.main_thread():  # signals reach the main thread
         previous = {number: signal.signal(number, _raise_stop)
                     for number in (signal.SIGINT, signal.SIGTERM)}
     try:
-        with FrameWriter(target, replace=force) as writer:
+        with writing(target), FrameWriter(target, replace=force) as writer:
             click.echo(f"recording {bus.channel_info} to {target}; Ctrl-C stops", err=True)
             flushed = time.monotonic()
             try:

@@ -1,4 +1,4 @@
-"""``blinkcan emulate DEVICE[:NODE] ...``: run twins on a bus until Ctrl-C."""
+"""``blinkcan emulate DEVICE[@GENERATION][:NODE] ...``: run twins on a bus until Ctrl-C."""
 
 from __future__ import annotations
 
@@ -10,7 +10,15 @@ from typing import Any
 import click
 from rich.console import Console
 
-from blinkcan.cli.bus_options import bus_options, cli_bus, parse_int
+from blinkcan.cli.bus_options import (
+    NODE_ID,
+    bus_options,
+    bus_settings,
+    cli_bus,
+    describe_bus,
+    parse_int,
+    parse_node_id,
+)
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import parse_spec
 from blinkcan.protocol.frame import Frame
@@ -28,31 +36,58 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
         raise click.UsageError("--node-id is for one device; write DEVICE:NODE for several")
     twins: list[CanopenTwin] = []
     for spec in devices:
-        name, _, node_text = spec.partition(":")
+        model, _, node_text = spec.partition(":")
         try:
-            model = parse_spec(name)[0]
+            found = parse_spec(model)[0]
         except ValueError as error:
             raise click.BadParameter(str(error), param_hint="DEVICE") from None
-        node = parse_int(node_text) if node_text else node_id
+        node = parse_node_id(node_text) if node_text else node_id
         options: dict[str, object] = {}
-        if low_side and model.description().face.low_side_capable:
+        if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
         try:
-            twins.append(build_twin(name, node, quirks, nvm, **options))
+            twins.append(build_twin(model, node, quirks, nvm, **options))
         except (ValueError, TypeError) as error:
+            for twin in twins:
+                twin.close()
             raise click.ClickException(str(error)) from None
+    _refuse_shared_node_ids(twins)
     return twins
 
 
+def _refuse_shared_node_ids(twins: list[CanopenTwin]) -> None:
+    """Two devices on one node id answer every SDO request twice: refused."""
+    seen: dict[int, CanopenTwin] = {}
+    for twin in twins:
+        other = seen.setdefault(twin.node_id, twin)
+        if other is not twin:
+            for each in twins:
+                each.close()
+            raise click.UsageError(
+                f"{other.description.kind} and {twin.description.kind} both on node "
+                f"{twin.node_id:02X}h; give each its own, e.g. {twin.description.kind}:"
+                f"0x{_free_node_id(twin.node_id, set(seen)):02X}")
+
+
+def _free_node_id(near: int, taken: set[int]) -> int:
+    candidate: int
+    for candidate in [*range(near + 1, 128), *range(1, near)]:
+        if candidate not in taken:
+            return candidate
+    return near
+
+
 @click.command("emulate")
-@click.argument("devices", nargs=-1, required=True, metavar="DEVICE[:NODE]...")
-@click.option("--node-id", default=None, help="Node id of a single device (0x15, 21, 15h).")
+@click.argument("devices", nargs=-1, required=True, metavar="DEVICE[@GEN][:NODE]...")
+@click.option("--node-id", type=NODE_ID, default=None,
+              help="Node id of a single device (0x15, 21, 15h).")
 @click.option("--nvm", default=None, type=click.Path(dir_okay=False),
               help="JSON file keeping a single device's stored settings across runs.")
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
               show_default=True,
               help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
-@click.option("--response-delay", type=float, default=0.0, show_default=True,
+@click.option("--response-delay", type=click.FloatRange(min=0.0), default=0.0,
+              show_default=True,
               help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
 @click.option("--low-side", default="", metavar="PINS",
               help="Keybox pins built as low-side drivers, e.g. 2,5 (errata K22).")
@@ -60,31 +95,34 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
               metavar="[HOST:PORT]", help="Serve the front panel (default 127.0.0.1:8080).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @bus_options
-def command(devices: tuple[str, ...], node_id: str | None, nvm: str | None, quirks: str,
-            response_delay: float, low_side: str, web: str | None, quiet: bool,
-            interface: str | None, channel: str | None, bitrate: int | None) -> None:
+def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quirks: str,
+            response_delay: float, low_side: str, web: str | None, quiet: bool) -> None:
     """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
-    (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5).
+    (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5: the newer
+    firmware, manual rev 1.5).
 
     \b
-    blinkcan emulate keypad
-    blinkcan emulate keypad keybox:0x0C --low-side 2,5
+    blinkcan emulate keypad keybox
+    blinkcan emulate keypad@1.5 keybox:0x0D --low-side 2,5
     blinkcan emulate keypad:0x15 keypad:0x16 -i socketcan -c vcan0
     """
     console = Console(highlight=False)
     try:
         pins = tuple(parse_int(p) for p in low_side.split(",") if p.strip())
-        twins = build_twins(devices, parse_int(node_id) if node_id else None, nvm, quirks, pins)
+        twins = build_twins(devices, node_id, nvm, quirks, pins)
     except NvmError as error:
         raise click.ClickException(str(error)) from None
-    bus = cli_bus(interface, channel, bitrate)
+    bus = cli_bus()
     decoder = Decoder({t.node_id: t.description for t in twins})
     printer = None if quiet else _FramePrinter(console, decoder)
     emulator = Emulator(bus, twins, response_delay=response_delay)
     if printer is not None:
         emulator.on_frame = printer
-    names = ", ".join(f"{t.description.kind} {t.node_id:02X}h" for t in twins)
-    console.print(f"[bold]blinkcan[/] emulating {names} on {bus.channel_info}. Ctrl-C stops.")
+    names = ", ".join(f"{t.description.kind} {t.node_id:02X}h" + (
+        f" (rev {t.description.generation})" if t.description.kind == "keypad" else "")
+        for t in twins)
+    console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
+                  "Ctrl-C stops.")
     try:
         with emulator, panel(emulator, web, console):
             threading.Event().wait()

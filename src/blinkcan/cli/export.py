@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
-from blinkcan.cli.bus_options import parse_int
+from blinkcan.cli.bus_options import NODE_ID
+from blinkcan.cli.targets import check_target, writing
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.dbc import dbc_text
@@ -19,23 +18,24 @@ from blinkcan.formats.eds import eds_text
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="File (default: stdout).")
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
               show_default=True, help="EDS: the profile whose default values to write.")
-@click.option("--node-id", default=None, help="DBC: the node the COB-IDs are for.")
+@click.option("--node-id", type=NODE_ID, default=None,
+              help="DBC: the node the COB-IDs are for (1..127).")
 @click.option("--manual", default=None, help="Keypad generation (manual revision), e.g. 1.1.")
 @click.option("--force", is_flag=True, help="Replace FILE if it exists.")
-def command(kind: str, device: str, output: str | None, quirks: str, node_id: str | None,
+def command(kind: str, device: str, output: str | None, quirks: str, node_id: int | None,
             manual: str | None, force: bool) -> None:
     """Write the EDS or DBC file of a device, from the same tables the twins run on."""
     try:
         description = describe_device(f"{device}@{manual}" if manual else device, quirks)
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="DEVICE") from None
-    node = parse_int(node_id) if node_id else None
-    text = eds_text(description) if kind == "eds" else dbc_text(description, node)
+    if output is not None:
+        check_target(output, force)
+    text = eds_text(description) if kind == "eds" else dbc_text(description, node_id)
     if output is None:
         click.echo(text, nl=False)
     else:
-        if Path(output).exists() and not force:
-            raise click.ClickException(f"{output} exists; pass --force to replace it")
-        write_atomically(output, text.encode("utf-8"))
+        with writing(output):
+            write_atomically(output, text.encode("utf-8"))
         click.echo(f"wrote {output}", err=True)
 

@@ -10,6 +10,7 @@ import click
 from rich.console import Console, Group
 from rich.live import Live
 from rich.table import Table
+from rich.text import Text
 
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.decode import parse_devices
@@ -31,6 +32,8 @@ def render(view: BusView, events: deque[Event]) -> Group:
         elif node.device == "keybox":
             pins = ((pin, state, False) for pin, state in node.outputs.items())
             parts.append(keybox_panel(pins, title))
+        if node.other:  # what the model sends besides keys and outputs: knobs, inputs...
+            parts.append(Text("\n".join(node.other.values())))
     table = Table("time", "id", "data", "meaning", title="events", title_justify="left")
     for event in events:
         frame = event.frame
@@ -48,8 +51,8 @@ def render(view: BusView, events: deque[Event]) -> Group:
 @click.option("--duration", type=float, default=None, help="Stop after this many seconds.")
 @click.option("--rows", type=int, default=15, show_default=True, help="Events shown.")
 @bus_options
-def command(devices: tuple[str, ...], log_file: str | None, duration: float | None, rows: int,
-            interface: str | None, channel: str | None, bitrate: int | None) -> None:
+def command(devices: tuple[str, ...], log_file: str | None, duration: float | None,
+            rows: int) -> None:
     """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops."""
     decoder = Decoder(parse_devices(devices))
     view = BusView(decoder)
@@ -69,7 +72,7 @@ def command(devices: tuple[str, ...], log_file: str | None, duration: float | No
             raise click.ClickException(str(error)) from None
         console.print(render(view, events))
         return
-    bus = cli_bus(interface, channel, bitrate)
+    bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
     try:
         with Live(render(view, events), console=console, auto_refresh=False) as live:

@@ -14,10 +14,9 @@ from blinkcan.host import scan
 @click.option("--listen", type=float, default=0.5, show_default=True,
               help="Seconds to listen for boot-ups and heartbeats first.")
 @bus_options
-def command(listen: float, interface: str | None, channel: str | None,
-            bitrate: int | None) -> None:
+def command(listen: float) -> None:
     """Find devices: boot-up and heartbeat heard, SDO read of 1000h, 1018h, 100Bh."""
-    bus = cli_bus(interface, channel, bitrate)
+    bus = cli_bus()
     try:
         found = scan(bus, listen=listen)
     finally:

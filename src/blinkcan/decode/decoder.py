@@ -287,7 +287,7 @@ class Decoder:
 
     def _pdo_route(self, layout: PdoLayout, node: int, device: str
                    ) -> Callable[[Frame, float], Event]:
-        describe = _PDO_TEXT.get(layout.name, _generic_pdo)
+        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
 
         def route(frame: Frame, time: float) -> Event:
             if len(frame.data) < layout.min_length:
@@ -495,9 +495,29 @@ def _backlight(values: dict[str, int]) -> tuple[str, dict[str, Any]]:
     return f"backlight {level}/63 in {colour}", {"level": level, "colour": colour}
 
 
-def _generic_pdo(decoder: Decoder, node: int, values: dict[str, int]
+def _generic_pdo(layout: PdoLayout
+                 ) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
+    """Any PDO from its layout alone: masks as item numbers, values scaled to their unit."""
+    signals = {s.name: s for s in layout.signals}
+
+    def describe(decoder: Decoder, node: int, values: dict[str, int]
                  ) -> tuple[str, dict[str, Any]]:
-    return ", ".join(f"{k} {v}" for k, v in values.items()), dict(values)
+        parts: list[str] = []
+        fields: dict[str, Any] = {}
+        for name, raw in values.items():
+            signal = signals[name]
+            if signal.item is not None:
+                items = numbers(raw)
+                fields[name] = items
+                parts.append(f"{signal.item} {listing(items)}")
+            else:
+                value = signal.physical(raw)
+                fields[name] = value
+                shown = f"{value:g} {signal.unit}" if signal.unit else f"{value}"
+                parts.append(f"{signal.label.lower()} {shown}")
+        return f"{layout.label.lower()}: {', '.join(parts)}", fields
+
+    return describe
 
 
 def _leds(verb: str) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:

@@ -21,6 +21,8 @@ from blinkcan.devices.colours import channel_name
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import describe_device
 
+#: the PDOs followed field by field; any other PDO is kept as its latest meaning
+_FOLLOWED = frozenset({"led_on", "led_blink", "key_state", "outputs", "faults"})
 _NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
                "enter pre-operational": "pre-operational"}
 _RESETS = ("reset node", "reset communication")
@@ -38,6 +40,8 @@ class NodeView:
     face: Face = field(default_factory=Face)  # the model's keys and pins, once known
     #: the state the last NMT command to this node asked for (None: none seen, or a reset)
     asked: str | None = None
+    #: PDO name -> what its last frame meant (encoders, analog inputs, ring LEDs, ...)
+    other: dict[str, str] = field(default_factory=dict)
 
     def know(self, face: Face) -> None:
         if face != self.face:
@@ -126,7 +130,10 @@ class BusView:
         elif event.kind is Kind.HEARTBEAT:
             view.reported(fields.get("state", view.state))
         elif event.kind is Kind.PDO:
-            self._pdo(view, fields)
+            if fields.get("pdo") in _FOLLOWED:
+                self._pdo(view, fields)
+            else:
+                view.other[str(fields.get("pdo"))] = event.text
         elif event.kind in (Kind.SDO_WRITE, Kind.SDO_VALUE):
             self._object(view, event.kind, fields)
 

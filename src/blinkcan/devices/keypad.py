@@ -6,8 +6,6 @@ contradicts itself the errata.md decision is applied and cited.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from blinkcan.devices.common import (
     TIMER_MS_MAX,
     ConsumerHeartbeat,
@@ -17,7 +15,14 @@ from blinkcan.devices.common import (
     model_id,
     producer_heartbeat_time,
 )
-from blinkcan.devices.model import DeviceDescription, Face, Model, Quirks, check_quirks
+from blinkcan.devices.model import (
+    DeviceDescription,
+    Face,
+    LedField,
+    Model,
+    Quirks,
+    check_quirks,
+)
 from blinkcan.devices.objects import (
     Access,
     NodeIdRelative,
@@ -90,16 +95,6 @@ def _mapping(index: int, label: str, prefix: str, targets: tuple[int, ...]) -> O
         for i, target in enumerate(targets, start=1)
     ))
 
-
-@dataclass(frozen=True)
-class LedField:
-    """One sub-index of 2001h/2002h as a bit field of the 36-bit LED word (PKP §11)."""
-
-    subindex: int
-    suffix: str
-    label: str
-    shift: int
-    width: int
 
 
 #: rev 1.1 §16/§17: one 12-bit mask per colour. rev 1.5 §17/§18 (rev 1.3 history): the
@@ -323,12 +318,17 @@ def describe_keypad(
         nmt_aliases={0x00: NmtCommand.STOP},  # PKP §7 "old PKP sw compatibility", errata P12
         consumer_heartbeat=CONSUMER_HEARTBEAT if generation == "1.5" else None,
         face=FACE,
+        led_fields=LED_FIELDS[generation],
+        features=GENERATION_2_FEATURES if generation == "1.5" else frozenset(),
         title="PKP-2600-SI keypad",
         eds_file=eds_file,
         eds_date=eds_date,
         eds_defaults=_eds_led_mappings(generation),
     )
 
+
+#: rev 1.5 (pkp-rev1.1-vs-rev1.5.md): SYNC (G3), node id at once (G1), backlight colour (G2)
+GENERATION_2_FEATURES = frozenset({"sync", "node-id-at-once", "backlight-colour-pdo"})
 
 #: PKP §2: two rows of six keys, 1-6 on top; an RGB LED under every key (PKP §11)
 FACE = Face(

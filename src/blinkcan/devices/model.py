@@ -22,6 +22,17 @@ def check_quirks(quirks: str) -> Quirks:
 
 
 @dataclass(frozen=True)
+class LedField:
+    """One sub-index of 2001h/2002h as a bit field of a keypad's LED word (PKP §11)."""
+
+    subindex: int
+    suffix: str
+    label: str
+    shift: int
+    width: int
+
+
+@dataclass(frozen=True)
 class Encoder:
     """A rotary encoder: its number, the key its push is, its ring LEDs (clockwise from six
     o'clock) and the PDO that reports it."""
@@ -81,6 +92,11 @@ class DeviceDescription:
     #: what 1016h/01 accepts, where the device has a consumer heartbeat (None: it has none)
     consumer_heartbeat: ConsumerHeartbeat | None = None
     face: Face = Face()
+    #: 2001h/2002h sub-indices as fields of the LED word (keypads)
+    led_fields: tuple[LedField, ...] = ()
+    #: behaviours a twin or driver switches on: "sync" (SYNC-driven PDOs, errata G3),
+    #: "node-id-at-once" (G1), "backlight-colour-pdo" (G2)
+    features: frozenset[str] = frozenset()
     #: "PKP-2600-SI keypad": how people call it
     title: str = ""
     #: the shipped EDS file's name and date (the manual revision's date, MM-DD-YYYY)

@@ -24,6 +24,9 @@ class PdoSignal:
     ``entry`` names the object entry the bits carry, or None for bits that are not an object
     (the keypad's tick timer, PKP §10). ``item`` says the bits are a mask of numbered things
     (bit 0 = "key" 1, "LED" 1, "pin" 1), so the decoder and the DBC can name each one.
+    ``scale`` and ``unit`` give the physical value (10 mV per count: 0.01, "V");
+    ``sign_magnitude``: the top bit is the sign, the others the magnitude (an encoder's
+    direction counter, MT §12).
     """
 
     name: str
@@ -32,6 +35,16 @@ class PdoSignal:
     length: int
     entry: str | None
     item: str | None = None
+    scale: float = 1.0
+    unit: str = ""
+    sign_magnitude: bool = False
+
+    def physical(self, raw: int) -> int | float:
+        """The value the bits mean: signed for sign-magnitude, scaled where a unit says so."""
+        if self.sign_magnitude:
+            top = 1 << (self.length - 1)
+            raw = -(raw & (top - 1)) if raw & top else raw
+        return raw * self.scale if self.scale != 1.0 else raw
 
     @property
     def mask(self) -> int:

@@ -81,7 +81,7 @@ class EventSource(Generic[E]):
         scheduler = self._scheduler
         if scheduler is not None and scheduler.simulated and waiting.empty():
             limit = 3600.0 if timeout is None else timeout  # a simulated wait always ends
-            scheduler.wait(_Arrived(waiting), limit)
+            scheduler.wait(_Arrived(waiting), limit, background=True)
             return waiting.get_nowait()
         return waiting.get(timeout=timeout)
 

@@ -14,20 +14,25 @@ import contextlib
 import functools
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import can
 
 from blinkcan.devices.colours import BacklightColour, Channel, led_colour
 from blinkcan.devices.keypad import (
     LEVEL_MAX,
+    MODEL,
     SHOW_COMPLETE,
     SHOW_FAST_FLASH,
     SHOW_OFF,
     describe_keypad,
 )
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
+from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
@@ -59,6 +64,33 @@ def _masks(channels_by_key: Mapping[int, int]) -> dict[str, int]:
 
 
 class Keypad(Device):
+    # the model's description carries its keys, LED layout and PDOs; ``model=`` names
+    # another registered keypad, whose driver class (a subclass) is built instead
+    def __new__(cls, *args: Any, model: str | None = None, **kwargs: Any) -> Keypad:
+        target: type[Keypad] = cls
+        if model is not None and model != MODEL:
+            found = driver_class(model)
+            if not issubclass(found, Keypad):
+                raise ValueError(f"{model!r} is not a keypad")
+            target = found
+        return super().__new__(target)
+
+    @classmethod
+    def connect(cls, bus: HostBus | can.BusABC, node_id: int = 0x15, **options: Any) -> Keypad:
+        """The driver of whichever keypad answers at ``node_id``: its 100Bh model id names the
+        model (two models share 1000h, MT M59). ValueError for a device that is no keypad."""
+        host = HostBus.attach(bus)
+        try:
+            raw = host.sdo(check_node_id(node_id), options.get("sdo_timeout", 0.5), 1).upload(
+                0x100B, 0)
+        finally:
+            host.release()
+        model_id = raw.decode("ascii", "replace")
+        found = identify(model_id=model_id)
+        if found is None or found.kind != "keypad":
+            raise ValueError(f"node {node_id:02X}h is a {model_id!r}, not a known keypad")
+        return cls(bus, node_id, model=found.model, **options)
+
     """Drive a PKP-2600-SI at ``node_id`` on ``bus`` (a python-can bus or a :class:`HostBus`).
 
     ``start``: send NMT start now, after every boot-up and after a watchdog trip.
@@ -70,8 +102,9 @@ class Keypad(Device):
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
                  long_press: float = 0.8, restore: bool = True, generation: str | None = None,
                  watchdog: float | None = None, host_node_id: int = 0x7F,
-                 sdo_timeout: float = 0.5, verify: bool = True) -> None:
-        super().__init__(bus, node_id, describe_keypad(generation or "1.1", "cia301", node_id),
+                 sdo_timeout: float = 0.5, verify: bool = True, model: str | None = None
+                 ) -> None:
+        super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
         self.host_node_id = check_node_id(host_node_id)
@@ -109,8 +142,12 @@ class Keypad(Device):
             except SdoAbortError:
                 found = "1.1"
             self._generation = found
-            self.description = describe_keypad(found, "cia301", self.node_id)
+            self.description = self._describe(found, self.node_id)
         return self._generation
+
+    def _describe(self, generation: str | None, node_id: int) -> DeviceDescription:
+        """This driver's model at ``generation`` (None: the first), CiA 301 profile."""
+        return describe_keypad(generation or "1.1", "cia301", node_id)
 
     def watch_host(self, period: float) -> None:
         """Generation 2 only: the keypad switches its LEDs off when the controller's
@@ -168,18 +205,33 @@ class Keypad(Device):
     # -- LEDs -------------------------------------------------------------------------------------
 
     def set_led(self, key: int, colour: str = "off", blink: str | None = None) -> None:
-        """Light ``key`` (1..12) in ``colour``; with ``blink`` it blinks in that colour, and with
-        both it alternates between them (PKP §12 alternate mode).
+        """Light ``key`` (1..12) in ``colour``. ``blink`` makes it blink: the same colour (or
+        ``colour="off"``) blinks on and off, another colour alternates with ``colour``
+        (PKP §12 alternate mode)::
+
+            set_led(3, "blue")                  # steady blue
+            set_led(3, "blue", blink="blue")    # blue, blinking
+            set_led(3, "red", blink="green")    # red and green alternating
 
         Colours: off, red, green, blue, yellow/amber, cyan, magenta, white.
         """
-        check_range("key", key, 1, self.description.face.keys)
+        face = self.description.face
+        check_range("key", key, 1, face.keys)
+        if key not in face.led_keys:
+            raise ValueError(f"key {key} has no LED; keys with one: "
+                             f"{', '.join(map(str, face.led_keys))}")
         steady = led_colour(colour)
         blinking = led_colour(blink) if blink is not None else Channel.NONE
         # the twin's phase model: phase A shows the "on" channels, phase B the on-and-not-
-        # blinking plus the blinking-and-not-on ones; so on = colour, blink = colour ^ blink.
+        # blinking plus the blinking-and-not-on ones; so one colour blinks with on = blink =
+        # colour, and two alternate with on = colour, blink = colour ^ other.
         self._steady[key] = int(steady)
-        self._blink[key] = int(steady ^ blinking) if blink is not None else 0
+        if blink is None:
+            self._blink[key] = 0
+        elif blinking == steady:
+            self._blink[key] = int(steady)
+        else:
+            self._blink[key] = int(steady ^ blinking)
         self._flush()
 
     def set_leds(self, colours: Mapping[int, str], blink: Mapping[int, str] | None = None) -> None:
@@ -190,7 +242,7 @@ class Keypad(Device):
 
     def clear_leds(self) -> None:
         with self.batch():
-            for key in self.description.face.key_numbers:
+            for key in self.description.face.led_keys:
                 self.set_led(key, "off")
 
     @contextlib.contextmanager

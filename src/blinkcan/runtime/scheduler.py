@@ -110,8 +110,10 @@ class Scheduler(ABC):
         """A fresh signal that :meth:`wait` can wait for."""
 
     @abstractmethod
-    def wait(self, signal: Signal, timeout: float) -> bool:
-        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False)."""
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        """Block the caller until ``signal`` is set (True) or ``timeout`` s passed (False).
+        ``background``: spawned work may run meanwhile (waiting for events, not in the middle
+        of a transfer)."""
 
     @abstractmethod
     def sleep(self, seconds: float) -> None:
@@ -243,7 +245,7 @@ class RealTimeScheduler(Scheduler):
     def signal(self) -> Signal:
         return threading.Event()
 
-    def wait(self, signal: Signal, timeout: float) -> bool:
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
         assert isinstance(signal, threading.Event)
         return signal.wait(timeout)
 
@@ -260,10 +262,12 @@ class RealTimeScheduler(Scheduler):
             self._workers = ThreadPoolExecutor(_WORKERS, thread_name_prefix=f"{self.name}-work")
 
         def work() -> None:
-            if key is not None:
-                with self._pending_lock:
-                    self._pending.discard(key)
-            guarded(action)
+            try:
+                guarded(action)
+            finally:  # the same work is not queued again until this one is over
+                if key is not None:
+                    with self._pending_lock:
+                        self._pending.discard(key)
 
         try:
             self._workers.submit(work)
@@ -348,7 +352,9 @@ class SimulatedScheduler(Scheduler):
     def signal(self) -> Signal:
         return Flag()
 
-    def wait(self, signal: Signal, timeout: float) -> bool:
+    def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        if background:
+            return self.run_until(signal.is_set, self._now + timeout)
         self._waits += 1
         try:
             return self.run_until(signal.is_set, self._now + timeout)

@@ -86,7 +86,7 @@ class SimulatedNetwork:
         now = self.scheduler.clock()
         self.frames.append(TimedFrame(now, frame))
         for handler in list(self._endpoints):
-            if handler is not sender:
+            if handler != sender:  # bound methods: equal, not identical, per access
                 self.in_flight += 1
                 self.scheduler.call_soon(self._handover_later(handler, frame))
 

@@ -21,6 +21,8 @@ from blinkcan.protocol.abort import AbortCode
 
 #: A write hook: called with the new value before it is stored; returns an abort code to refuse.
 WriteHook = Callable[[int], "AbortCode | None"]
+#: A read hook: the bytes an SDO upload returns instead of the stored value.
+Reader = Callable[[], bytes]
 #: Persists the stored settings as they are to become; returns an abort code when it cannot.
 Persister = Callable[[dict[str, Value]], "AbortCode | None"]
 
@@ -28,8 +30,8 @@ Persister = Callable[[dict[str, Value]], "AbortCode | None"]
 class _Slot:
     """One entry's live value and the facts about its type, computed once (hot path)."""
 
-    __slots__ = ("entry", "hook", "keeps_value", "raw", "readable", "signed", "size", "spans",
-                 "value", "writable")
+    __slots__ = ("entry", "hook", "keeps_value", "raw", "readable", "reader", "signed", "size",
+                 "spans", "value", "writable")
 
     def __init__(self, entry: ObjectEntry, value: Value) -> None:
         self.entry = entry
@@ -39,6 +41,7 @@ class _Slot:
         self.signed = entry.data_type.is_signed
         self.spans = _valid_spans(entry)
         self.hook: WriteHook | None = None
+        self.reader: Reader | None = None
         self.keeps_value = True
         self.value = value
         self.raw = entry.encode(value)
@@ -105,6 +108,12 @@ class ObjectStore:
         slot.hook = hook
         slot.keeps_value = keeps_value
 
+    def set_reader(self, name: str, reader: Reader) -> None:
+        """Answer SDO reads of ``name`` with ``reader()``: an entry whose write sets one
+        quantity and whose read shows another (MT M40: a write stores the startup tick
+        counter, a read returns the live counter)."""
+        self._by_name[name].reader = reader
+
     def write_from_pdo(self, name: str, value: int) -> AbortCode | None:
         """An RPDO writing a mapped entry: hooks run as for SDO, access is not checked."""
         slot = self._by_name[name]
@@ -163,7 +172,8 @@ class ObjectStore:
             return self._missing(mux)
         if not slot.readable:
             return AbortCode.WRITE_ONLY
-        return slot.raw
+        reader = slot.reader
+        return slot.raw if reader is None else reader()
 
     def sdo_download(self, mux: bytes, data: bytes, size_indicated: bool) -> int:
         slot = self._slots.get(mux)

@@ -17,7 +17,6 @@ from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keypad import (
-    LED_FIELDS,
     LEVEL_MAX,
     MODEL,
     PROTOCOL_CANOPEN,
@@ -38,10 +37,11 @@ from blinkcan.twin.base import CanopenTwin, next_due
 from blinkcan.twin.keypad_display import (
     BLINK_PERIOD_S,
     SHOW_NAMES,
-    STARTUP_SHOWS,
     DemoMode,
     ShowPlayer,
+    fill,
     render_key,
+    startup_shows,
 )
 from blinkcan.twin.keypad_j1939 import J1939Keypad
 from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
@@ -106,7 +106,6 @@ class KeypadTwin(CanopenTwin):
         if protocol == "j1939" and fresh:
             self._store.set("can_protocol", PROTOCOL_J1939)
             self._persist()
-        manual = description.generation
         self._face = description.face
         self._key_pdo = description.pdo("key_state")
         self._key_cob_id = self._key_pdo.cob_id(node_id)
@@ -117,14 +116,18 @@ class KeypadTwin(CanopenTwin):
         self._show_mode = 0
         self._demo: DemoMode | None = None
         self._j1939 = False
-        self._generation2 = manual == "1.5"
+        self._generation2 = "sync" in description.features  # G1-G3 (rev 1.5, PKP-3500-MT)
         #: the LED picture (PKP §11 word: red 0-11, green 12-23, blue 24-35), on and blink
         self._words = {"led_on": 0, "led_blink": 0}
         self._held: dict[str, int] = {}  # RPDO words waiting for the next SYNC (errata G3)
         self._syncs = 0
         self._last_rpdo_length = 8
         self._led_views = {f"{prefix}_{f.suffix}": (prefix, f.shift, (1 << f.width) - 1)
-                           for prefix in self._words for f in LED_FIELDS[manual]}
+                           for prefix in self._words for f in description.led_fields}
+        #: bits per colour of the LED word, and the bits that are LEDs (MT M27: not the holes)
+        self._led_width = description.pdo("led_on").signal("red").length
+        self._led_mask = fill(sum(1 << (k - 1) for k in self._face.led_keys), 7, self._led_width)
+        self._shows = startup_shows(self._face.led_keys, self._led_width)
         store = self._store
         store.set_hook("tpdo1_event_timer", self._on_event_timer)
         store.set_hook("can_protocol", self._on_can_protocol)
@@ -184,6 +187,7 @@ class KeypadTwin(CanopenTwin):
 
         def on_write(value: int) -> AbortCode | None:
             word = self._words[prefix]
+            value &= self._led_mask >> shift  # MT M27: bits that are no LED read back 0
             self._words[prefix] = (word & ~(mask << shift)) | (value << shift)
             self._refresh_led_views(prefix)
             return None
@@ -198,7 +202,7 @@ class KeypadTwin(CanopenTwin):
 
     def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
         if layout.name in self._words:  # PKP §11/§12: the whole picture in one frame
-            word = sum(signals[s.name] << s.start for s in layout.signals)
+            word = sum(signals[s.name] << s.start for s in layout.signals) & self._led_mask
             if self._rpdo_synchronous(layout.name):
                 self._held[layout.name] = word  # applied at the next SYNC (rev 1.5 §36/§37)
             else:
@@ -310,14 +314,18 @@ class KeypadTwin(CanopenTwin):
         if application:
             self._show = None
             self._show_mode = self._store.get_int("startup_led_show")
-            steps = STARTUP_SHOWS.get(self._show_mode)
+            steps = self._shows.get(self._show_mode)
             if steps is not None and not self._j1939:
                 self._show = ShowPlayer(steps, now)
             # DEMO mode starts at power-on (PKP §24: "disconnect and reconnect")
-            self._demo = DemoMode(now) if self._store.get_int("demo_mode") else None
+            self._demo = self._make_demo(now) if self._store.get_int("demo_mode") else None
             if self._demo is not None:
                 self._routes = self._build_routes()
         return []
+
+    def _make_demo(self, now: float) -> DemoMode:
+        """DEMO mode of this model (PKP §24 and appendix)."""
+        return DemoMode(now)
 
     def _on_power_off(self) -> None:
         self._words = {"led_on": 0, "led_blink": 0}
@@ -472,7 +480,8 @@ class KeypadTwin(CanopenTwin):
         else:
             on, blink = self.displayed_leds()
         keys = [
-            {"key": key, "pressed": bool(self._keys >> (key - 1) & 1), **render_key(on, blink, key)}
+            {"key": key, "pressed": bool(self._keys >> (key - 1) & 1),
+             **render_key(on, blink, key, self._led_width)}
             for key in self._face.key_numbers
         ]
         indicator = self._store.get_int("indicator_brightness")
@@ -492,6 +501,7 @@ class KeypadTwin(CanopenTwin):
             "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
             "leds": dict(self._words),
             # what the host last commanded, apart from what a show or DEMO mode displays
-            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
+            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key,
+                                     self._led_width)
                           for key in self._face.key_numbers],
         }

@@ -68,26 +68,27 @@ class ShowStep:
     blink: int = 0
 
 
-def _complete_show() -> tuple[ShowStep, ...]:
+def _complete_show(keys: tuple[int, ...], width: int) -> tuple[ShowStep, ...]:
     """Each colour fills the keys one by one, then all keys white (durations ours)."""
-    steps = [
-        ShowStep(0.06, fill((1 << count) - 1, channel))
-        for channel in (Channel.RED, Channel.GREEN, Channel.BLUE)
-        for count in range(1, _KEYS + 1)
-    ]
-    steps.append(ShowStep(0.3, fill(ALL_KEYS, Channel.RED | Channel.GREEN | Channel.BLUE)))
+    masks = [sum(1 << (key - 1) for key in keys[:count]) for count in range(1, len(keys) + 1)]
+    steps = [ShowStep(0.06, fill(mask, channel, width))
+             for channel in (Channel.RED, Channel.GREEN, Channel.BLUE) for mask in masks]
+    steps.append(ShowStep(0.3, fill(masks[-1], Channel.RED | Channel.GREEN | Channel.BLUE, width)))
     return tuple(steps)
 
 
-def _fast_flash() -> tuple[ShowStep, ...]:
-    white = fill(ALL_KEYS, Channel.RED | Channel.GREEN | Channel.BLUE)
+def _fast_flash(keys: tuple[int, ...], width: int) -> tuple[ShowStep, ...]:
+    every = sum(1 << (key - 1) for key in keys)
+    white = fill(every, Channel.RED | Channel.GREEN | Channel.BLUE, width)
     return (ShowStep(0.1, white), ShowStep(0.1, 0)) * 3
 
 
-STARTUP_SHOWS: dict[int, tuple[ShowStep, ...]] = {
-    SHOW_COMPLETE: _complete_show(),
-    SHOW_FAST_FLASH: _fast_flash(),
-}
+def startup_shows(keys: tuple[int, ...], width: int) -> dict[int, tuple[ShowStep, ...]]:
+    """2014h's shows (PKP §23) on the keys that have an LED, in an LED word of ``width``."""
+    return {SHOW_COMPLETE: _complete_show(keys, width), SHOW_FAST_FLASH: _fast_flash(keys, width)}
+
+
+STARTUP_SHOWS = startup_shows(FACE.led_keys, _KEYS)
 SHOW_NAMES = {0: "off", SHOW_COMPLETE: "complete", SHOW_FAST_FLASH: "fast flash"}
 
 

@@ -48,6 +48,39 @@ ACTIONS: dict[str, tuple[tuple[str, ...], str | None, Callable[[Any, Any, float]
 }
 #: argument -> how many of it a model's face has
 _COUNTS: dict[str, Callable[[Face], int]] = {"key": lambda f: f.keys, "pin": lambda f: f.pins}
+_TICKS_PER_ACTION = 64  # a drag or scroll sends at most this many ticks at once
+
+#: actions on what a face has besides keys and pins (knobs, inputs):
+#: action -> (argument -> its valid range on a face, what it does with (twin, arguments, now))
+FACE_ACTIONS: dict[str, tuple[dict[str, Callable[[Face], tuple[float, float]]],
+                              Callable[[Any, dict[str, Any], float], object]]] = {
+    "turn": ({"encoder": lambda f: (1, len(f.encoders)),
+              "ticks": lambda f: (-_TICKS_PER_ACTION, _TICKS_PER_ACTION)},
+             lambda t, a, now: t.turn(a["encoder"], a["ticks"], now)),
+    "set_analog": ({"input": lambda f: (0, f.analog_inputs - 1),
+                    "volts": lambda f: (0.0, f.analog_volts_max)},
+                   lambda t, a, now: t.set_analog(a["input"], a["volts"], now)),
+    "set_digital_input": ({"input": lambda f: (0, f.digital_inputs - 1),
+                           "level": lambda f: (0, 1)},
+                          lambda t, a, now: t.set_digital_input(a["input"], bool(a["level"]),
+                                                                now)),
+}
+
+
+def _face_arguments(face: Face, action: str, request: dict[str, Any]) -> dict[str, Any]:
+    """The arguments of a face action, each checked against the device's face."""
+    ranges, _ = FACE_ACTIONS[action]
+    arguments = {}
+    for name, valid in ranges.items():
+        low, high = valid(face)
+        if high < low:
+            raise ValueError(f"this device has nothing for {action!r}")
+        value = request.get(name)
+        number = (int, float) if isinstance(low, float) else (int,)
+        if isinstance(value, bool) or not isinstance(value, number) or not low <= value <= high:
+            raise ValueError(f"{name} must be {low}..{high}, not {value!r}")
+        arguments[name] = value
+    return arguments
 
 
 class Panel:
@@ -90,8 +123,14 @@ class Panel:
         twin = self.twin(request.get("node"))
         kind = twin.description.kind
         action = request.get("action")
+        if action in FACE_ACTIONS:
+            arguments = _face_arguments(twin.description.face, action, request)
+            perform_face = FACE_ACTIONS[action][1]
+            self.emulator.run(lambda now: perform_face(twin, arguments, now))
+            return
         if action not in ACTIONS:
-            raise ValueError(f"unknown action {action!r}; known: {', '.join(ACTIONS)}")
+            known = ", ".join([*ACTIONS, *FACE_ACTIONS])
+            raise ValueError(f"unknown action {action!r}; known: {known}")
         kinds, argument, perform = ACTIONS[action]
         if kind not in kinds:
             raise ValueError(f"a {kind} has no action {action!r}")

@@ -49,6 +49,74 @@ function headerView(node) {
   } };
 }
 
+// A rotary encoder: its ring LEDs drawn clockwise from six o'clock (as the model's face
+// numbers them), turned by dragging up/down or scrolling; its cap is the key it also is.
+const TICK_PIXELS = 12;
+function knobView(node, encoder, cell) {
+  const dots = encoder.ring_leds.map((led, i) => {
+    const angle = (i / encoder.ring_leds.length) * 2 * Math.PI;  // clockwise from six o'clock
+    const dot = element("div", { class: "ring-led", "data-test": `ring-led-${led}` });
+    dot.style.left = `${50 - 44 * Math.sin(angle)}%`;
+    dot.style.top = `${50 + 44 * Math.cos(angle)}%`;
+    cell.appendChild(dot);
+    return dot;
+  });
+  const counter = element("span", { class: "counter", "data-test": `counter-${encoder.number}` });
+  cell.appendChild(counter);
+  cell.classList.add("knob");
+  const turn = (ticks) => { if (ticks) act(node, "turn", { encoder: encoder.number, ticks }); };
+  cell.addEventListener("wheel", (event) => {
+    event.preventDefault();
+    turn(event.deltaY < 0 ? 1 : -1);  // scroll up: clockwise
+  }, { passive: false });
+  let dragY = null;
+  let turned = false;
+  cell.addEventListener("pointerdown", (event) => {
+    event.preventDefault(); dragY = event.clientY; turned = false;
+  });
+  cell.addEventListener("pointermove", (event) => {
+    if (dragY === null) return;
+    const ticks = Math.trunc((dragY - event.clientY) / TICK_PIXELS);  // up: clockwise
+    if (ticks) { dragY -= ticks * TICK_PIXELS; turned = true; turn(ticks); }
+  });
+  cell.addEventListener("pointerup", async () => {  // a click without turning pushes the knob
+    if (dragY !== null && !turned) {
+      await act(node, "press", { key: encoder.key });
+      await act(node, "release", { key: encoder.key });
+    }
+    dragY = null;
+  });
+  cell.addEventListener("pointerleave", () => { dragY = null; });
+  return { update(state, phase) {
+    counter.textContent = state.counter;
+    state.ring.forEach((led, i) => {
+      const lit = phase === 0 ? led.on : led.on !== led.blink;  // blink: the on mask XOR blink
+      dots[i].classList.toggle("lit", lit);
+    });
+  } };
+}
+
+// Analog inputs: a slider per input (0 to the face's full scale), its digital level beside.
+function inputsView(node, face) {
+  const box = element("div", { class: "inputs" });
+  const rows = [];
+  for (let n = 0; n < face.analog_inputs; n++) {
+    const slider = element("input", { type: "range", min: 0, max: face.analog_volts_max, step: 0.01,
+                                      value: 0, "data-test": `analog-${n}` });
+    slider.addEventListener("change", () =>
+      act(node, "set_analog", { input: n, volts: parseFloat(slider.value) }));
+    const value = element("span", { class: "volts" });
+    rows.push({ slider, value });
+    box.appendChild(element("label", {}, [element("span", { text: `IN${n}` }), slider, value]));
+  }
+  return { root: box, update(device) {
+    (device.analog_inputs || []).forEach((input, n) => {
+      if (document.activeElement !== rows[n].slider) rows[n].slider.value = input.volts;
+      rows[n].value.textContent = `${input.volts.toFixed(2)} V · ${input.digital ? "high" : "low"}`;
+    });
+  } };
+}
+
 function keypadView(node, face) {
   const head = headerView(node);
   const grid = element("div", { class: "keypad" });
@@ -61,18 +129,23 @@ function keypadView(node, face) {
                          [led, element("span", { class: "num", text: number })]);
     const press = (event) => { event.preventDefault(); act(node, "press", { key: number }); };
     const release = (event) => { event.preventDefault(); act(node, "release", { key: number }); };
-    cell.addEventListener("pointerdown", press);
-    cell.addEventListener("pointerup", release);
-    cell.addEventListener("pointerleave", (event) => {
-      const key = current.get(node).keys[number - 1];
-      if (key.pressed) release(event);
-    });
-    cells.set(number, { cell, led });
+    const encoder = face.encoders.find((e) => e.key === number);
+    if (!encoder) {  // a knob is pushed by a click (knobView)
+      cell.addEventListener("pointerdown", press);
+      cell.addEventListener("pointerup", release);
+      cell.addEventListener("pointerleave", (event) => {
+        const key = current.get(node).keys[number - 1];
+        if (key.pressed) release(event);
+      });
+    }
+    const knob = encoder ? knobView(node, encoder, cell) : null;
+    cells.set(number, { cell, led, knob, encoder });
     grid.appendChild(cell);
   }
+  const inputs = inputsView(node, face);
   const footer = element("div", { class: "facts" });
   const root = element("div", { class: "device", "data-test": `device-${node}` },
-                       [...head.parts, grid, footer]);
+                       [...head.parts, grid, inputs.root, footer]);
   return { model: null, root, update(device) {
     head.update(device);
     root.classList.toggle("off-power", !device.powered);
@@ -81,6 +154,11 @@ function keypadView(node, face) {
     grid.style.boxShadow = glow && device.backlight.level > 0 ? `0 0 ${spread}px ${spread / 2}px ${glow}` : "none";
     const brightness = 0.35 + 0.65 * (device.indicator_brightness / 63);
     const phase = Math.floor(Date.now() / (1000 * device.blink_period_s / 2)) % 2;
+    for (const state of device.encoders || []) {
+      const view = [...cells.values()].find((c) => c.encoder && c.encoder.number === state.encoder);
+      if (view) view.knob.update(state, phase);
+    }
+    inputs.update(device);
     device.keys.forEach((key) => {
       if (!cells.has(key.key)) return;
       const { cell, led } = cells.get(key.key);
