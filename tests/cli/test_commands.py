@@ -75,6 +75,10 @@ def assert_one_line_error(result: Result, message: str) -> None:
     (["nmt", "start", "0x80"], "node id 0x80 outside"),
     (["keybox", "pwm", "12", "55%"], "not a step of 10 %"),
     (["scan", "--bus-kwargs", "=1"], "'=1' is not NAME=VALUE"),
+    (["scan", "--listen", "-1"], "--listen"),
+    (["monitor", "--rows", "0"], "--rows"),
+    (["monitor", "--duration", "-1"], "--duration"),
+    (["record", "x.pcap", "--duration", "-1"], "--duration"),
 ])
 def test_mistakes_are_one_line_and_a_non_zero_exit(args: list[str], message: str) -> None:
     assert_one_line_error(invoke(*args), message)

@@ -75,10 +75,18 @@ def wait_until(condition: Callable[[], object], timeout: float = 2.0) -> None:
         time.sleep(0.005)
 
 
-@pytest.fixture(params=[("firmware", "1.1"), ("cia301", "1.1"), ("firmware", "1.5")],
-                ids=["firmware", "cia301", "generation2"])
+FLAVOURS = [("firmware", "1.1"), ("cia301", "1.1"), ("firmware", "1.5")]
+FLAVOUR_IDS = ["firmware", "cia301", "generation2"]
+
+
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
 def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
     """Every driver test runs against both quirk profiles and both keypad generations."""
+    yield from threaded_rig(request)
+
+
+def threaded_rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    """The rig on a virtual bus in real time: threads, python-can's notifier."""
     quirks, generation = request.param
     channel = f"host-{uuid.uuid4().hex}"
     buses = [can.Bus(interface="virtual", channel=channel) for _ in range(3)]

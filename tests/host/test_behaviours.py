@@ -1,11 +1,19 @@
-"""Momentary, Toggle and Cycle: the LED follows the state; on_change reports it."""
+"""Momentary, Toggle and Cycle: the LED follows the state; on_change reports it (in simulated
+time)."""
 
 from __future__ import annotations
+
+from collections.abc import Iterator
 
 import pytest
 
 from blinkcan.host import Cycle, Keybox, Keypad, Momentary, Toggle
-from tests.host.conftest import Rig, wait_until
+from tests.host.conftest import FLAVOUR_IDS, FLAVOURS, Rig, simulated_rig
+
+
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
+def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    yield from simulated_rig(request)
 
 
 def colour(rig: Rig, key: int) -> str:
@@ -19,23 +27,23 @@ def press(rig: Rig, key: int) -> None:
 
 def test_toggle_momentary_and_cycle(rig: Rig) -> None:
     keypad = Keypad(rig.host)
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
     changes: list[tuple[str, int]] = []
     Toggle(keypad, 1, on_change=lambda s: changes.append(("toggle", s)))
     Momentary(keypad, 2, on="amber", on_change=lambda s: changes.append(("momentary", s)))
     Cycle(keypad, 3, ["off", "green", "amber", "red"],
           on_change=lambda s: changes.append(("cycle", s)))
     press(rig, 1)
-    wait_until(lambda: colour(rig, 1) == "green")
+    rig.wait_until(lambda: colour(rig, 1) == "green")
     rig.emulator.press(rig.keypad, 2)
-    wait_until(lambda: colour(rig, 2) == "yellow")
+    rig.wait_until(lambda: colour(rig, 2) == "yellow")
     rig.emulator.release(rig.keypad, 2)
-    wait_until(lambda: colour(rig, 2) == "off")
+    rig.wait_until(lambda: colour(rig, 2) == "off")
     for _ in range(5):
         press(rig, 3)
-    wait_until(lambda: colour(rig, 3) == "green")  # off, green, yellow, red, off, green
+    rig.wait_until(lambda: colour(rig, 3) == "green")  # off, green, yellow, red, off, green
     press(rig, 1)
-    wait_until(lambda: colour(rig, 1) == "off")
+    rig.wait_until(lambda: colour(rig, 1) == "off")
     assert changes == [("toggle", 1), ("momentary", 1), ("momentary", 0), ("cycle", 1),
                        ("cycle", 2), ("cycle", 3), ("cycle", 0), ("cycle", 1), ("toggle", 0)]
 
@@ -54,11 +62,11 @@ def test_keybox_restores_outputs_after_a_reboot_only_when_asked(rig: Rig) -> Non
     asked = Keybox(rig.host, restore_outputs=True)
     asked.set_outputs(high=[3, 5])
     rig.emulator.power_cycle(rig.keybox)
-    wait_until(lambda: asked.states()[5] == "high")
+    rig.wait_until(lambda: asked.states()[5] == "high")
     assert {p for p, s in asked.states().items() if s == "high"} == {3, 5}
     asked.close()
     plain = Keybox(rig.host)
     plain.on(8)
     rig.emulator.power_cycle(rig.keybox)
-    wait_until(lambda: rig.emulator.snapshot(rig.keybox)["nmt_state"] == "operational")
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keybox)["nmt_state"] == "operational")
     assert plain.state(8) == "off"

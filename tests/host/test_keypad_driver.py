@@ -1,15 +1,25 @@
-"""The Keypad driver against the keypad twin, in both quirk profiles and generations."""
+"""The Keypad driver against the keypad twin, in both quirk profiles and generations: in
+simulated time, and the tests that use threads on a virtual bus in real time."""
 
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Iterator
 
 import pytest
 
 from blinkcan.host import HealthEvent, KeyEvent, Keypad, SdoAbortError
-from tests.host.conftest import Rig, wait_until
+from tests.host.conftest import FLAVOUR_IDS, FLAVOURS, Rig, simulated_rig, threaded_rig
+
+
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
+def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    yield from simulated_rig(request)
+
+
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
+def real_rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    yield from threaded_rig(request)
 
 
 def keys(rig: Rig) -> list[dict[str, object]]:
@@ -23,21 +33,22 @@ def test_identity_reads_versions_the_right_way_round(rig: Rig) -> None:
             identity.serial_number) == (0x3E2, "PKP2600SI", 0x000B0191, "FFFFFFFF")
 
 
-def test_key_events_by_callback_and_iterator(rig: Rig) -> None:
-    keypad = Keypad(rig.host, long_press=0.1)
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+def test_key_events_by_callback_and_iterator(real_rig: Rig) -> None:
+    keypad = Keypad(real_rig.host, long_press=0.1)
+    real_rig.wait_until(
+        lambda: real_rig.emulator.snapshot(real_rig.keypad)["nmt_state"] == "operational")
     seen: list[KeyEvent] = []
     keypad.on_key(seen.append)
     received: list[tuple[int, str]] = []
     reader = threading.Thread(target=lambda: received.extend(
         (e.key, e.action) for e in keypad.events(timeout=0.5)))
     reader.start()
-    time.sleep(0.02)
-    rig.emulator.press(rig.keypad, 5)
-    time.sleep(0.2)
-    rig.emulator.release(rig.keypad, 5)
-    rig.emulator.press(rig.keypad, 12)
-    rig.emulator.release(rig.keypad, 12)
+    real_rig.sleep(0.02)
+    real_rig.emulator.press(real_rig.keypad, 5)
+    real_rig.sleep(0.2)
+    real_rig.emulator.release(real_rig.keypad, 5)
+    real_rig.emulator.press(real_rig.keypad, 12)
+    real_rig.emulator.release(real_rig.keypad, 12)
     reader.join()
     expected = [(5, "press"), (5, "long press"), (5, "release"), (12, "press"), (12, "release")]
     assert [(e.key, e.action) for e in seen] == expected
@@ -48,7 +59,7 @@ def test_leds_steady_blinking_and_alternating(rig: Rig) -> None:
     keypad = Keypad(rig.host)
     keypad.set_leds({1: "red", 2: "amber", 3: "white"}, blink={4: "blue"})
     keypad.set_led(5, "red", blink="green")
-    wait_until(lambda: keys(rig)[4]["alternate"])
+    rig.wait_until(lambda: keys(rig)[4]["alternate"])
     shown = keys(rig)
     assert [k["phases"] for k in shown[:5]] == [
         ["red", "red"], ["yellow", "yellow"], ["white", "white"], ["off", "blue"],
@@ -73,7 +84,7 @@ def test_brightness_and_backlight(rig: Rig) -> None:
     keypad = Keypad(rig.host)
     keypad.set_brightness(20)
     keypad.set_backlight("cyan", 40)
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "cyan",
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "cyan",
                                                                          "level": 40})
     assert rig.emulator.snapshot(rig.keypad)["indicator_brightness"] == 20
 
@@ -82,9 +93,10 @@ def test_leds_come_back_after_a_power_cycle(rig: Rig) -> None:
     keypad = Keypad(rig.host)
     keypad.set_led(7, "magenta")
     keypad.set_backlight(level=30)
-    wait_until(lambda: keys(rig)[6]["colour"] == "magenta")
+    rig.wait_until(lambda: keys(rig)[6]["colour"] == "magenta")
     rig.emulator.power_cycle(rig.keypad)
-    wait_until(lambda: keys(rig)[6]["colour"] == "magenta")
+    rig.wait_until(lambda: keys(rig)[6]["colour"] == "magenta"
+                   and rig.emulator.snapshot(rig.keypad)["backlight"]["level"] == 30)
     snapshot = rig.emulator.snapshot(rig.keypad)
     assert snapshot["nmt_state"] == "operational"
     assert snapshot["backlight"]["level"] == 30
@@ -93,7 +105,7 @@ def test_leds_come_back_after_a_power_cycle(rig: Rig) -> None:
 def test_heartbeat_lost_and_back(rig: Rig) -> None:
     keypad = Keypad(rig.host)
     keypad.monitor_heartbeat(0.1)
-    time.sleep(0.3)
+    rig.sleep(0.3)
     events = keypad.health_events(timeout=2.0)
     rig.emulator.power_off(rig.keypad)
     assert "lost" in [e.kind for e in _until(events, "lost")]
@@ -149,9 +161,9 @@ def test_an_abort_names_node_object_and_meaning(rig: Rig) -> None:
         keypad.sdo.upload(0x1001, 0)
 
 
-def test_overlapping_requests_never_lose_an_answer(rig: Rig) -> None:
-    rig.emulator.response_delay = 0.01  # the keypad now drops overlapping requests
-    keypad = Keypad(rig.host)
+def test_overlapping_requests_never_lose_an_answer(real_rig: Rig) -> None:
+    real_rig.emulator.response_delay = 0.01  # the keypad now drops overlapping requests
+    keypad = Keypad(real_rig.host)
     results: list[object] = []
 
     def reader(name: str) -> None:
@@ -175,7 +187,7 @@ def test_a_backlight_level_keeps_the_colour_on_both_generations(rig: Rig) -> Non
     keypad = Keypad(rig.host)
     keypad.set_backlight("blue", 10)
     keypad.set_backlight(level=40)  # generation 2 would fall back to the default colour
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "blue",
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "blue",
                                                                          "level": 40})
 
 
@@ -183,7 +195,7 @@ def test_setting_red_leds_never_clears_green_1_to_4(rig: Rig) -> None:
     keypad = Keypad(rig.host)
     keypad.set_leds({1: "green", 2: "green"})
     keypad.set_led(3, "red")
-    wait_until(lambda: keys(rig)[2]["colour"] == "red")
+    rig.wait_until(lambda: keys(rig)[2]["colour"] == "red")
     assert [k["colour"] for k in keys(rig)[:3]] == ["green", "green", "red"]
 
 
@@ -197,15 +209,15 @@ def test_generation_2_watchdog_and_sync(rig: Rig) -> None:
         return
     keypad.set_synchronous(leds=True, key_state_every=1)
     keypad.set_led(6, "cyan")
-    time.sleep(0.05)
+    rig.sleep(0.05)
     assert keys(rig)[5]["colour"] == "off"  # held until a SYNC
     sync = rig.host.produce_sync(0.02)
-    wait_until(lambda: keys(rig)[5]["colour"] == "cyan")
+    rig.wait_until(lambda: keys(rig)[5]["colour"] == "cyan")
     sync.cancel()
     keypad.set_synchronous(leds=False, key_state_every=None)
     keypad.watch_host(0.15)  # margin: a busy machine delays heartbeats
     keypad.set_led(7, "red")
-    wait_until(lambda: keys(rig)[6]["colour"] == "red")
+    rig.wait_until(lambda: keys(rig)[6]["colour"] == "red")
     events = keypad.health_events(timeout=3.0)
     keypad.stop_host_heartbeat()
     assert any(e.kind == "watchdog" for e in events)  # the driver saw the trip
@@ -215,17 +227,17 @@ def test_generation_2_watchdog_and_sync(rig: Rig) -> None:
 def test_j1939_and_back(rig: Rig) -> None:
     keypad = Keypad(rig.host)
     keypad.switch_to_j1939(confirm=True)
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["protocol"] == "j1939")
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keypad)["protocol"] == "j1939")
     events = keypad.health_events(timeout=1.0)
     keypad.switch_to_canopen()
     assert next(events).kind == "boot-up"
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
 
 
 def test_an_event_iterator_sees_events_from_its_creation_on(rig: Rig) -> None:
     keypad = Keypad(rig.host)
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
+    rig.wait_until(lambda: rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational")
     events = keypad.events(timeout=1.0)  # not iterated yet
     rig.emulator.press(rig.keypad, 2)
-    time.sleep(0.05)
+    rig.sleep(0.05)
     assert next(events).key == 2

@@ -44,7 +44,8 @@ def _raise_stop(signum: int, frame: object) -> None:
 
 @click.command("record")
 @click.argument("target", type=click.Path(dir_okay=False))
-@click.option("--duration", type=float, default=None, help="Seconds to record (default: Ctrl-C).")
+@click.option("--duration", type=click.FloatRange(min=0.0), default=None,
+              help="Seconds to record (default: Ctrl-C).")
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 @bus_options
 def record(target: str, duration: float | None, force: bool) -> None:

@@ -48,8 +48,10 @@ def render(view: BusView, events: deque[Event]) -> Group:
               help="Which node is which device (else learned from identity traffic).")
 @click.option("--file", "log_file", type=click.Path(dir_okay=False), default=None,
               help="Replay a log file instead of a live bus.")
-@click.option("--duration", type=float, default=None, help="Stop after this many seconds.")
-@click.option("--rows", type=int, default=15, show_default=True, help="Events shown.")
+@click.option("--duration", type=click.FloatRange(min=0.0), default=None,
+              help="Stop after this many seconds.")
+@click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True,
+              help="Events shown.")
 @bus_options
 def command(devices: tuple[str, ...], log_file: str | None, duration: float | None,
             rows: int) -> None:

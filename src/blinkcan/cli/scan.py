@@ -11,7 +11,7 @@ from blinkcan.host import scan
 
 
 @click.command("scan")
-@click.option("--listen", type=float, default=0.5, show_default=True,
+@click.option("--listen", type=click.FloatRange(min=0.0), default=0.5, show_default=True,
               help="Seconds to listen for boot-ups and heartbeats first.")
 @bus_options
 def command(listen: float) -> None:

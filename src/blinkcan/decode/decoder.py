@@ -39,8 +39,19 @@ _NMT_TEXT = {
 }
 _STATE_TEXT = {NmtState.STOPPED: "stopped", NmtState.OPERATIONAL: "operational",
                NmtState.PRE_OPERATIONAL: "pre-operational"}
-_JSON_CACHE_SIZE = 100_000
+#: cached JSON bodies kept at most (the oldest half goes when full): a few MB at worst
+_JSON_CACHE_SIZE = 16_384
+#: a route's JSON stops being cached when, after this many misses, under 1 in 4 lookups hit
+_CACHE_TRIAL = 512
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
+
+
+def _encode_text(text: str) -> str:
+    return orjson.dumps(text).decode()
+
+
+def _encode_fields(fields: dict[str, Any]) -> str:
+    return _encode(fields)
 
 
 def _encode(document: dict[str, Any]) -> str:
@@ -105,13 +116,50 @@ class Event(NamedTuple):
         }
 
 
+def _item_tables(bits: int) -> tuple[tuple[tuple[int, ...], ...], tuple[str, ...]]:
+    """For every mask below 2**bits: its item numbers (bit 0 = item 1) and their listing.
+    Key, LED and pin masks are 12-13 bits, so decoding a mask is one lookup."""
+    items: list[tuple[int, ...]] = [()]
+    for mask in range(1, 1 << bits):
+        items.append(((mask & -mask).bit_length(),) + items[mask & (mask - 1)])
+    return tuple(items), tuple(", ".join(map(str, i)) if i else "none" for i in items)
+
+
+_ITEMS, _ITEM_LISTINGS = _item_tables(13)
+_ITEM_JSON = tuple(f"[{','.join(map(str, items))}]" for items in _ITEMS)
+_TABLED = len(_ITEMS)
+
+
 def numbers(mask: int, offset: int = 1) -> list[int]:
     """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
+    if offset == 1 and 0 <= mask < _TABLED:
+        return list(_ITEMS[mask])
     return item_numbers(mask, offset)
 
 
 def listing(items: list[int]) -> str:
     return ", ".join(map(str, items)) if items else "none"
+
+
+def mask_listing(mask: int) -> str:
+    """``listing(numbers(mask))``, one lookup for the usual masks."""
+    return _ITEM_LISTINGS[mask] if 0 <= mask < _TABLED else listing(numbers(mask))
+
+
+def _mask_json(mask: int) -> str:
+    """``numbers(mask)`` as compact JSON, one lookup for the usual masks."""
+    return _ITEM_JSON[mask] if 0 <= mask < _TABLED else _encode_text_list(numbers(mask))
+
+
+def _encode_text_list(items: list[int]) -> str:
+    return orjson.dumps(items).decode()
+
+
+#: an SDO transfer with no frame for this long is over (its client gave up); its state goes
+TRANSFER_IDLE_S = 2.0
+#: a segmented transfer longer than this is no longer followed (no object of these devices is
+#: a tenth of it; a generic node's domain could be anything)
+TRANSFER_MAX_BYTES = 4096
 
 
 @dataclass
@@ -120,6 +168,7 @@ class _Transfer:
     subindex: int
     entry: ObjectEntry | None
     writing: bool
+    last: float = 0.0
     buffer: bytearray = field(default_factory=bytearray)
 
 
@@ -142,6 +191,11 @@ class Decoder:
         #: key-state routes: (node, shift, mask) of the keys in the frame
         self._keyed: dict[tuple[int, bool], tuple[int, int, int]] = {}
         self._json_bodies: dict[object, str] = {}
+        #: routes that write their JSON line without an Event (the PDOs: most of a log)
+        self._json_routes: dict[tuple[int, bool], Callable[[Frame, float], str | None]] = {}
+        #: per route: [cache hits, cache misses]; routes whose frames rarely repeat go uncached
+        self._cache_stats: dict[tuple[int, bool], list[int]] = {}
+        self._uncached: set[tuple[int, bool]] = set()
         #: nodes named from 1000h alone: 100Bh may still correct them (two keypads share it)
         self._guessed: set[int] = set()
         #: keypads in J1939 mode, by address (decode/j1939.py)
@@ -155,39 +209,61 @@ class Decoder:
         route = self._routes.get((frame.can_id, frame.extended))
         if route is None:
             route = self._route(frame)
-            self._routes[frame.can_id, frame.extended] = route
+            if not frame.extended:  # at most 2048 standard identifiers: the cache is bounded
+                self._routes[frame.can_id, frame.extended] = route
         return route(frame, time)
 
     def json_line(self, frame: Frame, time: float = 0.0) -> str:
         """``json.dumps(decode(frame, time).to_json())``, fast for frames seen before.
 
         Logs are mostly repetition (heartbeats, periodic PDOs). Where a frame's meaning
-        depends on its bytes alone, the JSON after the time is kept and reused.
+        depends on its bytes alone, the JSON after the time is kept and reused, for as long as
+        that route's frames do repeat. PDOs write their line without building an Event.
         """
         key = (frame.can_id, frame.extended)
         keyed = self._keyed.get(key)
         cache_key: object = frame
-        if keyed is not None:  # a key state means the same after the same previous keys
-            node, shift, mask = keyed
-            cache_key = (frame, self._keys.get(node, 0))
-            body = self._json_bodies.get(cache_key)
-            if body is not None:
-                self._keys[node] = (int.from_bytes(frame.data, "little") >> shift) & mask
-                return f'{{"time":{time!r},{body}'
-        else:
-            body = self._json_bodies.get(frame)
-            if body is not None:
-                return f'{{"time":{time!r},{body}'
-        event = self.decode(frame, time)
-        line = _encode(event.to_json())
-        if (key in self._pure and event.kind is not Kind.BOOT_UP) or (
-                key in self._keyed and event.kind is Kind.PDO):
-            prefix = f'{{"time":{time!r},'
-            if line.startswith(prefix):
-                if len(self._json_bodies) >= _JSON_CACHE_SIZE:
-                    self._json_bodies.clear()
-                self._json_bodies[cache_key] = line[len(prefix):]
+        cached = key not in self._uncached
+        if cached:
+            if keyed is not None:  # a key state means the same after the same previous keys
+                node, shift, mask = keyed
+                cache_key = (frame, self._keys.get(node, 0))
+                body = self._json_bodies.get(cache_key)
+                if body is not None:
+                    self._keys[node] = (int.from_bytes(frame.data, "little") >> shift) & mask
+                    self._cache_stats[key][0] += 1
+                    return f'{{"time":{time!r},{body}'
+            else:
+                body = self._json_bodies.get(frame)
+                if body is not None:
+                    self._cache_stats[key][0] += 1
+                    return f'{{"time":{time!r},{body}'
+        fast = self._json_routes.get(key)
+        line = fast(frame, time) if fast is not None else None
+        kind = Kind.PDO
+        if line is None:
+            event = self.decode(frame, time)
+            line, kind = _encode(event.to_json()), event.kind
+        if cached and ((key in self._pure and kind is not Kind.BOOT_UP) or (
+                keyed is not None and kind is Kind.PDO)):
+            self._remember(key, cache_key, time, line)
         return line
+
+    def _remember(self, key: tuple[int, bool], cache_key: object, time: float, line: str
+                  ) -> None:
+        prefix = f'{{"time":{time!r},'
+        if not line.startswith(prefix):
+            return
+        stats = self._cache_stats.setdefault(key, [0, 0])
+        stats[1] += 1
+        if stats[1] >= _CACHE_TRIAL and stats[0] * 4 < stats[1] + stats[0]:
+            self._uncached.add(key)  # its frames rarely repeat: caching costs more than it saves
+            return
+        bodies = self._json_bodies
+        if len(bodies) >= _JSON_CACHE_SIZE:
+            for old in list(bodies)[: _JSON_CACHE_SIZE // 2]:  # dicts keep insertion order
+                del bodies[old]
+        bodies[cache_key] = line[len(prefix):]
 
     def decode_remote(self, can_id: int, extended: bool, dlc: int, time: float = 0.0) -> Event:
         """A remote (RTR) frame: on 700h + node it is node guarding (CiA 301 7.2.8.3.2.1)."""
@@ -204,10 +280,9 @@ class Decoder:
 
     def _route(self, frame: Frame) -> Callable[[Frame, float], Event]:
         key = (frame.can_id, frame.extended)
-        self._pure.add(key)  # every route below but SDO and the key state is pure
         if frame.extended:
-            self._pure.discard(key)  # J1939 decoding learns keypad addresses
-            return self._extended
+            return self._extended  # never cached: 2**29 identifiers would not be bounded
+        self._pure.add(key)  # every route below but SDO and the key state is pure
         can_id = frame.can_id
         if can_id == NMT:
             return self._nmt
@@ -227,6 +302,7 @@ class Decoder:
                         self._pure.discard(key)
                         keys = layout.signal("keys")
                         self._keyed[key] = (node, keys.start, keys.mask)
+                    self._json_routes[key] = self._pdo_json_route(layout, node, device.kind)
                     return self._pdo_route(layout, node, device.kind)
         return self._unknown
 
@@ -236,6 +312,9 @@ class Decoder:
             del self._routes[key]
             self._pure.discard(key)
             self._keyed.pop(key, None)
+            self._json_routes.pop(key, None)
+            self._cache_stats.pop(key, None)
+            self._uncached.discard(key)
         self._json_bodies.clear()
 
     def _who(self, node: int) -> str | None:
@@ -302,21 +381,64 @@ class Decoder:
 
         return route
 
-    def _key_state(self, node: int, values: dict[str, int]) -> tuple[str, dict[str, Any]]:
-        device = self.devices[node]
-        keys = values["keys"] & ((1 << device.face.keys) - 1)
+    def _pdo_json_route(self, layout: PdoLayout, node: int, device: str
+                        ) -> Callable[[Frame, float], str | None]:
+        """The PDO's JSON line written directly: the same text as ``to_json`` of its event
+        (tests/decode check both ways agree), without the Event and the dict in between.
+        None for what the event route handles (a short frame)."""
+        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
+        length, name = layout.length, layout.name
+        decode_values = layout.decode
+        signals = {s.name: (s.start, s.mask) for s in layout.signals}
+        fast = _PDO_JSON.get(name)
+        if fast is not None and not set(fast[0]) <= set(signals):
+            fast = None  # another model's PDO of that name: the Event route describes it
+        if fast is not None:  # the signals it reads, as (shift, mask), in its order
+            names, describe_json = fast
+            (s0, m0), (s1, m1), (s2, m2) = ([signals[n] for n in names] + [(0, 0)] * 3)[:3]
+        who = f"{device} {node:02X}h: "
+        head = ""  # the constant part between "time" and "data", made on the first frame
+        middle = (f'","kind":"pdo","node":{node},"device":{_encode_text(device)},"text":')
+        pdo = f',"pdo":{_encode_text(name)}'
+
+        def route(frame: Frame, time: float) -> str | None:
+            nonlocal head
+            data = frame.data
+            if len(data) < length:
+                return None
+            if not head:
+                head = f',"id":{frame.can_id},"extended":false,"data":"'
+            if fast is not None:
+                word = int.from_bytes(data, "little")
+                text, fields_json = describe_json(self, node, (word >> s0) & m0,
+                                                  (word >> s1) & m1, (word >> s2) & m2)
+                return (f'{{"time":{time!r}{head}{data.hex()}{middle}"{who}{text}"'
+                        f'{pdo},{fields_json}}}')  # the texts have no character to escape
+            text, fields = describe(self, node, decode_values(data))
+            rest = _encode_fields(fields)
+            return (f'{{"time":{time!r}{head}{data.hex()}{middle}{_encode_text(who + text)}'
+                    f'{pdo}{"," + rest[1:] if len(rest) > 2 else "}"}')
+
+        return route
+
+    def _key_masks(self, node: int, keys: int) -> tuple[int, int, int]:
+        """(pressed, released, held) masks of a key-state PDO, the keys remembered."""
+        keys &= (1 << self.devices[node].face.keys) - 1
         before = self._keys.get(node, 0)
         self._keys[node] = keys
-        pressed, released = numbers(keys & ~before), numbers(before & ~keys)
-        held = numbers(keys)
-        parts = []
-        if pressed:
-            parts.append(f"key {listing(pressed)} pressed")
-        if released:
-            parts.append(f"key {listing(released)} released")
-        text = "; ".join(parts) if parts else f"keys held: {listing(held)}"
-        return text, {"pressed": pressed, "released": released, "held": held,
-                      "tick": values.get("tick")}  # errata P8: frames of 2-4 bytes have none
+        return keys & ~before, before & ~keys, keys
+
+    def _key_state(self, node: int, values: dict[str, int]) -> tuple[str, dict[str, Any]]:
+        pressed, released, held = self._key_masks(node, values["keys"])
+        return _key_text(pressed, released, held), {
+            "pressed": numbers(pressed), "released": numbers(released), "held": numbers(held),
+            "tick": values.get("tick")}  # errata P8: frames of 2-4 bytes have none
+
+    def _key_state_json(self, node: int, keys: int, tick: int, _: int) -> tuple[str, str]:
+        pressed, released, held = self._key_masks(node, keys)
+        return _key_text(pressed, released, held), (
+            f'"pressed":{_mask_json(pressed)},"released":{_mask_json(released)},'
+            f'"held":{_mask_json(held)},"tick":{tick}')
 
     # -- SDO --------------------------------------------------------------------------------------
 
@@ -350,14 +472,14 @@ class Decoder:
             name = self._name(index, sub, entry)
             fields = {"index": index, "subindex": sub, "object": entry.name if entry else None}
             if ccs == 2:
-                self._transfers[node] = _Transfer(index, sub, entry, False)
+                self._transfers[node] = _Transfer(index, sub, entry, False, time)
                 return Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
             if ccs == 4:
                 self._transfers.pop(node, None)
                 code = int.from_bytes(data[4:8], "little")
                 return Event(time, frame, Kind.SDO_ABORT, f"SDO abort {name} by the client: "
                              f"{describe_abort(code)}", node, kind, {**fields, "code": code})
-            self._transfers[node] = _Transfer(index, sub, entry, True)
+            self._transfers[node] = _Transfer(index, sub, entry, True, time)
             if not command & 0x02:
                 return Event(time, frame, Kind.SDO_WRITE, f"SDO segmented write {name}", node,
                              kind, fields)
@@ -372,9 +494,11 @@ class Decoder:
         if ccs == 3:
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO read, next segment", node, kind)
         if ccs == 0:
-            transfer = self._transfers.get(node)
-            if transfer is not None:
-                transfer.buffer += data[1 : 8 - ((command >> 1) & 7)]
+            transfer = self._live_transfer(node, time)
+            segment = data[1 : 8 - ((command >> 1) & 7)]
+            if transfer is not None and not self._grow(node, transfer, segment):
+                return Event(time, frame, Kind.SDO_SEGMENT, f"SDO write segment: over "
+                             f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind)
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment", node, kind)
         return Event(time, frame, Kind.FRAME, f"SDO request {command:02X}h", node, kind)
 
@@ -383,7 +507,7 @@ class Decoder:
         data = frame.data
         command = data[0]
         kind = device.kind if device is not None else None
-        transfer = self._transfers.get(node)
+        transfer = self._live_transfer(node, time)
         if command == 0x80:
             self._transfers.pop(node, None)
             index, sub = data[1] | data[2] << 8, data[3]
@@ -412,7 +536,9 @@ class Decoder:
             return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: {size} bytes follow",
                          node, kind, {**fields, "size": size})
         if command >> 5 == 0 and not transfer.writing:
-            transfer.buffer += data[1 : 8 - ((command >> 1) & 7)]
+            if not self._grow(node, transfer, data[1 : 8 - ((command >> 1) & 7)]):
+                return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
+                             f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
             if command & 1:
                 self._transfers.pop(node, None)
                 return self._value(frame, time, node, kind, transfer, bytes(transfer.buffer),
@@ -423,6 +549,24 @@ class Decoder:
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment acknowledged", node,
                          kind, fields)
         return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+
+    def _live_transfer(self, node: int, time: float) -> _Transfer | None:
+        """The node's transfer in progress, unless it went silent (TRANSFER_IDLE_S)."""
+        transfer = self._transfers.get(node)
+        if transfer is not None:
+            if not 0 <= time - transfer.last <= TRANSFER_IDLE_S:
+                del self._transfers[node]
+                return None
+            transfer.last = time
+        return transfer
+
+    def _grow(self, node: int, transfer: _Transfer, segment: bytes) -> bool:
+        """Add a segment; False (and the transfer dropped) past TRANSFER_MAX_BYTES."""
+        if len(transfer.buffer) + len(segment) > TRANSFER_MAX_BYTES:
+            self._transfers.pop(node, None)
+            return False
+        transfer.buffer += segment
+        return True
 
     def _value(self, frame: Frame, time: float, node: int, kind: str | None,
                transfer: _Transfer, raw: bytes, name: str, fields: dict[str, Any]) -> Event:
@@ -520,14 +664,43 @@ def _generic_pdo(layout: PdoLayout
     return describe
 
 
+def _key_text(pressed: int, released: int, held: int) -> str:
+    if pressed and released:
+        return f"key {mask_listing(pressed)} pressed; key {mask_listing(released)} released"
+    if pressed:
+        return f"key {mask_listing(pressed)} pressed"
+    if released:
+        return f"key {mask_listing(released)} released"
+    return f"keys held: {mask_listing(held)}"
+
+
+def _led_text(verb: str, red: int, green: int, blue: int) -> str:
+    parts = [f"{colour} {mask_listing(mask)}" for colour, mask in
+             (("red", red), ("green", green), ("blue", blue)) if mask]
+    return f"{verb}: {'; '.join(parts) if parts else 'none'}"
+
+
 def _leds(verb: str) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
     def describe(decoder: Decoder, node: int, values: dict[str, int]
                  ) -> tuple[str, dict[str, Any]]:
-        lit = {colour: numbers(values[colour]) for colour in ("red", "green", "blue")}
-        parts = [f"{colour} {listing(keys)}" for colour, keys in lit.items() if keys]
-        return f"{verb}: {'; '.join(parts) if parts else 'none'}", lit
+        red, green, blue = values["red"], values["green"], values["blue"]
+        return (_led_text(verb, red, green, blue),
+                {"red": numbers(red), "green": numbers(green), "blue": numbers(blue)})
 
     return describe
+
+
+def _leds_json(verb: str) -> Callable[[Decoder, int, int, int, int], tuple[str, str]]:
+    def describe(decoder: Decoder, node: int, red: int, green: int, blue: int
+                 ) -> tuple[str, str]:
+        return (_led_text(verb, red, green, blue), f'"red":{_mask_json(red)},'
+                f'"green":{_mask_json(green)},"blue":{_mask_json(blue)}')
+
+    return describe
+
+
+def _outputs_text(off: int, high: int) -> str:
+    return f"outputs OFF: {mask_listing(off)}; HIGH: {mask_listing(high)}"
 
 
 _PDO_TEXT: dict[str, Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]] = {
@@ -537,10 +710,23 @@ _PDO_TEXT: dict[str, Callable[[Decoder, int, dict[str, int]], tuple[str, dict[st
     "indicator_brightness": lambda d, n, v: (f"indicator brightness {v['level']}/63",
                                              {"level": v["level"]}),
     "backlight_brightness": lambda d, n, v: _backlight(v),
-    "outputs": lambda d, n, v: (
-        f"outputs OFF: {listing(numbers(v['off']))}; HIGH: "
-        f"{listing(numbers(v['high'] & ~v['off']))}",  # KBX §17: OFF wins
+    "outputs": lambda d, n, v: (  # KBX §17: OFF wins
+        _outputs_text(v["off"], v["high"] & ~v["off"]),
         {"off": numbers(v["off"]), "high": numbers(v["high"] & ~v["off"])}),
-    "faults": lambda d, n, v: (f"outputs in FAULT: {listing(numbers(v['faults']))}",
+    "faults": lambda d, n, v: (f"outputs in FAULT: {mask_listing(v['faults'])}",
                                {"faults": numbers(v["faults"])}),
+}
+
+#: the same PDOs written straight to JSON (Decoder._pdo_json_route): the signals each reads,
+#: in order, and (text, the fields as JSON members); the texts are shared with _PDO_TEXT
+_PDO_JSON: dict[str, tuple[tuple[str, ...], Callable[..., tuple[str, str]]]] = {
+    "key_state": (("keys", "tick"), lambda d, n, keys, tick, _: d._key_state_json(n, keys, tick,
+                                                                                   0)),
+    "led_on": (("red", "green", "blue"), _leds_json("LEDs on")),
+    "led_blink": (("red", "green", "blue"), _leds_json("LEDs blink")),
+    "outputs": (("off", "high"), lambda d, n, off, high, _: (  # KBX §17: OFF wins
+        _outputs_text(off, high & ~off),
+        f'"off":{_mask_json(off)},"high":{_mask_json(high & ~off)}')),
+    "faults": (("faults",), lambda d, n, faults, _, __: (
+        f"outputs in FAULT: {mask_listing(faults)}", f'"faults":{_mask_json(faults)}')),
 }

@@ -258,7 +258,7 @@ class HostBus:
         if fast is not None and not frame.extended:
             fast(frame, now)
         if frame.extended or frame.can_id in self._handlers:
-            self.scheduler.call_soon(lambda: self._dispatch(frame, now))
+            self.scheduler.post(lambda: self._dispatch(frame, now))
 
     def _from_simulation(self, frame: Frame, now: float) -> None:
         fast = self._fast.get(frame.can_id)

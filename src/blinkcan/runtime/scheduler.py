@@ -33,6 +33,7 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 
 _STOP = object()
+_POSTED = object()
 _MAX_IDLE_WAIT = 0.5
 _WORKERS = 4  # blocking work (SDO off a handler) per scheduler: bounded, never one per call
 
@@ -140,6 +141,11 @@ class Scheduler(ABC):
     def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(when, None, callback))
 
+    def post(self, callback: Callable[[], object]) -> None:
+        """Run ``callback`` on the loop as soon as it can, after what was posted before
+        (from any thread; cheaper than a timer: frames from the reader come this way)."""
+        self.call_soon(callback)
+
     def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(self.clock() + delay, None, callback))
 
@@ -235,6 +241,9 @@ class RealTimeScheduler(Scheduler):
         self._inbox.put(timer)
         return timer
 
+    def post(self, callback: Callable[[], object]) -> None:
+        self._inbox.put((_POSTED, callback))
+
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         if self._thread is None or self.in_loop:
             return action()
@@ -303,6 +312,9 @@ class RealTimeScheduler(Scheduler):
             self._heap.push(item)
             return
         action, future = item
+        if action is _POSTED:
+            guarded(future)
+            return
         try:
             future.set_result(action())
         except BaseException as error:

@@ -1,0 +1,95 @@
+"""The decoder stays bounded: caches, routes and SDO transfers never grow without limit, and
+the fast JSON writer says exactly what the Event says."""
+
+from __future__ import annotations
+
+import json
+import random
+import tracemalloc
+from collections.abc import Callable
+
+from blinkcan.decode import Decoder, Kind
+from blinkcan.decode.decoder import TRANSFER_IDLE_S, TRANSFER_MAX_BYTES
+from blinkcan.devices.registry import describe_device
+from blinkcan.protocol import Frame
+from tests.conftest import frame
+
+
+def _growth(feed: Callable[[], None]) -> int:
+    """Bytes still allocated after ``feed`` ran (traced by tracemalloc)."""
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        feed()
+        return tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+
+
+def test_distinct_extended_identifiers_do_not_grow_the_decoder() -> None:
+    decoder = Decoder()
+    decoder.json_line(Frame(0x18FEF100, bytes(8), True))
+
+    def feed() -> None:
+        for ident in range(0x100000, 0x100000 + 20_000):
+            decoder.json_line(Frame(ident, bytes(8), True), 1.0)
+            decoder.decode(Frame(ident + 0x200000, bytes(8), True), 1.0)
+
+    assert _growth(feed) < 256 * 1024  # main kept a route per identifier: megabytes
+
+
+def _random_pdos(count: int, seed: int = 3) -> list[Frame]:
+    chance = random.Random(seed)
+    layouts = [(layout, d.default_node_id) for d in (describe_device("keypad"),
+                                                      describe_device("keybox"))
+               for layout in d.pdos]
+    found = []
+    for _ in range(count):
+        layout, node = chance.choice(layouts)
+        values = {s.name: chance.getrandbits(s.length) for s in layout.signals}
+        found.append(Frame(layout.cob_id(node), layout.encode(values)))
+    return found
+
+
+def test_the_json_cache_is_bounded_on_traffic_that_never_repeats() -> None:
+    decoder = Decoder({0x15: "keypad", 0x0C: "keybox"})
+    pdos = _random_pdos(100_000)
+
+    def feed() -> None:
+        for n, pdo in enumerate(pdos):
+            decoder.json_line(pdo, n * 0.001)
+
+    assert _growth(feed) < 8 * 1024 * 1024  # main cached 100k lines: tens of megabytes
+
+
+def test_fast_json_lines_are_the_events_json_exactly() -> None:
+    fast = Decoder({0x15: "keypad", 0x0C: "keybox"})
+    slow = Decoder({0x15: "keypad", 0x0C: "keybox"})
+    pdos = [*_random_pdos(3_000, seed=5), frame("215 01"), frame("195 08 00")]  # short ones
+    for n, pdo in enumerate(pdos + pdos):  # twice: the second time from the cache
+        time = 1_700_000_000 + n / 1000
+        line = fast.json_line(pdo, time)
+        assert line == json.dumps(slow.decode(pdo, time).to_json(), separators=(",", ":"),
+                                  ensure_ascii=False)
+
+
+def test_an_unterminated_segmented_upload_is_dropped_after_silence() -> None:
+    decoder = Decoder({0x15: "keypad"})
+    opened = [decoder.decode(frame(t), 0.0) for t in (
+        "615 40 08 10 00 00 00 00 00", "595 41 08 10 00 0B 00 00 00",
+        "615 60 00 00 00 00 00 00 00", "595 00 42 6C 69 6E 6B 4D 61")]
+    assert opened[-1].kind is Kind.SDO_SEGMENT
+    # the client gave up; much later an unrelated last segment is not this transfer's end
+    late = decoder.decode(frame("595 0B 72 69 6E 65 00 00 00"), TRANSFER_IDLE_S + 1.0)
+    assert late.kind is Kind.FRAME
+    assert "SDO value" not in str(late)
+
+
+def test_an_endless_segmented_transfer_is_no_longer_followed_past_the_limit() -> None:
+    decoder = Decoder({0x15: "keypad"})
+    decoder.decode(frame("615 40 08 10 00 00 00 00 00"), 0.0)
+    decoder.decode(frame("595 41 08 10 00 00 00 00 00"), 0.0)
+    events = [decoder.decode(frame(f"595 {(n % 2) << 4:02X} 41 41 41 41 41 41 41"), n * 0.001)
+              for n in range(TRANSFER_MAX_BYTES // 7 + 10)]
+    assert "no longer followed" in str(events[TRANSFER_MAX_BYTES // 7])
+    assert events[-1].kind is Kind.FRAME  # the transfer is gone: nothing accumulates
