@@ -75,6 +75,7 @@ def assert_one_line_error(result: Result, message: str) -> None:
     (["nmt", "start", "0x80"], "node id 0x80 outside"),
     (["keybox", "pwm", "12", "55%"], "not a step of 10 %"),
     (["scan", "--bus-kwargs", "=1"], "'=1' is not NAME=VALUE"),
+    (["keypad", "led", "3", "red", "--node-id", "0x80"], "node id 0x80 outside"),
     (["scan", "--listen", "-1"], "--listen"),
     (["monitor", "--rows", "0"], "--rows"),
     (["monitor", "--duration", "-1"], "--duration"),
@@ -117,6 +118,9 @@ def test_bus_options_work_before_and_after_the_subcommand(bench: Bench) -> None:
     wait_until(lambda: emulator.snapshot(keypad)["keys"][4]["colour"] == "blue")
     # the one nearest the command wins
     run("-i", "virtual", "-c", "nobody-listens", "keybox", "on", "3", *bus)
+    # the node id too may follow the command
+    assert run("keybox", "--node-id", "0x33", "on", "2", "--node-id", "0x0C", *bus).strip() == (
+        "keybox 0Ch: output 2 HIGH")
 
 
 def test_bus_kwargs_as_python_can_takes_them() -> None:

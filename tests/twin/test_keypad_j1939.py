@@ -500,3 +500,22 @@ def test_the_j1939_keypad_snapshot_is_json(bench: Bench) -> None:
         "source_address": 0x21, "identifier": 0x21, "destination_address": 0xFF,
         "address_claim": "off", "name": NAME, "heartbeat_ms": 0, "periodic_key_state_ms": 0,
         "event_key_state": True, "led_acknowledge": False, "led_management": "single"}
+
+
+def test_two_keypads_do_not_take_each_others_messages_for_commands() -> None:
+    """J-2 accepts commands to FFh; the FFh padding (§4) keeps messages from being commands."""
+    first, second = KeypadTwin(protocol="j1939"), KeypadTwin(protocol="j1939")
+    for twin in (first, second):
+        twin.power_on(0.0)
+        twin.advance(10.0)
+    second.receive(frame("18EF2100 04 1B 70 22 01 FF FF FF"), 10.0)
+    revision = first.receive(frame("18EFFF00 04 1B 2A FF FF FF FF FF"), 10.0)
+    assert second.receive(revision[0], 10.0) == []  # a reply is no request
+    key = first.press(5, 10.0)[0]  # 04 1B 01 05 01 21 FF FF
+    assert second.receive(key, 10.0) == []
+    assert second.snapshot()["keys"][4]["colour"] == "off"
+    identifier_01 = KeypadTwin(protocol="j1939")
+    identifier_01.power_on(0.0)
+    identifier_01.receive(frame("18EF2100 04 1B 70 23 01 FF FF FF"), 0.0)
+    second.receive(identifier_01.press(5, 10.0)[0], 10.0)  # 01 05 01 01 FF: state on
+    assert second.snapshot()["keys"][4]["colour"] == "off"

@@ -148,6 +148,11 @@ def test_bad_requests_are_refused_and_change_nothing(bench: Bench) -> None:
                  '{"node": 21, "action": "format_disk"}',
                  'not json'):
         status = page.evaluate(  # type: ignore[attr-defined]
-            "async (body) => (await fetch('/api/action', {method: 'POST', body})).status", body)
+            "async (body) => (await fetch('/api/action', {method: 'POST', body,"
+            " headers: {'Content-Type': 'application/json'}})).status", body)
         assert status == 400, body
+    plain = page.evaluate(  # type: ignore[attr-defined]  # what an HTML form can send
+        "async () => (await fetch('/api/action', {method: 'POST',"
+        " body: '{\"node\": 12, \"action\": \"blow_fuse\", \"pin\": 4}'})).status")
+    assert plain == 415
     assert bench.emulator.snapshot(bench.keybox) == before

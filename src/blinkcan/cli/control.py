@@ -64,6 +64,16 @@ def _confirm(what: str, yes: bool) -> None:
         raise click.Abort()
 
 
+def _set_node_id(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
+    if value is not None:
+        ctx.obj = (ctx.obj[0], value)
+
+
+#: ``--node-id`` after the command too (``blinkcan keypad info --node-id 0x16``)
+node_id_option = click.option("--node-id", type=NODE_ID, default=None, expose_value=False,
+                              callback=_set_node_id, help="The device's node id.")
+
+
 def _group(kind: str, title: str) -> click.Group:
     default = model(kind).default_node_id
 
@@ -85,6 +95,7 @@ keybox = _group("keybox", "a Keybox")
 for group in (keypad, keybox):
     @group.command("info")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def info(target: Target) -> None:
         """Identity: name, model, versions (un-reversed), serial, vendor."""
@@ -94,6 +105,7 @@ for group in (keypad, keybox):
     @group.command("heartbeat")
     @click.argument("milliseconds", type=click.IntRange(0, 0xFFFF))
     @bus_options
+    @node_id_option
     @click.pass_obj
     def heartbeat(target: Target, milliseconds: int) -> None:
         """Producer heartbeat period in ms (0 = off)."""
@@ -105,6 +117,7 @@ for group in (keypad, keybox):
     @click.argument("new_id", type=NODE_ID)
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def set_node_id(target: Target, new_id: int, yes: bool) -> None:
         """Store a new node id (applies at the next reset; generation 2 keypads: at once)."""
@@ -117,6 +130,7 @@ for group in (keypad, keybox):
     @click.argument("bit_rate", metavar="BITRATE", type=int)
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def set_baud(target: Target, bit_rate: int, yes: bool) -> None:
         """Store a bit rate in bit/s, with this model's own code (applies at the next reset)."""
@@ -129,6 +143,7 @@ for group in (keypad, keybox):
     @group.command("restore-defaults")
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
+    @node_id_option
     @click.pass_obj
     def restore_defaults(target: Target, yes: bool) -> None:
         """Every stored setting back to factory values (1011h), applied at the next reset."""
@@ -154,6 +169,7 @@ def _blink_words(colour: str, blink: str | None) -> str:
               help="Blink: alone, COLOUR blinks on and off; with another colour, the LED "
                    "alternates between the two.")
 @bus_options
+@node_id_option
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     """Light KEY (1-12) in COLOUR (off, red, green, blue, amber, cyan, magenta, white). Starts
@@ -175,6 +191,7 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
 @click.option("--colour", default=None, help="Backlight colour (red ... yellow/green).")
 @click.option("--level", type=int, default=None, help="0-63 (0 = off).")
 @bus_options
+@node_id_option
 @click.pass_obj
 def backlight(target: Target, colour: str | None, level: int | None) -> None:
     """Backlight colour and level."""
@@ -191,6 +208,7 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
 @keypad.command("brightness")
 @click.argument("level", type=int)
 @bus_options
+@node_id_option
 @click.pass_obj
 def brightness(target: Target, level: int) -> None:
     """Indicator LED brightness 0-63."""
@@ -204,6 +222,7 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
     @keybox.command(name, help=doc)
     @click.argument("pin", type=int)
     @bus_options
+    @node_id_option
     @click.pass_obj
     def command(target: Target, pin: int) -> None:
         with _device(target) as device:
@@ -220,6 +239,7 @@ _pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} R
 @click.argument("pins")
 @click.argument("duty")
 @bus_options
+@node_id_option
 @click.pass_obj
 def pwm(target: Target, pins: str, duty: str) -> None:
     """PWM on PINS (12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps of 10.
@@ -246,6 +266,7 @@ def pwm(target: Target, pins: str, duty: str) -> None:
 
 @keybox.command("states")
 @bus_options
+@node_id_option
 @click.pass_obj
 def states(target: Target) -> None:
     """Every output's state, and the input levels."""
@@ -258,6 +279,7 @@ def states(target: Target) -> None:
 
 @keybox.command("faults")
 @bus_options
+@node_id_option
 @click.pass_obj
 def faults(target: Target) -> None:
     """The outputs in FAULT."""

@@ -90,8 +90,15 @@ class J1939Command:
         return data + bytes((UNUSED,)) * (8 - len(data))
 
     def decode(self, data: bytes) -> dict[str, int] | None:
-        """The fields of a command frame, or None if it is malformed (J-2: no change)."""
-        if len(data) != 8 or data[:2] != HEADER or data[2] != self.code:
+        """The fields of a command frame, or None if it is malformed (J-2: no change).
+
+        The unused bytes must be FFh (§4). That rule is also what keeps one keypad's messages,
+        sent to all (FFh), from being taken for commands by another: a software revision reply
+        (``2A`` + ASCII) is no request, a key message (``01``, FFh where the LED command has its
+        secondary colour) no LED command (blinkcan decision, J-2)."""
+        used = 3 + len(self.fields)
+        if len(data) != 8 or data[:2] != HEADER or data[2] != self.code or \
+                any(byte != UNUSED for byte in data[used:]):
             return None
         decoded = {}
         for offset, field in enumerate(self.fields, start=3):
@@ -119,7 +126,7 @@ COMMANDS: tuple[J1939Command, ...] = (
         J1939Field("key", "Key", _KEY),
         J1939Field("colour", "Colour", _COLOUR),
         J1939Field("state", "State", values((0, 3))),
-        J1939Field("secondary", "Secondary colour", _COLOUR, keep=UNUSED),
+        J1939Field("secondary", "Secondary colour", _COLOUR),
     ), Persistence.NONE),
     J1939Command(0x02, "led_brightness", "LED brightness", "§8",
                  (_level("led_brightness", "LED brightness", LEVEL_MAX),), Persistence.TEMPORARY),

@@ -19,6 +19,7 @@ ENTRY_POINT_GROUP = "blinkcan.models"
 BUILTIN_MODELS: tuple[str, ...] = (
     "blinkcan.devices.keypad:PKP_2600_SI",
     "blinkcan.devices.keybox:KEYBOX",
+    "blinkcan.devices.pkp3500:PKP_3500_MT",
 )
 
 

@@ -3,6 +3,11 @@
 The interop tests load it into a ``RemoteNode``; the EDS writer exports it with ``export_od``.
 Only CiA 306 keys go in: no StorageLocation and no Unit (python-canopen's own keys, which
 CanFestival's objdictgen refuses), and every [DeviceInfo] key CiA 306 lists.
+
+A PDO communication record whose mapping record the device lacks (the PKP-3500-MT's 1803h has
+no 1A03h, MT M50) gets one stated with no mapped objects: EDS readers, python-canopen's
+``RemoteNode`` among them, pair every 14xxh/18xxh with its 16xxh/1Axxh and refuse the file
+otherwise. The device still aborts a read of it; [Comments] says so.
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ from typing import Any
 import canopen.objectdictionary as cod
 
 from blinkcan.devices.model import DeviceDescription
-from blinkcan.devices.objects import NodeIdRelative, ObjectEntry, ObjectKind
+from blinkcan.devices.objects import DataType, NodeIdRelative, ObjectEntry, ObjectKind
 
 
 def _variable(entry: ObjectEntry, name: str, node_id: int, stated: int | None = None) -> Any:
@@ -40,6 +45,14 @@ def _mapping_counts(description: DeviceDescription) -> tuple[int, int]:
     indexes = {obj.index for obj in description.table.objects}
     return (sum(0x1400 <= i <= 0x15FF for i in indexes),
             sum(0x1800 <= i <= 0x19FF for i in indexes))
+
+
+def missing_mappings(description: DeviceDescription) -> list[int]:
+    """Mapping records (16xxh, 1Axxh) of communication records the table has without them."""
+    table = description.table
+    return [obj.index + 0x200 for obj in table.objects
+            if (0x1400 <= obj.index <= 0x15FF or 0x1800 <= obj.index <= 0x19FF)
+            and not table.has_index(obj.index + 0x200)]
 
 
 def _device_information(od: Any, description: DeviceDescription) -> None:
@@ -81,4 +94,10 @@ def object_dictionary(description: DeviceDescription, node_id: int | None = None
             container.add_member(_variable(entry, entry.label, od.node_id,
                                            stated.get(entry.name)))
         od.add_object(container)
+    for index in missing_mappings(description):
+        record: Any = cod.ODRecord("PDO mapping parameter (not in the device)", index)
+        count: Any = cod.ODVariable("Number of mapped objects", index, 0)
+        count.data_type, count.access_type, count.default = int(DataType.UNSIGNED8), "ro", 0
+        record.add_member(count)
+        od.add_object(record)
     return od

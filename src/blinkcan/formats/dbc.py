@@ -23,9 +23,12 @@ _STATES = {NmtState.BOOT_UP: "boot_up", NmtState.STOPPED: "stopped",
 
 
 def _signals(signal: PdoSignal, receiver: list[str]) -> list[Signal]:
-    if signal.item is None:
+    if signal.item is None:  # a value, scaled to its unit where the layout gives one
+        conversion = cdb.conversion.BaseConversion.factory(
+            scale=signal.scale, offset=0, is_float=False)
         return [Signal(signal.name, signal.start, signal.length, byte_order="little_endian",
-                       is_signed=False, comment=signal.label, receivers=receiver)]
+                       is_signed=False, conversion=conversion, unit=signal.unit or None,
+                       comment=signal.label, receivers=receiver)]
     return [Signal(f"{signal.name}_{i + 1}", signal.start + i, 1, byte_order="little_endian",
                    is_signed=False, comment=f"{signal.label}: {signal.item} {i + 1}",
                    receivers=receiver)

@@ -20,7 +20,7 @@ from canopen.objectdictionary import eds as canopen_eds
 
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.formats.atomic import write_atomically
-from blinkcan.formats.canopen_od import object_dictionary
+from blinkcan.formats.canopen_od import missing_mappings, object_dictionary
 from blinkcan.formats.shipped import shipped_eds
 
 _PDO_MAPPING = re.compile(r"^PDOMapping=0x([01])$", re.MULTILINE)
@@ -37,6 +37,9 @@ def _comments(description: DeviceDescription) -> str:
         entry = description.table[name]
         lines.append(f"{entry.index:04X}sub{entry.subindex:X} states {stated:#010x}, the layout"
                      f" of the frame the device acts on; it reads back {entry.default:#010x}.")
+    for index in missing_mappings(description):
+        lines.append(f"{index:04X} is not in the device (a read aborts); stated with no mapped"
+                     f" objects because EDS readers expect one beside {index - 0x200:04X}.")
     return "\n".join(lines)
 
 

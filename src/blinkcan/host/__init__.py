@@ -10,6 +10,7 @@ from blinkcan.host.device import (
     NoDeviceError,
     WrongDeviceError,
 )
+from blinkcan.host.j1939_keypad import FoundJ1939, scan_j1939
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.host.scan import Found, scan
@@ -21,6 +22,7 @@ __all__ = [
     "Cycle",
     "FaultEvent",
     "Found",
+    "FoundJ1939",
     "HealthEvent",
     "HostBus",
     "Identity",
@@ -37,4 +39,5 @@ __all__ = [
     "WrongDeviceError",
     "async_scan",
     "scan",
+    "scan_j1939",
 ]

@@ -6,6 +6,8 @@ reboots it forgets its LEDs (errata.md, field reports), and generation 2 switche
 its watchdog trips (rev 1.5 §26): the driver starts it again and re-sends the whole picture as
 it is when it is sent (the backlight colour goes by SDO, serialised with the application's own
 backlight commands, so a restore never writes a colour the application has since changed).
+In J1939 mode (``protocol="j1939"``, or after :meth:`Keypad.switch_to_j1939`) the same calls
+go through :class:`~blinkcan.host.j1939_keypad.J1939KeypadLink`.
 """
 
 from __future__ import annotations
@@ -27,11 +29,14 @@ from blinkcan.devices.keypad import (
     SHOW_OFF,
     describe_keypad,
 )
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
+from blinkcan.host.j1939_keypad import J1939KeypadLink, look_of
 from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
@@ -97,13 +102,17 @@ class Keypad(Device):
     ``long_press``: seconds a key is held before a "long press" event. ``restore``: re-send the
     LED picture after a boot-up or a watchdog trip. ``verify``: confirm that a PKP-2600-SI
     answers at ``node_id`` first (False only for a keypad that cannot answer SDO).
+    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md);
+    it answers no SDO, so nothing is confirmed then.
     """
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
                  long_press: float = 0.8, restore: bool = True, generation: str | None = None,
                  watchdog: float | None = None, host_node_id: int = 0x7F,
-                 sdo_timeout: float = 0.5, verify: bool = True, model: str | None = None
-                 ) -> None:
+                 sdo_timeout: float = 0.5, verify: bool = True, model: str | None = None,
+                 protocol: str = "canopen", address: int = DEFAULT_ADDRESS) -> None:
+        if protocol not in ("canopen", "j1939"):
+            raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
@@ -123,10 +132,15 @@ class Keypad(Device):
         self._backlight_colour: int | None = None
         key_pdo = self.description.pdo("key_state")
         self._unsubscribe.append(self.host.subscribe(key_pdo.cob_id(node_id), self._on_keys))
-        self._confirm_or_close(verify)
+        #: the J1939 side while the keypad is in J1939 mode, else None
+        self.j1939: J1939KeypadLink | None = None
+        if protocol == "j1939":
+            self._use_j1939(address)
+        else:
+            self._confirm_or_close(verify)
         if watchdog is not None:
             self.watch_host(watchdog)
-        if start:
+        if start and self.j1939 is None:
             self.start()
 
     # -- firmware generation --------------------------------------------------------------------
@@ -186,7 +200,12 @@ class Keypad(Device):
         if len(frame.data) < layout.min_length:  # errata P8: accept DLC >= 2
             return
         mask = layout.decode(frame.data)["keys"] & ((1 << self.description.face.keys) - 1)
-        pressed = frozenset(item_numbers(mask))
+        self._keys_now(frozenset(item_numbers(mask)), now)
+
+    def _on_j1939_key(self, key: int, pressed: bool, now: float) -> None:
+        self._keys_now(self.pressed | {key} if pressed else self.pressed - {key}, now)
+
+    def _keys_now(self, pressed: frozenset[int], now: float) -> None:
         before, self.pressed = self.pressed, pressed
         for key in sorted(pressed - before):
             self.keys.emit(KeyEvent(key, PRESS, now))
@@ -258,6 +277,10 @@ class Keypad(Device):
     def _flush(self, force: bool = False) -> None:
         if self._batching:
             return
+        if self.j1939 is not None:
+            self.j1939.show({key: look_of(self._steady.get(key, 0), self._blink.get(key, 0))
+                             for key in range(1, self.description.face.keys + 1)}, force)
+            return
         on, blink = self._pdo_frame("led_on", _masks(self._steady)), \
             self._pdo_frame("led_blink", _masks(self._blink))
         sent = self._sent
@@ -278,6 +301,9 @@ class Keypad(Device):
         """Indicator LED brightness 0..63 (PKP §13; 0 is the minimum, not off)."""
         check_range("brightness", level, 0, LEVEL_MAX)
         self._indicator = level
+        if self.j1939 is not None:
+            self.j1939.send("led_brightness", level)
+            return
         self.host.send(self._pdo_frame("indicator_brightness", {"level": level}))
 
     def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
@@ -291,7 +317,10 @@ class Keypad(Device):
                 self._backlight_colour = int(code)
             if level is not None:
                 self._backlight_level = level
-                self.host.send(self._backlight_frame(level))
+                if self.j1939 is not None:
+                    self.j1939.send("backlight_level", level)
+                else:
+                    self.host.send(self._backlight_frame(level))
 
     def _restore_backlight(self) -> None:
         """The backlight as it is when this runs (after any backlight command in flight)."""
@@ -334,15 +363,52 @@ class Keypad(Device):
         """Send the key state every ``period`` s as well as on change; 0 = only on change."""
         self.write("tpdo1_event_timer", round(period * 1000))
 
-    def switch_to_j1939(self, *, confirm: bool = False) -> None:
-        """The keypad leaves CANopen (PKP §44); :meth:`switch_to_canopen` brings it back."""
+    def write(self, name: str, value: Value) -> None:
+        """A setting by its CANopen name; in J1939 mode sent as the J1939 command for it."""
+        if self.j1939 is None:
+            super().write(name, value)
+            return
+        self.check(name, value)
+        self.j1939.write(name, int(value))
+
+    @property
+    def protocol(self) -> str:
+        return "canopen" if self.j1939 is None else "j1939"
+
+    def switch_to_j1939(self, *, confirm: bool = False, address: int = DEFAULT_ADDRESS) -> None:
+        """The keypad leaves CANopen (PKP §44) and restarts in J1939 mode at ``address`` (21h
+        unless a J1939 source address was stored before, J-1); this driver goes on over J1939
+        and sends the LED picture again. :meth:`switch_to_canopen` brings both back."""
         if not confirm:
             raise ValueError("the keypad will stop speaking CANopen: pass confirm=True")
         self.write("can_protocol", 1)
+        self._use_j1939(address)
+        if self.restore:
+            self._restore_j1939()
 
     def switch_to_canopen(self) -> None:
-        """The documented way back from J1939 (PKP §44), to CANopen factory settings."""
-        self.host.send(J1939_RETURN)
+        """The documented way back from J1939 (§27, PKP §44), to CANopen factory settings; the
+        keypad's boot-up then restarts it and the driver re-sends the picture over CANopen."""
+        if self.j1939 is None:
+            self.host.send(J1939_RETURN)
+            return
+        self.j1939.send("switch_to_canopen", 0)
+        self.j1939.close()
+        self.j1939 = None
+        self._sent = None
+
+    def _use_j1939(self, address: int) -> None:
+        self.j1939 = J1939KeypadLink(self.host, address, self._on_j1939_key)
+        self._unsubscribe.append(self.j1939.close)
+
+    def _restore_j1939(self) -> None:
+        self._flush(force=True)
+        if self._indicator is not None:
+            self.set_brightness(self._indicator)
+        if self._backlight_colour is not None or self._backlight_level is not None:
+            colour = self._backlight_colour
+            self.set_backlight(BacklightColour(colour).label if colour else None,
+                               self._backlight_level)
 
     # -- recovery ---------------------------------------------------------------------------------
 

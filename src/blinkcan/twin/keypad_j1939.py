@@ -7,7 +7,9 @@ same LED picture, blink model, startup show and DEMO mode as CANopen mode (J-4: 
 Decisions beyond J-1..J-7 (blinkcan's, where the manual is silent):
 - Every message from the keypad (key states, heartbeat, software revision, LED acknowledge) goes
   to the destination address of 6Eh (default FFh): the manual prints them all on ``18EFFF21h``.
-- A command must be 8 bytes with the ``04 1B`` header; the FFh padding is not checked.
+- A command must be 8 bytes with the ``04 1B`` header and FFh in its unused bytes (§4); so a
+  keypad never takes another keypad's messages to all (FFh) for commands
+  (``J1939Command.decode``).
 - A multiple-LED frame sets the colour-1 or colour-2 nibbles of all 12 LEDs; each LED shows the
   pair it holds (§7b). A single-LED command clears that LED's nibbles.
 - With address claim (74h) off the keypad takes no part in address claiming; with it on, a
@@ -228,7 +230,7 @@ class J1939Keypad:
     def _single_led(self, command: J1939Command, fields: dict[str, int],
                     now: float) -> list[Frame]:
         key, state = fields["key"], fields["state"]
-        secondary = fields["secondary"] if fields["secondary"] <= 9 else 0
+        secondary = fields["secondary"]
         for nibbles in self._nibbles:
             nibbles[key - 1] = 0
         self._show_look(key, LedLook(LedState(state), fields["colour"], secondary))
@@ -396,6 +398,9 @@ class J1939Keypad:
             "startup_show": show,
             "demo": self._demo.describe() if self._demo is not None else None,
             "leds": dict(self._words),
+            # what the host last commanded, apart from what a show or DEMO mode displays
+            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
+                          for key in range(1, _KEYS + 1)],
             "j1939": {
                 "source_address": self.address,
                 "identifier": self.settings["identifier"],

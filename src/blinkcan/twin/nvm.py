@@ -114,12 +114,15 @@ class JsonFileNvm:
             return stream
         try:
             fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        except BlockingIOError:
             stream.seek(0)
             holder = stream.read().strip() or "unknown"
             stream.close()
             raise NvmError(f"NVM file {self.path} is in use by another twin (process "
                            f"{holder}); close that one first or use another file") from None
+        except OSError as error:  # a file system without locks: refused, not risked
+            stream.close()
+            raise NvmError(f"cannot lock NVM file {self.path}: {error.strerror}") from error
         stream.seek(0)
         stream.truncate()
         stream.write(f"{os.getpid()}\n")

@@ -14,12 +14,13 @@ import asyncio
 import json
 import time
 from collections import deque
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, Collection
 from dataclasses import asdict
 from importlib import resources
 from typing import Any
 
 from starlette.applications import Starlette
+from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Mount, Route
@@ -31,6 +32,7 @@ from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.web.guard import REQUEST_TIMEOUT_S, BodyError, Guard, json_body
 
 MAX_UPDATES_PER_S = 30
 FRAMES_KEPT = 20
@@ -143,7 +145,10 @@ class Panel:
         self.emulator.run(lambda now: perform(twin, value, now))
 
 
-def create_app(emulator: Emulator) -> Starlette:
+def create_app(emulator: Emulator, hosts: Collection[str] | None = ("127.0.0.1",),
+               request_timeout: float = REQUEST_TIMEOUT_S) -> Starlette:
+    """The panel's web app. ``hosts``: the Host names it answers to (None: any, for a wildcard
+    address; see web/guard.py); ``request_timeout``: seconds a request body may take."""
     panel = Panel(emulator)
     static = resources.files("blinkcan.web") / "static"
 
@@ -169,9 +174,10 @@ def create_app(emulator: Emulator) -> Starlette:
 
     async def action(request: Request) -> Response:
         try:
-            body = await request.json()
-        except ValueError:
-            return JSONResponse({"error": "the body is not JSON"}, status_code=400)
+            body = await json_body(request, request_timeout)
+        except BodyError as error:  # an unread or slow body: do not wait for more of it
+            return JSONResponse({"error": str(error)}, status_code=error.status,
+                                headers={"Connection": "close"})
         try:
             await asyncio.to_thread(panel.act, body)
         except (ValueError, TypeError) as error:
@@ -184,7 +190,7 @@ def create_app(emulator: Emulator) -> Starlette:
         Route("/api/events", events),
         Route("/api/action", action, methods=["POST"]),
         Mount("/static", StaticFiles(directory=str(static)), name="static"),
-    ])
+    ], middleware=[Middleware(Guard, hosts=hosts)])
 
 
 __all__ = ["ACTIONS", "KeyboxTwin", "Panel", "create_app"]

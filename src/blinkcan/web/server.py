@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 
@@ -9,6 +10,12 @@ import uvicorn
 
 from blinkcan.runtime import Emulator
 from blinkcan.web.app import create_app
+from blinkcan.web.guard import (
+    REQUEST_TIMEOUT_S,
+    HeadTimeoutProtocol,
+    allowed_hosts,
+    exposure_warning,
+)
 
 DEFAULT_ADDRESS = "127.0.0.1:8080"
 
@@ -26,11 +33,17 @@ def parse_address(text: str) -> tuple[str, int]:
 
 
 class PanelServer:
-    """``with PanelServer(emulator, "127.0.0.1", 8080) as server: print(server.url)``."""
+    """``with PanelServer(emulator, "127.0.0.1", 8080) as server: print(server.url)``.
 
-    def __init__(self, emulator: Emulator, host: str = "127.0.0.1", port: int = 8080) -> None:
-        config = uvicorn.Config(create_app(emulator), host=host, port=port, log_level="warning",
-                                lifespan="off")
+    It answers only to its own address (web/guard.py); bound elsewhere than loopback it logs a
+    warning (:attr:`warning`) that anyone on the network can reach it."""
+
+    def __init__(self, emulator: Emulator, host: str = "127.0.0.1", port: int = 8080,
+                 request_timeout: float = REQUEST_TIMEOUT_S) -> None:
+        app = create_app(emulator, allowed_hosts(host), request_timeout)
+        config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
+                                http=HeadTimeoutProtocol.with_timeout(request_timeout))
+        self.warning = exposure_warning(host)
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._server.run, name="blinkcan-panel",
                                         daemon=True)
@@ -42,6 +55,8 @@ class PanelServer:
         return f"http://{self.host}:{self.port}/"
 
     def start(self) -> PanelServer:
+        if self.warning is not None:
+            logging.getLogger(__name__).warning(self.warning)
         self._thread.start()
         deadline = time.monotonic() + 10
         while not self._server.started:

@@ -1,0 +1,192 @@
+"""The PKP-3500-MT driver: everything :class:`Keypad` does (keys, key-LEDs, backlight,
+configuration) on this model's description, plus its encoders, ring LEDs and inputs.
+
+Built as ``Keypad(bus, 0x15, model="pkp-3500-mt")``, ``Keypad.connect(bus, 0x15)`` (which reads
+100Bh) or directly. § numbers are the PKP-3500-MT manual's (MT), M-numbers its decisions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import can
+
+from blinkcan.devices.keypad import LEVEL_MAX
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.pkp3500 import GENERATION, MODEL, describe_pkp3500
+from blinkcan.host.bus import HostBus
+from blinkcan.host.device import Device
+from blinkcan.host.events import EventSource
+from blinkcan.host.keypad import Keypad
+from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_mask, item_numbers
+
+
+@dataclass(frozen=True)
+class EncoderEvent:
+    """An encoder PDO (MT §12/§13): ``ticks`` moved since the previous one (> 0 clockwise,
+    M37), the tick ``counter`` and the ``top`` it is clamped at (0: it wraps, M34)."""
+
+    encoder: int
+    ticks: int
+    counter: int
+    top: int
+    time: float
+
+    @property
+    def direction(self) -> str:
+        return "clockwise" if self.ticks > 0 else "counterclockwise" if self.ticks < 0 else "none"
+
+
+class Pkp3500Keypad(Keypad):
+    """Drive a PKP-3500-MT at ``node_id`` on ``bus``. Options as :class:`Keypad`."""
+
+    def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, model: str = MODEL,
+                 **options: Any) -> None:
+        if model != MODEL:
+            raise ValueError(f"this driver runs model {MODEL!r}, not {model!r}")
+        super().__init__(bus, node_id, generation=GENERATION, **options)
+        face = self.description.face
+        self.encoders = EventSource[EncoderEvent](self.host.scheduler)
+        #: the last encoder state each encoder reported: (counter, top)
+        self.encoder_states: dict[int, tuple[int, int]] = {}
+        #: volts of IN0..IN3 from the last 495h PDO (10 mV resolution, M44)
+        self.analog: dict[int, float] = {}
+        self._rings: int | None = None  # the ring LEDs last set, restored after a boot-up
+        for encoder in face.encoders:
+            layout = self.description.pdo(encoder.pdo)
+            self._unsubscribe.append(self.host.subscribe(
+                layout.cob_id(node_id), self._encoder_handler(encoder.number)))
+        analog = self.description.pdo("analog_inputs")
+        self._unsubscribe.append(self.host.subscribe(analog.cob_id(node_id), self._on_analog))
+
+    def _describe(self, generation: str | None, node_id: int) -> DeviceDescription:
+        return describe_pkp3500(generation or GENERATION, "cia301", node_id)
+
+    @property
+    def generation(self) -> str:
+        return GENERATION  # one firmware generation, with the rev 1.5 features (M-intro)
+
+    def watch_host(self, period: float) -> None:
+        """The keypad switches its LEDs off (rings too) when the controller's heartbeat
+        stops (MT §32, M65)."""
+        Device.watch_host(self, period)
+
+    # -- encoders ---------------------------------------------------------------------------------
+
+    def on_encoder(self, callback: Callable[[EncoderEvent], object]) -> Callable[[], None]:
+        """Call ``callback(event)`` on the bus thread for every encoder PDO."""
+        return self.encoders.subscribe(callback)
+
+    def encoder_events(self, timeout: float | None = None) -> Iterator[EncoderEvent]:
+        """Encoder events from now on, in this thread; stops after ``timeout`` s without one."""
+        return self.encoders.iterate(timeout)
+
+    def _encoder_handler(self, number: int) -> Callable[[Frame, float], None]:
+        face = self.description.face
+        layout = self.description.pdo(face.encoders[number - 1].pdo)
+        direction = layout.signal("direction")
+
+        def on_frame(frame: Frame, now: float) -> None:
+            if len(frame.data) < layout.min_length:
+                return
+            values = layout.decode(frame.data)
+            ticks = int(direction.physical(values["direction"]))  # sign-magnitude (M37)
+            self.encoder_states[number] = (values["ticks"], values["top"])
+            self.encoders.emit(EncoderEvent(number, ticks, values["ticks"], values["top"], now))
+
+        return on_frame
+
+    def _check_encoder(self, encoder: int) -> int:
+        return check_range("encoder", encoder, 1, len(self.description.face.encoders))
+
+    def set_top(self, encoder: int, top: int) -> None:
+        """The counter of ``encoder`` stops at ``top`` (2..16) clockwise and at 0; 0: it counts
+        0..65535 and wraps (MT §19f/g, M34, M39). Stored."""
+        self.write(f"encoder_{self._check_encoder(encoder)}_top", top)
+
+    def set_startup_counter(self, encoder: int, value: int) -> None:
+        """The counter ``encoder`` starts from at power-on (at most TOP, M40). Stored."""
+        self.write(f"encoder_{self._check_encoder(encoder)}_ticks", value)
+
+    def read_counter(self, encoder: int) -> int:
+        """The live tick counter (SDO 2000h/03 or /05, M40)."""
+        return int(self.read(f"encoder_{self._check_encoder(encoder)}_ticks"))
+
+    def set_encoder_period(self, encoder: int, period: float) -> None:
+        """Also send the encoder's state every ``period`` s (0: only when turned; 0.05..65.279,
+        MT §51/§52, M72)."""
+        ms = round(period * 1000)
+        self.write(f"tpdo{self._check_encoder(encoder) + 1}_event_timer", ms)
+
+    # -- ring LEDs (MT §17, §20c, §21c) ----------------------------------------------------------
+
+    def set_ring(self, encoder: int, leds: Iterable[int]) -> None:
+        """Light exactly ``leds`` of ``encoder``'s ring (numbered as the face, LED 1 / 17 at six
+        o'clock, clockwise, M26); the other ring keeps its LEDs. Sent as the 415h PDO."""
+        ring = self.description.face.encoders[self._check_encoder(encoder) - 1].ring_leds
+        chosen = set(leds)
+        if not chosen <= set(ring):
+            raise ValueError(f"ring {encoder} has LEDs {ring[0]}..{ring[-1]}, not "
+                             f"{sorted(chosen - set(ring))}")
+        own = sum(1 << (led - 1) for led in chosen)
+        others = (self._rings or 0) & ~sum(1 << (led - 1) for led in ring)
+        self._send_rings(others | own)
+
+    def ring(self, encoder: int) -> list[int]:
+        """The ring LEDs of ``encoder`` this driver last set."""
+        ring = self.description.face.encoders[self._check_encoder(encoder) - 1].ring_leds
+        return [led for led in item_numbers(self._rings or 0) if led in ring]
+
+    def set_ring_blink(self, leds: Iterable[int]) -> None:
+        """Ring LEDs that blink (1..32; only by SDO 2002h/04, M29)."""
+        self.write("led_blink_rings", item_mask(leds, "ring LED", 32))
+
+    def _send_rings(self, word: int) -> None:
+        self._rings = word
+        self.host.send(self._pdo_frame("ring_leds", {"rings": word}))
+
+    # -- inputs (MT §14, §23, §24) -----------------------------------------------------------------
+
+    def _on_analog(self, frame: Frame, now: float) -> None:
+        layout = self.description.pdo("analog_inputs")
+        if len(frame.data) < layout.min_length:
+            return
+        values = layout.decode(frame.data)
+        for signal in layout.signals:
+            self.analog[int(signal.name[2:])] = float(signal.physical(values[signal.name]))
+
+    def read_analog(self, input: int) -> float:
+        """Volts on IN0..IN3 by SDO 2005h (8 bits, 5 V = FFh, M45)."""
+        count = len(self.analog_inputs_range())
+        check_range("input", input, 0, count - 1)
+        byte = int(self.read(f"analog_input_{input}"))
+        return round(byte * self.description.face.analog_volts_max / 0xFF, 3)
+
+    def analog_inputs_range(self) -> range:
+        return range(self.description.face.analog_inputs)
+
+    def digital_inputs(self) -> dict[int, bool]:
+        """IN0..IN3 as levels (2004h: high from 2.5 V, M46)."""
+        bits = int(self.read("digital_inputs"))
+        return {n: bool(bits >> n & 1) for n in range(self.description.face.digital_inputs)}
+
+    def set_analog_period(self, period: float) -> None:
+        """The 495h PDO every ``period`` s, 0.08..2 in 10 ms steps (MT §25, M47). Stored."""
+        self.write("analog_period", round(period * 100))
+
+    # -- what differs from the PKP-2600-SI --------------------------------------------------------
+
+    def set_brightness(self, level: int) -> None:
+        """Key-LED and ring brightness 0..63 by SDO 2003h/01: this keypad has no brightness
+        PDO, its 415h is the ring LEDs (M29, M56)."""
+        check_range("brightness", level, 0, LEVEL_MAX)
+        self.write("indicator_brightness", level)
+
+    def _on_boot_up(self, now: float) -> None:
+        super()._on_boot_up(now)
+        if self.restore and self._rings is not None:
+            self.host.send(self._pdo_frame("ring_leds", {"rings": self._rings}))

@@ -1,0 +1,390 @@
+"""The PKP-3500-MT keypad twin (manual rev 1.3, ``spec/pkp-3500-mt-decisions.md``).
+
+What the PKP-2600-SI twin does (key state, LED words and their views, brightness, SYNC, node id
+at once, consumer heartbeat, restore, the J1939 switch) runs here on this model's description
+(15 keys, 16 LED bits per colour with holes at the encoders). On top:
+
+- two encoders: a tick counter clamped at TOP or wrapping when TOP = 00h (M34), a direction
+  counter of the net movement since that encoder's last PDO (M37), one 295h/395h frame per tick
+  while operational (M36, M38), plus an event timer (1801h/1802h sub 05h); the startup value
+  written to 2000h/03, /05 is stored, a read returns the live counter (M40);
+- ring LEDs: 415h and 2001h/04 (on), 2002h/04 (blink), single colour (M29);
+- four analog inputs: 495h every 2006h x 10 ms while operational (M47), 2005h as 8 bits
+  (M45), 2004h as digital levels from 2.5 V (M46); 1803h/02 reads the 2006h byte (M12);
+- the backlight PDO keeps the colour in use for an out-of-range colour (M51);
+- DEMO mode as M75-M81: key-LEDs red, ring LEDs 1 and 17, key 1 cycles the key-LED colour,
+  keys 2/3 the brightness, the rings follow the knobs as bar graphs.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel
+from blinkcan.devices.keypad import LEVEL_MAX
+from blinkcan.devices.keypad_j1939 import DEFAULT_NAME
+from blinkcan.devices.model import Quirks
+from blinkcan.devices.objects import Value
+from blinkcan.devices.pkp3500 import (
+    ANALOG_BYTE_MAX,
+    ANALOG_COUNTS,
+    ANALOG_PERIOD_UNIT_S,
+    DIGITAL_THRESHOLD_COUNTS,
+    DIRECTION_MAGNITUDE_MAX,
+    GENERATION,
+    MODEL,
+    describe_pkp3500,
+)
+from blinkcan.protocol.abort import AbortCode
+from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.j1939 import J1939Name
+from blinkcan.protocol.nmt import NmtState
+from blinkcan.twin.base import next_due
+from blinkcan.twin.keypad import KeypadTwin
+from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
+from blinkcan.twin.nvm import Nvm
+
+_TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
+
+
+def direction_byte(net: int) -> int:
+    """MT §12 (M37): bit 7 = counterclockwise, bits 0-6 = ticks, saturating at 127."""
+    magnitude = min(abs(net), DIRECTION_MAGNITUDE_MAX)
+    return magnitude | (0x80 if net < 0 and magnitude else 0)
+
+
+class _Encoder:
+    """One knob's live state: tick counter, net movement since its last PDO, its timer."""
+
+    def __init__(self, number: int) -> None:
+        self.number = number
+        self.counter = 0
+        self.net = 0
+        self.timer_next: float | None = None
+        self.timer_period = 0.0
+        self.bar = 0  # DEMO mode: ring LEDs lit as a bar graph (M81)
+
+
+class EncoderDemo(DemoMode):
+    """DEMO mode of the PKP-3500-MT (appendix p.61, M75-M81): the key-LEDs in one colour (red
+    at first, key 1 steps through the ten colours), keys 2 and 3 the LED brightness, the
+    backlight off. The rings (bar graphs of the knobs) are the twin's; key 4's steps are not
+    modelled (other keys have no effect, M80)."""
+
+    def __init__(self, now: float, led_mask: int, width: int) -> None:
+        super().__init__(now)
+        self._led_mask = led_mask
+        self._width = width
+
+    @property
+    def backlight_colour(self) -> BacklightColour | None:
+        return None  # M76: the backlight stays off
+
+    @property
+    def key_colour(self) -> BacklightColour | None:
+        return DEMO_COLOURS[self.colour_index]
+
+    def press(self, key: int, now: float) -> None:
+        if key == 1:  # M77: key 1 (encoder 1's push) steps the key-LED colour
+            self.colour_index = (self.colour_index + 1) % len(DEMO_COLOURS)
+        elif key == 2:  # M78: LED brightness up / down
+            self.level = min(LEVEL_MAX, self.level + DEMO_LEVEL_STEP)
+        elif key == 3:
+            self.level = max(0, self.level - DEMO_LEVEL_STEP)
+
+    def leds(self, now: float) -> tuple[int, int]:
+        colour = self.key_colour
+        channels = BACKLIGHT_CHANNELS[colour] if colour is not None else Channel.NONE
+        return fill(self._led_mask, channels, self._width), 0
+
+    def next_change(self, now: float) -> float | None:
+        return None
+
+    def describe(self) -> dict[str, object]:
+        colour = self.key_colour
+        return {"key_led_colour": colour.label if colour else "off", "step": None,
+                "level": self.level}
+
+
+class Pkp3500Twin(KeypadTwin):
+    """A PKP-3500-MT that behaves on the bus as its manual and the decisions describe.
+
+    Built as ``KeypadTwin(node_id=0x15, model="pkp-3500-mt")`` or directly. Fault injection
+    beyond keys: :meth:`turn`, :meth:`set_analog`, :meth:`set_digital_input`.
+    """
+
+    def __init__(
+        self,
+        node_id: int = 0x15,
+        quirks: Quirks = "firmware",
+        nvm: str | os.PathLike[str] | Nvm | None = None,
+        manual: str = GENERATION,
+        protocol: str = "canopen",
+        name: J1939Name | bytes = DEFAULT_NAME,
+        settings: Mapping[str, Value] | None = None,
+        model: str = MODEL,
+    ) -> None:
+        if model != MODEL:
+            raise ValueError(f"the PKP-3500-MT twin runs model {MODEL!r}, not {model!r}")
+        description = describe_pkp3500(manual, quirks, node_id)
+        face = description.face
+        self._encoders = [_Encoder(e.number) for e in face.encoders]
+        self._encoder_layouts = [description.pdo(e.pdo) for e in face.encoders]
+        self._analog_layout = description.pdo("analog_inputs")
+        self._counts = [0] * face.analog_inputs  # 10 mV units (M44)
+        self._analog_next: float | None = None
+        self._temporary_colour: int | None = None  # M51: set by 515h or 2003h/03 since power-on
+        self._init_keypad(description, node_id, nvm, protocol, name, settings)
+        store = self._store
+        for encoder in self._encoders:
+            n = encoder.number
+            store.set_reader(f"encoder_{n}_ticks", self._counter_reader(encoder))
+            store.set_hook(f"encoder_{n}_top", self._top_hook(encoder))
+            store.set_hook(f"tpdo{n + 1}_event_timer", self._encoder_timer_hook(encoder))
+        store.set_hook("analog_period", self._on_analog_period)
+        store.set_hook("backlight_colour", self._on_backlight_colour)
+
+    # -- physical side ------------------------------------------------------------------------
+
+    def turn(self, encoder: int, ticks: int, now: float) -> list[Frame]:
+        """Turn encoder 1 or 2 by ``ticks`` (> 0 clockwise, < 0 counterclockwise; 16 = one
+        turn). Returns one encoder PDO per tick while operational (M36, M38)."""
+        knob = self._encoders[check_range("encoder", encoder, 1, len(self._encoders)) - 1]
+        if isinstance(ticks, bool) or not isinstance(ticks, int):
+            raise TypeError(f"ticks must be an int, not {type(ticks).__name__}")
+        if not self._powered or not ticks:
+            return []
+        self._now = now
+        step = 1 if ticks > 0 else -1
+        frames = []
+        for _ in range(abs(ticks)):
+            self._tick(knob, step)
+            if self._sends_pdos():
+                frames.append(self._encoder_frame(knob))
+        return frames
+
+    def set_analog(self, input: int, volts: float, now: float) -> list[Frame]:
+        """Put ``volts`` on input IN0..IN3 (above 5 V reads full scale, M45). The 495h PDO
+        carries it at its next period."""
+        check_range("input", input, 0, len(self._counts) - 1)
+        if isinstance(volts, bool) or not isinstance(volts, (int, float)) \
+                or not 0 <= volts < float("inf"):  # NaN fails the comparison
+            raise ValueError(f"volts must be a number >= 0, not {volts!r}")
+        self._now = now
+        self._counts[input] = min(ANALOG_COUNTS, round(volts * 100))  # 10 mV per count (M44)
+        self._refresh_inputs()
+        return []
+
+    def set_digital_input(self, input: int, level: bool, now: float) -> list[Frame]:
+        """Drive input IN0..IN3 high (5 V) or low (0 V); 2004h reads it from 2.5 V (M46)."""
+        return self.set_analog(input, 5.0 if level else 0.0, now)
+
+    def _refresh_inputs(self) -> None:
+        digital = 0
+        for n, count in enumerate(self._counts):
+            # M45: 2005h = round(count * 255 / 500); M46: a 1 from 2.5 V
+            self._store.set(f"analog_input_{n}", min(ANALOG_BYTE_MAX, round(count * 255 / 500)))
+            digital |= (count >= DIGITAL_THRESHOLD_COUNTS) << n
+        self._store.set("digital_inputs", digital)
+
+    # -- encoders -------------------------------------------------------------------------------
+
+    def _top(self, knob: _Encoder) -> int:
+        return self._store.get_int(f"encoder_{knob.number}_top")
+
+    def _tick(self, knob: _Encoder, step: int) -> None:
+        top = self._top(knob)
+        if top:  # M34: clamp to [0, TOP]
+            knob.counter = min(top, max(0, knob.counter + step))
+        else:  # M34: TOP 00h wraps both ways
+            knob.counter = (knob.counter + step) % _TICK_RANGE
+        knob.net += step  # M37: ticks count even when clamped
+        self._store.set(f"encoder_{knob.number}_direction", direction_byte(knob.net))
+        if self._demo is not None:
+            self._demo_tick(knob, step)
+
+    def _encoder_frame(self, knob: _Encoder) -> Frame:
+        layout = self._encoder_layouts[knob.number - 1]
+        data = layout.encode({"direction": direction_byte(knob.net), "ticks": knob.counter,
+                              "top": self._top(knob)})
+        knob.net = 0  # M37: reset when the PDO is sent
+        self._store.set(f"encoder_{knob.number}_direction", 0)
+        return Frame(layout.cob_id(self._node_id), data)
+
+    def _counter_reader(self, knob: _Encoder) -> Any:
+        def read() -> bytes:
+            return knob.counter.to_bytes(2, "little")  # M40: a read gives the live counter
+
+        return read
+
+    def _top_hook(self, knob: _Encoder) -> Any:
+        def on_write(value: int) -> AbortCode | None:
+            if value and knob.counter > value:  # M39: a lower TOP clamps at once, no PDO
+                knob.counter = value
+            return None
+
+        return on_write
+
+    def _encoder_timer_hook(self, knob: _Encoder) -> Any:
+        def on_write(value: int) -> AbortCode | None:
+            self._schedule_encoder(knob, value, self._now)
+            return None
+
+        return on_write
+
+    def _schedule_encoder(self, knob: _Encoder, period_ms: int, now: float) -> None:
+        knob.timer_period = period_ms / 1000
+        running = self._sends_pdos() and period_ms
+        knob.timer_next = now + knob.timer_period if running else None
+
+    def _sends_pdos(self) -> bool:
+        return self._nmt is NmtState.OPERATIONAL and not self._j1939
+
+    # -- analog inputs --------------------------------------------------------------------------
+
+    def _analog_period(self) -> float:
+        return self._store.get_int("analog_period") * ANALOG_PERIOD_UNIT_S
+
+    def _on_analog_period(self, value: int) -> AbortCode | None:
+        self._store.set("tpdo4_transmission_type", value)  # M12: 1803h/02 reads this byte
+        if self._analog_next is not None:  # M47: a write restarts the period
+            self._analog_next = self._now + value * ANALOG_PERIOD_UNIT_S
+        return None
+
+    def _analog_frame(self) -> Frame:
+        layout = self._analog_layout
+        data = layout.encode({f"in{n}": count for n, count in enumerate(self._counts)})
+        return Frame(layout.cob_id(self._node_id), data)
+
+    # -- backlight (M51-M53) --------------------------------------------------------------------
+
+    def _on_backlight_colour(self, value: int) -> AbortCode | None:
+        self._temporary_colour = value  # M53: 2003h/03 is a temporary colour
+        return None
+
+    def _on_backlight_pdo(self, signals: dict[str, int], length: int) -> list[Frame]:
+        # MT §18 note 1 (M52): a level over 3Fh ignores the whole frame; DLC 1: level only
+        # (M54); note 2 (M51): a colour out of 01h-09h keeps the colour in use
+        level = signals["level"]
+        if level > LEVEL_MAX:
+            return []
+        self._store.set("backlight_brightness", level)
+        colour = signals["colour"]
+        if self._last_rpdo_length > 1 and 1 <= colour <= 9:
+            self._temporary_colour = colour
+            self._store.set("backlight_colour", colour)
+        return []
+
+    # -- CANopen hooks --------------------------------------------------------------------------
+
+    def _on_boot(self, now: float, application: bool) -> list[Frame]:
+        frames = super()._on_boot(now, application)
+        if application:
+            for knob in self._encoders:  # M40: from the startup value, at most TOP
+                startup = self._store.get_int(f"encoder_{knob.number}_ticks")
+                top = self._top(knob)
+                knob.counter = min(startup, top) if top else startup
+                knob.net = 0
+                self._store.set(f"encoder_{knob.number}_direction", 0)
+            self._temporary_colour = None
+            self._refresh_inputs()
+        self._store.set("tpdo4_transmission_type", self._store.get_int("analog_period"))
+        return frames
+
+    def _on_power_off(self) -> None:
+        super()._on_power_off()
+        self._counts = [0] * len(self._counts)  # M46: nothing connected
+        self._analog_next = None
+        for knob in self._encoders:
+            knob.timer_next = None
+        self._store.set("led_on_rings", 0)
+        self._store.set("led_blink_rings", 0)
+
+    def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
+        frames = super()._on_state_change(previous, state, now)
+        for knob in self._encoders:
+            self._schedule_encoder(knob, self._store.get_int(f"tpdo{knob.number + 1}_event_timer"),
+                                   now)
+        # M47: the first 495h one period after entering operational
+        self._analog_next = now + self._analog_period() if self._sends_pdos() else None
+        return frames
+
+    def _on_consumer_lost(self, now: float) -> None:
+        super()._on_consumer_lost(now)  # key-LEDs, blink and backlight off
+        self._store.set("led_on_rings", 0)  # M65: the ring LEDs too
+        self._store.set("led_blink_rings", 0)
+
+    def _on_advance(self, now: float) -> list[Frame]:
+        frames = super()._on_advance(now)
+        if self._j1939:
+            return frames
+        for knob in self._encoders:
+            due = knob.timer_next
+            if due is not None and now >= due:
+                frames.append(self._encoder_frame(knob))  # M38: also when nothing moved
+                knob.timer_next = next_due(due, knob.timer_period, now)
+        due = self._analog_next
+        if due is not None and now >= due:
+            frames.append(self._analog_frame())
+            self._analog_next = next_due(due, self._analog_period(), now)
+        return frames
+
+    def _deadlines(self) -> Iterable[float | None]:
+        if self._j1939:
+            return super()._deadlines()
+        return (*super()._deadlines(), self._analog_next,
+                *(knob.timer_next for knob in self._encoders))
+
+    def _make_demo(self, now: float) -> DemoMode:
+        for knob in self._encoders:
+            knob.bar = 1  # M76: LEDs 1 and 17 lit
+        keys = sum(1 << (k - 1) for k in self._face.led_keys)
+        return EncoderDemo(now, keys, self._led_width)
+
+    # -- what the keypad shows ------------------------------------------------------------------
+
+    def rings(self) -> tuple[int, int]:
+        """(on, blink) of the 32 ring LEDs (bit n-1 = LED n, M26): the objects or DEMO mode."""
+        if self._demo is not None:
+            return self._demo_rings(), 0
+        return self._store.get_int("led_on_rings"), self._store.get_int("led_blink_rings")
+
+    def _demo_rings(self) -> int:
+        # M76: LEDs 1 and 17 at start; M81: each ring a bar graph from its first LED
+        bits = 0
+        for knob, encoder in zip(self._encoders, self.description.face.encoders, strict=True):
+            lit = knob.bar
+            first = encoder.ring_leds[0]
+            bits |= ((1 << lit) - 1) << (first - 1)
+        return bits
+
+    def _demo_tick(self, knob: _Encoder, step: int) -> None:
+        size = len(self.description.face.encoders[knob.number - 1].ring_leds)
+        knob.bar = min(size, max(0, knob.bar + step))
+
+    def _snapshot(self) -> dict[str, Any]:
+        snapshot = super()._snapshot()
+        on, blink = self.rings() if self._powered and not self._j1939 else (0, 0)
+        encoders = []
+        for knob, encoder in zip(self._encoders, self.description.face.encoders, strict=True):
+            encoders.append({
+                "encoder": knob.number,
+                "key": encoder.key,
+                "counter": knob.counter,
+                "top": self._top(knob),
+                "ring": [{"led": led, "on": bool(on >> (led - 1) & 1),
+                          "blink": bool(blink >> (led - 1) & 1)} for led in encoder.ring_leds],
+            })
+        snapshot["encoders"] = encoders
+        snapshot["analog_inputs"] = [
+            {"input": n, "volts": count / 100, "count": count,
+             "digital": count >= DIGITAL_THRESHOLD_COUNTS}
+            for n, count in enumerate(self._counts)]
+        snapshot["analog_period_ms"] = self._store.get_int("analog_period") * 10
+        return snapshot
+
+
+__all__ = ["EncoderDemo", "Pkp3500Twin", "direction_byte"]
