@@ -150,6 +150,8 @@ for group in (keypad, keybox):
         _confirm(f"Every stored setting of the {target[0]} (node id, bit rate, heartbeat...) "
                  "goes back to its factory value at the next reset", yes)
         with _device(target) as device:
+            if isinstance(device, Keypad):
+                _ = device.generation  # probed: generation 2 has 1011h, generation 1 does not
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")
 
