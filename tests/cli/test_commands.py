@@ -251,3 +251,9 @@ def test_one_colour_blinks_from_the_command_line(bench: Bench) -> None:
     wait_until(lambda: emulator.snapshot(keypad)["keys"][2]["phases"] == ["blue", "off"])
     run("keypad", "led", "4", "green", "--blink", "green", *bus)
     wait_until(lambda: emulator.snapshot(keypad)["keys"][3]["phases"] == ["green", "off"])
+
+
+def test_scan_that_finds_nothing_names_the_bus_it_listened_on() -> None:
+    channel = f"empty-{uuid.uuid4().hex}"
+    assert_one_line_error(invoke("scan", "--listen", "0", "-i", "virtual", "-c", channel),
+                          f"no device answered on virtual {channel}")

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import time
+import uuid
+from collections.abc import Callable, Iterator
 
+import can
 import pytest
 
 from blinkcan import Keypad
 from blinkcan.host import KeyEvent
 from blinkcan.host.j1939_keypad import look_of, scan_j1939
 from blinkcan.protocol import Frame
+from blinkcan.runtime import Emulator
 from blinkcan.testing import Rig, frames_of
 from blinkcan.twin import KeypadTwin
 
@@ -138,3 +142,41 @@ def test_look_of_follows_the_phase_model() -> None:
     assert look_of(0, 0).state == 0
     assert (look_of(0b001, 0b011).state, look_of(0b001, 0b011).secondary) == (3, 0x02)
     assert (look_of(0b100, 0b100).state, look_of(0b100, 0b100).colour) == (2, 0x03)
+
+
+def test_the_round_trip_on_a_virtual_bus_in_real_time() -> None:
+    """The same round trip with the Emulator on python-can's ``virtual`` bus (threads, real
+    time), as a controller application runs it."""
+    channel = f"j1939-{uuid.uuid4()}"
+    twin = KeypadTwin()
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    host_bus = can.Bus(interface="virtual", channel=channel)
+    events: list[KeyEvent] = []
+    try:
+        with Emulator(device_bus, [twin]) as emulator:
+            keypad = Keypad(host_bus, 0x15)
+            keypad.on_key(events.append)
+            keypad.switch_to_j1939(confirm=True)
+            emulator.power_cycle(twin)
+            assert emulator.snapshot(twin)["protocol"] == "j1939"
+            assert keypad.j1939 is not None
+            assert keypad.j1939.software_revision() == "V2.6"
+            keypad.set_led(9, "cyan")
+            emulator.press(twin, 9)
+            wait(lambda: [(e.key, e.action) for e in events] == [(9, "press")])
+            assert emulator.snapshot(twin)["commanded"][8]["colour"] == "cyan"
+            keypad.switch_to_canopen()
+            wait(lambda: emulator.snapshot(twin)["nmt_state"] == "operational")
+            wait(lambda: emulator.snapshot(twin)["commanded"][8]["colour"] == "cyan")
+            assert keypad.identity().software_version == "V2.2"
+            keypad.close()
+    finally:
+        device_bus.shutdown()
+        host_bus.shutdown()
+
+
+def wait(condition: Callable[[], object], timeout: float = 3.0) -> None:
+    end = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < end, "condition not met in time"
+        time.sleep(0.01)

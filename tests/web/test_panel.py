@@ -156,3 +156,17 @@ def test_bad_requests_are_refused_and_change_nothing(bench: Bench) -> None:
         " body: '{\"node\": 12, \"action\": \"blow_fuse\", \"pin\": 4}'})).status")
     assert plain == 415
     assert bench.emulator.snapshot(bench.keybox) == before
+
+
+def test_indicator_brightness_0_is_drawn_dark(bench: Bench) -> None:
+    page = bench.page
+    bench.send("215 01 00 00 00 00 00 00 00")  # key 1 red
+    bench.send("415 00 00 00 00 00 00 00 00")  # indicator brightness 0 (PKP §13)
+    page.wait_for_function(  # type: ignore[attr-defined]
+        """() => { const key = document.querySelector('[data-test="key-1"]');
+                   return key.dataset.colour === 'red' && key.dataset.shown === 'off'; }""",
+        timeout=3000)
+    bench.send("415 3F 00 00 00 00 00 00 00")  # full brightness: red again
+    page.wait_for_function(  # type: ignore[attr-defined]
+        """() => document.querySelector('[data-test="key-1"]').dataset.shown === 'red'""",
+        timeout=3000)

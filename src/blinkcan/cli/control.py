@@ -10,25 +10,44 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import model
+<<<<<<< HEAD
 from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
+=======
+from blinkcan.host import Keybox, Keypad, SdoError
+from blinkcan.protocol.j1939 import ADDRESS_MAX
+>>>>>>> main
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
+#: ``blinkcan keypad --protocol j1939 --address 0x21``: kept in the context's meta
+_J1939_ADDRESS = "blinkcan.j1939_address"
+
+
+def _j1939_address() -> int | None:
+    """The keypad's J1939 address when ``--protocol j1939`` was given, else None."""
+    context = click.get_current_context(silent=True)
+    return None if context is None else context.meta.get(_J1939_ADDRESS)
 
 
 @contextmanager
 def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
     kind, node_id = target
+    address = _j1939_address()
     bus = cli_bus()
     try:
         try:
-            if kind == "keypad":
-                device: Keypad | Keybox = Keypad(bus, node_id, start=start)
+            if kind == "keypad" and address is not None:
+                device: Keypad | Keybox = Keypad(bus, node_id, protocol="j1939",
+                                                 address=address)
+            elif kind == "keypad":
+                device = Keypad(bus, node_id, start=start)
             else:
                 device = Keybox(bus, node_id, start=start)
         except (IdentityError, SdoError, ValueError) as error:
@@ -46,6 +65,10 @@ def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
 def _done(target: Target, what: str) -> None:
     """One line saying what an action did, e.g. ``keybox 0Ch: output 4 HIGH``."""
     kind, node_id = target
+    address = _j1939_address()
+    if address is not None:
+        click.echo(f"{kind} {address:02X}h (J1939): {what}")
+        return
     click.echo(f"{kind} {node_id:02X}h: {what}")
 
 
@@ -89,6 +112,47 @@ def _group(kind: str, title: str) -> click.Group:
 
 
 keypad = _group("keypad", "a PKP-2600-SI keypad")
+
+
+class J1939Address(click.ParamType):  # type: ignore[type-arg]
+    """A J1939 source address: 0x21, 33 or 21h, 01h..FDh."""
+
+    name = "ADDRESS"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> int:
+        try:
+            address = parse_int(str(value))
+        except click.BadParameter as error:
+            self.fail(error.message, param, ctx)
+        if not 0x01 <= address <= ADDRESS_MAX:
+            self.fail(f"a J1939 keypad address is 01h..{ADDRESS_MAX:02X}h, not {value}", param,
+                      ctx)
+        return address
+
+
+def _set_protocol(ctx: click.Context, param: click.Parameter, value: str | None) -> None:
+    if value == "j1939":
+        ctx.meta.setdefault(_J1939_ADDRESS, DEFAULT_ADDRESS)
+    elif value == "canopen":
+        ctx.meta.pop(_J1939_ADDRESS, None)
+
+
+def _set_address(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
+    if value is not None:
+        ctx.meta[_J1939_ADDRESS] = value
+
+
+# a keypad in J1939 mode (spec/pkp-2600-si-j1939.md): led, backlight and brightness go as J1939
+# commands to its source address (--address implies --protocol j1939)
+keypad.params += [
+    click.Option(["--protocol"], type=click.Choice(["canopen", "j1939"]), default=None,
+                 expose_value=False, is_eager=True, callback=_set_protocol,
+                 help="The keypad's protocol (default canopen)."),
+    click.Option(["--address"], type=J1939Address(), default=None,
+                 expose_value=False, callback=_set_address,
+                 help=f"J1939 source address of the keypad (default {DEFAULT_ADDRESS:02X}h)."),
+]
 keybox = _group("keybox", "a Keybox")
 
 

@@ -10,7 +10,7 @@ import time
 
 import click
 
-from blinkcan.cli.bus_options import bus_options, cli_bus
+from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
 from blinkcan.cli.targets import check_target, writing
 from blinkcan.formats.logs import FrameWriter, LogError, read_messages
 
@@ -60,7 +60,8 @@ def record(target: str, duration: float | None, force: bool) -> None:
                     for number in (signal.SIGINT, signal.SIGTERM)}
     try:
         with writing(target), FrameWriter(target, replace=force) as writer:
-            click.echo(f"recording {bus.channel_info} to {target}; Ctrl-C stops", err=True)
+            click.echo(f"recording {describe_bus(bus_settings())} to {target}; Ctrl-C stops",
+                       err=True)
             flushed = time.monotonic()
             try:
                 while end is None or time.monotonic() < end:

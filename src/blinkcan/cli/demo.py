@@ -127,15 +127,19 @@ def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, 
     return Group(
         Text(header, style="cyan"),
         Text(title, style="bold"),
-        keypad_panel(((k["key"], k["colour"], k["blink_colour"], k["pressed"]) for k in keys),
-                     f"keypad 15h, {keypad['nmt_state']} (~ blinking)", grid),
-        keybox_panel(((p["pin"], p["state"], p["fuse"] == "blown") for p in pins),
+        keypad_panel(((k["key"], *k["phases"], k["pressed"]) for k in keys),
+                     f"keypad 15h, {keypad['nmt_state']} (~ blinking, a/b alternating)", grid),
+        keybox_panel(((p["pin"], p["state"], p["fuse"] == "blown", p["pwm_percent"])
+                      for p in pins),
                      f"Keybox 0Ch, {keybox['nmt_state']}"),
         Panel(Text("\n".join(log), style="grey70"), title="last frames on the bus", expand=False),
     )
 
 
-def run_demo(console: Console, pause: float = 0.6, web: str | None = None) -> int:
+def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
+             wait: Callable[[], None] | None = None) -> int:
+    """The scripted demo; with ``web`` the panel is served and the controller keeps running
+    until ``wait`` returns (default: until Ctrl-C)."""
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     keypad_twin, keybox_twin = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
@@ -179,20 +183,31 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None) -> in
                 time.sleep(2.6)
                 show(SCRIPT[-1].title)
             states = keybox.states()
-            if web is not None:
+            if web is not None:  # the script's result, then the panel; the end comes after
                 live.stop()
+                console.line()
+                console.print(f"after the script: outputs HIGH {_high(states)}")
                 console.print("the controller keeps running with the panel; Ctrl-C stops")
-                with contextlib.suppress(KeyboardInterrupt):
-                    threading.Event().wait()
+                (wait or _until_interrupted)()
+                states = keybox.states()  # what was done on the panel counts too
             controller.stop()
             keypad.close()
             keybox.close()
     finally:
         host_bus.shutdown()
         device_bus.shutdown()
-    high = sorted(pin for pin, state in states.items() if state == "high")
-    console.print(f"\n{seen['frames']} frames on the bus; outputs HIGH at the end: {high}")
+    console.print(f"\n{seen['frames']} frames on the bus; outputs HIGH at the end: "
+                  f"{_high(states)}")
     return 0
+
+
+def _high(states: dict[int, str]) -> list[int]:
+    return sorted(pin for pin, state in states.items() if state == "high")
+
+
+def _until_interrupted() -> None:
+    with contextlib.suppress(KeyboardInterrupt):
+        threading.Event().wait()
 
 
 @click.command("demo")

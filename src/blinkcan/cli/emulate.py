@@ -24,12 +24,14 @@ from blinkcan.devices.registry import parse_spec
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.nvm import NvmError
 from blinkcan.twin.registry import build_twin
 
 
 def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
-                quirks: str, low_side: tuple[int, ...] = ()) -> list[CanopenTwin]:
+                quirks: str, low_side: tuple[int, ...] = (),
+                protocol: str = "canopen") -> list[CanopenTwin]:
     if nvm is not None and len(devices) != 1:
         raise click.UsageError("--nvm names one file, for one device")
     if node_id is not None and len(devices) != 1:
@@ -45,6 +47,11 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
         options: dict[str, object] = {}
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
+        if protocol != "canopen":  # spec/pkp-2600-si-j1939.md: the PKP-2600-SI's J1939 mode
+            if found.name != "pkp-2600-si":
+                raise click.UsageError(f"--protocol {protocol}: only the PKP-2600-SI keypad has "
+                                       f"a J1939 mode, not {found.name}")
+            options["protocol"] = protocol
         try:
             twins.append(build_twin(model, node, quirks, nvm, **options))
         except (ValueError, TypeError) as error:
@@ -93,10 +100,15 @@ def _free_node_id(near: int, taken: set[int]) -> int:
               help="Keybox pins built as low-side drivers, e.g. 2,5 (errata K22).")
 @click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
               metavar="[HOST:PORT]", help="Serve the front panel (default 127.0.0.1:8080).")
+@click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
+              show_default=True,
+              help="Keypads start in this protocol unless --nvm stored another (J1939: "
+                   "source address 21h, 250 kbit/s).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @bus_options
 def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quirks: str,
-            response_delay: float, low_side: str, web: str | None, quiet: bool) -> None:
+            response_delay: float, low_side: str, web: str | None, protocol: str,
+            quiet: bool) -> None:
     """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
     (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5: the newer
     firmware, manual rev 1.5).
@@ -105,11 +117,12 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     blinkcan emulate keypad keybox
     blinkcan emulate keypad@1.5 keybox:0x0D --low-side 2,5
     blinkcan emulate keypad:0x15 keypad:0x16 -i socketcan -c vcan0
+    blinkcan emulate keypad --protocol j1939
     """
     console = Console(highlight=False)
     try:
         pins = tuple(parse_int(p) for p in low_side.split(",") if p.strip())
-        twins = build_twins(devices, node_id, nvm, quirks, pins)
+        twins = build_twins(devices, node_id, nvm, quirks, pins, protocol)
     except NvmError as error:
         raise click.ClickException(str(error)) from None
     bus = cli_bus()
@@ -118,9 +131,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     emulator = Emulator(bus, twins, response_delay=response_delay)
     if printer is not None:
         emulator.on_frame = printer
-    names = ", ".join(f"{t.description.kind} {t.node_id:02X}h" + (
-        f" (rev {t.description.generation})" if t.description.kind == "keypad" else "")
-        for t in twins)
+    names = ", ".join(_name(t) for t in twins)
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
@@ -130,6 +141,16 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
         console.print("stopped")
     finally:
         bus.shutdown()
+
+
+def _name(twin: CanopenTwin) -> str:
+    """"keypad 15h (rev 1.1)", "keypad 21h (rev 1.1, J1939)", "keybox 0Ch"."""
+    if twin.description.kind != "keypad":
+        return f"{twin.description.kind} {twin.node_id:02X}h"
+    if isinstance(twin, KeypadTwin) and twin.protocol == "j1939":
+        address = twin.j1939.settings["source_address"]
+        return f"keypad {address:02X}h (rev {twin.description.generation}, J1939)"
+    return f"keypad {twin.node_id:02X}h (rev {twin.description.generation})"
 
 
 @contextlib.contextmanager

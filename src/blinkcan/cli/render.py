@@ -14,19 +14,23 @@ STYLE = {"off": "grey35", "red": "red", "green": "green", "blue": "blue", "yello
 PIN_STYLE = {"off": "grey50", "high": "bold green", "fault": "bold red"}
 
 
-def key_cell(key: int, lit: str, blink: str, held: bool = False) -> Text:
-    """"[ 4 green]", "[ 4 ~red]" for blinking; held keys underlined."""
-    if blink != "off":
-        label, style = f"~{blink}", STYLE[blink]
+def key_cell(key: int, phase_a: str, phase_b: str, held: bool = False) -> Text:
+    """A key by the colours of its two blink phases (devices/colours.blink_phases): "[ 4
+    green]" steady, "[ 4 ~red]" blinking, "[ 4 red/grn]" alternating; held keys underlined."""
+    if phase_a == phase_b:
+        label, style = ("" if phase_a == "off" else phase_a), STYLE[phase_a]
+    elif "off" in (phase_a, phase_b):
+        colour = phase_b if phase_a == "off" else phase_a
+        label, style = f"~{colour}", STYLE[colour]
     else:
-        label, style = ("" if lit == "off" else lit), STYLE[lit]
-    return Text(f"[{key:>2} {label:<6}]", style=f"bold {style}" + (" underline" if held else ""))
+        label, style = f"{phase_a[:3]}/{phase_b[:3]}", STYLE[phase_a]
+    return Text(f"[{key:>2} {label:<7}]", style=f"bold {style}" + (" underline" if held else ""))
 
 
 def keypad_panel(keys: Iterable[tuple[int, str, str, bool]], title: str,
                  grid: tuple[tuple[int, ...], ...]) -> Panel:
-    """keys: (key, colour, blink colour, held); ``grid``: the key numbers row by row as the
-    model's face shows them (0: no key)."""
+    """keys: (key, phase A colour, phase B colour, held); ``grid``: the key numbers row by row
+    as the model's face shows them (0: no key)."""
     cells = {key[0]: key_cell(*key) for key in keys}
     table = Table.grid(padding=(0, 1))
     for row in grid:
@@ -34,11 +38,12 @@ def keypad_panel(keys: Iterable[tuple[int, str, str, bool]], title: str,
     return Panel(table, title=title, expand=False)
 
 
-def keybox_panel(pins: Iterable[tuple[int, str, bool]], title: str) -> Panel:
-    """pins: (pin, "off"/"high"/"fault", fuse blown)."""
+def keybox_panel(pins: Iterable[tuple[int, str, bool, int | None]], title: str) -> Panel:
+    """pins: (pin, "off"/"high"/"fault", fuse blown, PWM duty in % or None)."""
     row = Text()
-    for pin, state, blown in pins:
-        row.append(f" {pin}:{state.upper()}", style=PIN_STYLE[state])
+    for pin, state, blown, pwm in pins:
+        shown = f"PWM {pwm}%" if pwm is not None and state != "fault" else state.upper()
+        row.append(f" {pin}:{shown}", style=PIN_STYLE[state])
         if blown:
             row.append("(fuse blown)", style="red")
     return Panel(row, title=title, expand=False)

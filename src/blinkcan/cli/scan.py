@@ -6,7 +6,7 @@ import click
 from rich.console import Console
 from rich.table import Table
 
-from blinkcan.cli.bus_options import bus_options, cli_bus
+from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
 from blinkcan.host import scan
 
 
@@ -22,7 +22,7 @@ def command(listen: float) -> None:
     finally:
         bus.shutdown()
     if not found:
-        raise click.ClickException("no device answered")
+        raise click.ClickException(f"no device answered on {describe_bus(bus_settings())}")
     table = Table("node", "device", "model", "firmware", "hardware", "device type", "heard")
     for device in found:
         table.add_row(f"{device.node_id:02X}h", device.kind or "other CANopen",

@@ -17,7 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
-from blinkcan.devices.colours import channel_name
+from blinkcan.devices.colours import blink_phases, channel_name
+from blinkcan.devices.keybox import PWM_LEVEL_MAX
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import describe_device
 
@@ -42,6 +43,8 @@ class NodeView:
     asked: str | None = None
     #: PDO name -> what its last frame meant (encoders, analog inputs, ring LEDs, ...)
     other: dict[str, str] = field(default_factory=dict)
+    #: pins in PWM (KBX §22, object "pwm"): pin -> duty in percent
+    pwm: dict[int, int] = field(default_factory=dict)
 
     def know(self, face: Face) -> None:
         if face != self.face:
@@ -49,7 +52,8 @@ class NodeView:
             self.outputs = dict.fromkeys(face.pin_numbers, "off")
 
     def outputs_off(self) -> None:
-        """Fail-safe: every HIGH output OFF, FAULT latched."""
+        """Fail-safe: every HIGH output OFF, PWM stopped, FAULT latched."""
+        self.pwm = {}
         self.outputs = {pin: "fault" if state == "fault" else "off"
                         for pin, state in self.outputs.items()}
 
@@ -57,7 +61,7 @@ class NodeView:
         """Power-on or reset: pre-operational, outputs OFF, no FAULT, LEDs dark, no key held."""
         self.state, self.leds, self.blink, self.held = "pre-operational", {}, {}, []
         self.outputs = dict.fromkeys(self.face.pin_numbers, "off")
-        self.asked = None
+        self.pwm, self.asked = {}, None
 
     def reported(self, state: str) -> None:
         """A heartbeat's state; a change the last NMT command did not ask for is a trip."""
@@ -78,6 +82,19 @@ class NodeView:
 
         return [(key, colour(self.leds, key), colour(self.blink, key))
                 for key in self.face.key_numbers]
+
+    def key_phases(self) -> list[tuple[int, str, str]]:
+        """(key, colour in blink phase A, in phase B): the same twice for a steady LED, one
+        "off" for a blinking one, two colours for an alternating one (colours.blink_phases)."""
+        def channels(picture: dict[str, list[int]], key: int) -> int:
+            return sum(bit for name, bit in (("red", 1), ("green", 2), ("blue", 4))
+                       if key in picture.get(name, []))
+
+        found = []
+        for key in self.face.key_numbers:
+            a, b = blink_phases(channels(self.leds, key), channels(self.blink, key))
+            found.append((key, channel_name(a), channel_name(b)))
+        return found
 
 
 class BusView:
@@ -164,6 +181,11 @@ class BusView:
     def _object(view: NodeView, kind: Kind, fields: dict[str, object]) -> None:
         index, sub, value = fields.get("index"), fields.get("subindex"), fields.get("value")
         if view.device != "keybox" or not isinstance(value, int) or not isinstance(sub, int):
+            return
+        if fields.get("object") == "pwm":  # KBX §22: byte 0 the PWM pins, byte 1 the duty
+            level = value >> 8
+            view.pwm = {pin: level * 100 // PWM_LEVEL_MAX
+                        for bit, pin in enumerate(view.face.pwm_pins) if value >> bit & 1}
             return
         if index == 0x2001 and sub in view.outputs and kind is Kind.SDO_WRITE:
             view.outputs[sub] = {0: "off", 1: "high", 2: "off"}.get(value, view.outputs[sub])

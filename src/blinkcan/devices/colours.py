@@ -48,6 +48,14 @@ def channel_name(channels: int) -> str:
     return _CHANNEL_NAMES[Channel(channels & 7)]
 
 
+def blink_phases(lit: int, blinking: int) -> tuple[int, int]:
+    """The channels a key shows in the two phases of a blink period (PKP §12, §17: "if the blink
+    message is sent when the LED is already ON, the LED blinks in alternative mode"; errata P9):
+    on and not blinking is lit in both, on and blinking in phase A only, blinking only in phase
+    B only. Red on + red/green blinking alternates red and green."""
+    return lit, (lit & ~blinking) | (blinking & ~lit)
+
+
 def led_colour(name: str) -> Channel:
     """Channels of a colour name; raises ValueError naming the valid names."""
     try:

@@ -419,6 +419,10 @@ class KeypadTwin(CanopenTwin):
 
     @property
     def protocol(self) -> str:
+        """The protocol in use; while unpowered, the one it will start in (stored)."""
+        if not self._powered:
+            stored = self._store.get_int("can_protocol")
+            return "j1939" if stored == PROTOCOL_J1939 else "canopen"
         return "j1939" if self._j1939 else "canopen"
 
     @property

@@ -15,7 +15,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel, channel_name
+from blinkcan.devices.colours import (
+    BACKLIGHT_CHANNELS,
+    BacklightColour,
+    Channel,
+    blink_phases,
+    channel_name,
+)
 from blinkcan.devices.keypad import FACE, LEVEL_MAX, SHOW_COMPLETE, SHOW_FAST_FLASH
 
 BLINK_PERIOD_S = 0.5  # one phase A + one phase B; not in the manual
@@ -52,7 +58,7 @@ def key_channels(word: int, key: int, width: int = _KEYS) -> int:
 def render_key(on: int, blink: int, key: int, width: int = _KEYS) -> dict[str, object]:
     """One key's LEDs for snapshot(): steady colour, blink colour, the two blink phases."""
     lit, blinking = key_channels(on, key, width), key_channels(blink, key, width)
-    phase_b = (lit & ~blinking) | (blinking & ~lit)
+    _, phase_b = blink_phases(lit, blinking)
     return {
         "colour": channel_name(lit),
         "blink_colour": channel_name(blinking),

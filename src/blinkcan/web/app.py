@@ -13,7 +13,6 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from collections import deque
 from collections.abc import AsyncIterator, Callable, Collection
 from dataclasses import asdict
 from importlib import resources
@@ -27,6 +26,7 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from blinkcan.decode import Decoder
+from blinkcan.decode.eventlog import EventLog
 from blinkcan.devices.model import Face
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
@@ -91,17 +91,26 @@ class Panel:
     def __init__(self, emulator: Emulator) -> None:
         self.emulator = emulator
         self.decoder = Decoder({t.node_id: t.description for t in emulator.twins})
-        self.frames: deque[dict[str, Any]] = deque(maxlen=FRAMES_KEPT)
+        #: the last frames with their meaning, repeated heartbeats folded (decode/eventlog.py)
+        self.log = EventLog(FRAMES_KEPT)
         self._faces: dict[str, dict[str, Any]] = {}
         previous = emulator.on_frame
 
         def record(frame: Frame, sent: bool, now: float) -> None:
             if previous is not None:
                 previous(frame, sent, now)
-            self.frames.append({"id": f"{frame.can_id:03X}", "data": frame.data.hex(" ").upper(),
-                                "text": str(self.decoder.decode(frame, now))})
+            self.log.add(self.decoder.decode(frame, now))
 
         emulator.on_frame = record
+
+    @property
+    def frames(self) -> list[dict[str, Any]]:
+        """The last frames: seconds since the first, id, data, meaning (xN: folded)."""
+        log = self.log
+        return [{"time": f"{log.since_start(row.event):.3f}",
+                 "id": f"{row.event.frame.can_id:03X}",
+                 "data": row.event.frame.data.hex(" ").upper(), "text": row.text()}
+                for row in list(log.rows)]
 
     def state(self) -> dict[str, Any]:
         devices = self.emulator.run(lambda now: [t.snapshot() for t in self.emulator.twins])
@@ -109,7 +118,7 @@ class Panel:
             description = twin.description
             device["model"], device["title"] = description.model, description.title
             device["face"] = self._faces.setdefault(description.model, asdict(description.face))
-        return {"devices": devices, "frames": list(self.frames)}
+        return {"devices": devices, "frames": self.frames}
 
     def twin(self, node_id: object) -> CanopenTwin:
         for twin in self.emulator.twins:

@@ -152,7 +152,9 @@ function keypadView(node, face) {
     const glow = BACKLIGHT[device.backlight.colour];
     const spread = 4 + device.backlight.level / 3;
     grid.style.boxShadow = glow && device.backlight.level > 0 ? `0 0 ${spread}px ${spread / 2}px ${glow}` : "none";
-    const brightness = 0.35 + 0.65 * (device.indicator_brightness / 63);
+    // indicator brightness 0 is dark; 1..63 from dim to full (PKP §13)
+    const level = device.indicator_brightness;
+    const brightness = 0.15 + 0.85 * (level / 63);
     const phase = Math.floor(Date.now() / (1000 * device.blink_period_s / 2)) % 2;
     for (const state of device.encoders || []) {
       const view = [...cells.values()].find((c) => c.encoder && c.encoder.number === state.encoder);
@@ -163,12 +165,14 @@ function keypadView(node, face) {
       if (!cells.has(key.key)) return;
       const { cell, led } = cells.get(key.key);
       const colour = key.phases[phase];
+      const shown = level > 0 ? colour : "off";
       cell.classList.toggle("pressed", key.pressed);
       cell.dataset.phases = key.phases.join(",");
       cell.dataset.colour = colour;
-      led.style.background = LED[colour];
-      led.style.opacity = colour === "off" ? 1 : brightness;
-      led.style.boxShadow = colour === "off" ? "none" : `0 0 10px ${LED[colour]}`;
+      cell.dataset.shown = shown;
+      led.style.background = LED[shown];
+      led.style.opacity = shown === "off" ? 1 : brightness;
+      led.style.boxShadow = shown === "off" ? "none" : `0 0 10px ${LED[shown]}`;
     });
     const extra = device.demo ? ` · DEMO: ${device.demo.step || "on"}` : "";
     const show = device.startup_show ? ` · startup show: ${device.startup_show.mode}` : "";
@@ -236,7 +240,7 @@ function render() {
     if (!present.has(node)) { view.root.remove(); views.delete(node); current.delete(node); }
   }
   document.getElementById("frames").replaceChildren(...latest.frames.slice().reverse().map(
-    (f) => element("li", { text: `${f.id.padStart(3)}  ${f.data.padEnd(23)}  ${f.text}` })));
+    (f) => element("li", { text: `${f.time.padStart(9)}  ${f.id.padStart(3)}  ${f.data.padEnd(23)}  ${f.text}` })));
 }
 
 const source = new EventSource("/api/events");

@@ -1,0 +1,69 @@
+"""The command line with keypads in J1939 mode: ``keypad --protocol j1939``, ``emulate
+--protocol j1939`` (spec/pkp-2600-si-j1939.md)."""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Iterator
+
+import can
+import click
+import pytest
+from click.testing import CliRunner
+
+from blinkcan.cli.emulate import _name, build_twins
+from blinkcan.cli.main import cli
+from blinkcan.protocol import Frame
+from blinkcan.runtime import Emulator
+from blinkcan.twin import KeypadTwin
+
+
+@pytest.fixture
+def bench() -> Iterator[tuple[str, Emulator, KeypadTwin]]:
+    channel = f"cli-j1939-{uuid.uuid4().hex}"
+    bus = can.Bus(interface="virtual", channel=channel)
+    twin = KeypadTwin(protocol="j1939")
+    with Emulator(bus, [twin]) as emulator:
+        yield channel, emulator, twin
+    bus.shutdown()
+
+
+def run(*args: str) -> str:
+    result = CliRunner().invoke(cli, list(args), env={"COLUMNS": "160"})
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+def test_keypad_commands_over_j1939(bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    channel, emulator, twin = bench
+    bus = ["-i", "virtual", "-c", channel]
+    assert run("keypad", "--protocol", "j1939", *bus, "led", "3", "red") == \
+        "keypad 21h (J1939): key 3 red\n"
+    assert emulator.snapshot(twin)["commanded"][2]["colour"] == "red"
+    run("keypad", "--protocol", "j1939", *bus, "backlight", "--colour", "cyan", "--level", "20")
+    run("keypad", "--address", "0x21", *bus, "brightness", "40")  # --address implies J1939
+    snapshot = emulator.snapshot(twin)
+    assert snapshot["backlight"] == {"colour": "cyan", "level": 20}
+    assert snapshot["indicator_brightness"] == 40
+    emulator.run(lambda now: twin.receive(
+        Frame(0x18EF2100, bytes.fromhex("041B7030FFFFFFFF"), extended=True), now))
+    assert run("keypad", "--address", "30h", *bus, "led", "1", "blue", "--blink") == \
+        "keypad 30h (J1939): key 1 blinking blue\n"
+    assert emulator.snapshot(twin)["commanded"][0]["colour"] == "blue"
+
+
+def test_a_bad_j1939_address_is_one_line() -> None:
+    result = CliRunner().invoke(cli, ["keypad", "--address", "0xFE", "-i", "virtual", "-c",
+                                      f"none-{uuid.uuid4().hex}", "led", "1", "red"])
+    assert result.exit_code == 2
+    assert "01h..FDh" in result.output
+
+
+def test_emulate_builds_keypads_in_j1939_mode() -> None:
+    twins = build_twins(("keypad@1.5",), None, None, "firmware", (), "j1939")
+    assert _name(twins[0]) == "keypad 21h (rev 1.5, J1939)"
+    twins[0].power_on(0.0)
+    assert twins[0].snapshot()["protocol"] == "j1939"
+    assert _name(build_twins(("keypad",), None, None, "firmware")[0]) == "keypad 15h (rev 1.1)"
+    with pytest.raises(click.UsageError, match="only the PKP-2600-SI"):
+        build_twins(("keybox",), None, None, "firmware", (), "j1939")
