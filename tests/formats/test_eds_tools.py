@@ -17,15 +17,17 @@ import canopen
 import pytest
 from canopen.objectdictionary import import_od
 
-from blinkcan.devices.model import DeviceDescription
-from blinkcan.devices.registry import describe_device
+from blinkcan.devices.model import QUIRK_PROFILES, DeviceDescription
+from blinkcan.devices.registry import describe_device, models
 from blinkcan.formats.eds import eds_text
 from blinkcan.formats.shipped import shipped_eds
 from blinkcan.protocol import Frame
 from blinkcan.protocol.cob import RPDO1
 from blinkcan.twin import KeypadTwin
 
-DEVICES = ["keypad", "keypad@1.5", "keybox", "keypad@1.1:cia301", "keybox:cia301"]
+#: every registered model, generation and quirk profile: "model@generation:quirks"
+DEVICES = [f"{model.name}@{generation}:{quirks}" for model in models()
+           for generation in model.generations for quirks in QUIRK_PROFILES]
 
 #: the findings eds-utils may report, per device: 1600h/1601h of rev 1.1 (see the docstring)
 DELIBERATE = {
@@ -38,7 +40,7 @@ DELIBERATE = {
 
 def _description(device: str) -> DeviceDescription:
     name, _, quirks = device.partition(":")
-    return describe_device(name, quirks or "firmware")
+    return describe_device(name, quirks or "firmware")  # "name@generation", quirks
 
 
 def _files(device: str, tmp_path: Path) -> list[Path]:
@@ -99,8 +101,8 @@ def test_device_info_has_every_cia306_key(device: str, tmp_path: Path) -> None:
 
 
 def test_rev15_every_mapped_object_is_pdo_mappable() -> None:
-    for device in ("keypad", "keypad@1.5", "keybox"):
-        description = describe_device(device)
+    for device in DEVICES:
+        description = _description(device)
         od: Any = import_od(str(shipped_eds(description)), description.default_node_id)
         for index in range(0x1600, 0x1800):
             if index in od:
@@ -117,7 +119,7 @@ def test_rev15_every_mapped_object_is_pdo_mappable() -> None:
 def test_rev11_led_rpdos_built_from_the_eds_are_the_frame_the_keypad_acts_on() -> None:
     """A master that trusts the EDS mapping (python-canopen here) sends the packed 5-byte
     frame; the keypad twin lights what the master meant (errata P7)."""
-    description = describe_device("keypad")
+    description = describe_device("keypad@1.1")
     node: Any = canopen.RemoteNode(0x15, str(shipped_eds(description)))
     canopen.Network().add_node(node)
     node.rpdo.read(from_od=True)

@@ -178,7 +178,7 @@ def test_shipped_eds_matches_a_fresh_export_and_python_canopen_reads_it() -> Non
     assert path.read_text() == eds_text(description)
     od: Any = canopen.import_od(str(path), 0x15)
     assert od[0x2000][7].default == 8  # TOP position encoder 2 (MT §3)
-    assert od[0x2005][4].name == "Analog input IN3 (5 V = FFh)"
+    assert od[0x2005][4].name == "Analog input IN3 (FFh at 5 V)"
     assert od[0x1803][2].access_type == "ro"
     assert len(od[0x1A03]) == 1  # stated empty for readers that pair 1803h with it (M50)
 
@@ -233,3 +233,25 @@ def test_cli_emulate_and_export_know_the_model(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["export", "eds", MT, "-o", str(tmp_path / "mt.eds")])
     assert result.exit_code == 0, result.output
     assert "PKP3500MT" in (tmp_path / "mt.eds").read_text()
+
+
+def test_readme_pkp3500_twin_example_runs() -> None:
+    import re
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    section = readme[readme.index("### The PKP-3500-MT"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S)
+    assert code is not None
+    scope: dict[str, Any] = {}
+    exec(compile(code.group(1), "README.md", "exec"), scope)
+    assert scope["mt"].objects["digital_inputs"] == 0b101  # IN0 driven high, IN2 at 3 V
+
+
+def test_scan_names_the_model() -> None:
+    from blinkcan.host import scan
+
+    with Rig() as rig:
+        rig.add(mt_twin())
+        rig.add(KeypadTwin(node_id=0x16))
+        found = {f.node_id: (f.kind, f.model) for f in scan(rig.bus, listen=0.05)}
+    assert found == {0x15: ("keypad", MT), 0x16: ("keypad", "pkp-2600-si")}

@@ -17,12 +17,8 @@ import click
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import model
-<<<<<<< HEAD
 from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
-=======
-from blinkcan.host import Keybox, Keypad, SdoError
 from blinkcan.protocol.j1939 import ADDRESS_MAX
->>>>>>> main
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]

@@ -5,10 +5,13 @@ from __future__ import annotations
 import click
 
 from blinkcan.cli.bus_options import NODE_ID
+from blinkcan.cli.control import J1939Address
 from blinkcan.cli.targets import check_target, writing
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.dbc import dbc_text
+from blinkcan.formats.dbc_j1939 import dbc_text as j1939_dbc_text
 from blinkcan.formats.eds import eds_text
 
 
@@ -22,16 +25,30 @@ from blinkcan.formats.eds import eds_text
               help="DBC: the node the COB-IDs are for (1..127).")
 @click.option("--manual", default=None, help="Keypad generation (manual revision), e.g. 1.1.")
 @click.option("--force", is_flag=True, help="Replace FILE if it exists.")
+@click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
+              show_default=True, help="DBC of a keypad: its CANopen PDOs or its J1939 mode.")
+@click.option("--address", type=J1939Address(), default=None,
+              help="DBC, J1939: the keypad's source address (default 21h).")
 def command(kind: str, device: str, output: str | None, quirks: str, node_id: int | None,
-            manual: str | None, force: bool) -> None:
-    """Write the EDS or DBC file of a device, from the same tables the twins run on."""
+            manual: str | None, force: bool, protocol: str, address: int | None) -> None:
+    """Write the EDS or DBC file of a device, from the same tables the twins run on.
+
+    \b
+    blinkcan export dbc keypad --protocol j1939 -o keypad-j1939.dbc
+    """
     try:
         description = describe_device(f"{device}@{manual}" if manual else device, quirks)
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="DEVICE") from None
     if output is not None:
         check_target(output, force)
-    text = eds_text(description) if kind == "eds" else dbc_text(description, node_id)
+    if protocol == "j1939" or address is not None:
+        if kind != "dbc" or description.model != "pkp-2600-si":
+            raise click.UsageError("J1939 mode: a DBC of the PKP-2600-SI keypad "
+                                   "(blinkcan export dbc keypad --protocol j1939)")
+        text = j1939_dbc_text(address if address is not None else DEFAULT_ADDRESS)
+    else:
+        text = eds_text(description) if kind == "eds" else dbc_text(description, node_id)
     if output is None:
         click.echo(text, nl=False)
     else:

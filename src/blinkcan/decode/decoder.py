@@ -29,7 +29,13 @@ from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState
-from blinkcan.protocol.sdo import EXPEDITED_UPLOAD_COMMAND
+from blinkcan.protocol.sdo import (
+    EXPEDITED_UPLOAD_COMMAND,
+    abort_code_of,
+    expedited_payload,
+    segment_payload,
+    split_multiplexer,
+)
 
 _UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
 _NMT_TEXT = {
@@ -467,7 +473,7 @@ class Decoder:
         command, ccs = data[0], data[0] >> 5
         kind = device.kind if device is not None else None
         if ccs in (1, 2, 4):
-            index, sub = data[1] | data[2] << 8, data[3]
+            index, sub = split_multiplexer(data[1:4])
             entry = self._entry(device, index, sub)
             name = self._name(index, sub, entry)
             fields = {"index": index, "subindex": sub, "object": entry.name if entry else None}
@@ -483,8 +489,7 @@ class Decoder:
             if not command & 0x02:
                 return Event(time, frame, Kind.SDO_WRITE, f"SDO segmented write {name}", node,
                              kind, fields)
-            size = 4 - ((command >> 2) & 3) if command & 1 else 4
-            raw = data[4 : 4 + size]
+            raw = expedited_payload(command, data)
             value = entry.decode(raw) if entry is not None else int.from_bytes(raw, "little")
             if index == 0x20FF and sub == 1 and value == 1:
                 text = "switch to J1939 (PKP §44)"
@@ -495,7 +500,7 @@ class Decoder:
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO read, next segment", node, kind)
         if ccs == 0:
             transfer = self._live_transfer(node, time)
-            segment = data[1 : 8 - ((command >> 1) & 7)]
+            segment = segment_payload(data)
             if transfer is not None and not self._grow(node, transfer, segment):
                 return Event(time, frame, Kind.SDO_SEGMENT, f"SDO write segment: over "
                              f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind)
@@ -510,8 +515,8 @@ class Decoder:
         transfer = self._live_transfer(node, time)
         if command == 0x80:
             self._transfers.pop(node, None)
-            index, sub = data[1] | data[2] << 8, data[3]
-            code = int.from_bytes(data[4:8], "little")
+            index, sub = split_multiplexer(data[1:4])
+            code = int(abort_code_of(data))
             name = self._name(index, sub, self._entry(device, index, sub))
             return Event(time, frame, Kind.SDO_ABORT,
                          f"SDO abort {name}: {code:08X}h {describe_abort(code)}", node, kind,
@@ -536,7 +541,7 @@ class Decoder:
             return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: {size} bytes follow",
                          node, kind, {**fields, "size": size})
         if command >> 5 == 0 and not transfer.writing:
-            if not self._grow(node, transfer, data[1 : 8 - ((command >> 1) & 7)]):
+            if not self._grow(node, transfer, segment_payload(data)):
                 return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
                              f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
             if command & 1:

@@ -48,6 +48,22 @@ FAULT_PERIOD_UNIT_S = 0.01  # errata K4: 2012h counts 10 ms
 
 #: 2001h pin state codes (KBX §19)
 PIN_OFF, PIN_HIGH, PIN_RESET, PIN_FAULT = 0x00, 0x01, 0x02, 0x03
+#: what the driver, the decoder, the panel and the twin's snapshot call a pin state
+PIN_STATE_NAMES = {PIN_OFF: "off", PIN_HIGH: "high", PIN_FAULT: "fault"}
+#: 2009h (KBX §22, errata K16): byte 0 a mask of the PWM pins (bit 0 = pin 12, bit 1 = pin 13),
+#: byte 1 the duty level 00h-0Ah
+PWM_BITS = {pin: 1 << i for i, pin in enumerate(PWM_PINS)}
+PWM_MASK = sum(PWM_BITS.values())
+
+
+def pwm_register(mask: int, level: int) -> int:
+    """The 2009h value of a PWM-pin mask and a duty level (KBX §22)."""
+    return mask | level << 8
+
+
+def split_pwm_register(value: int) -> tuple[int, int]:
+    """(PWM-pin mask, duty level) of a 2009h value (KBX §22)."""
+    return value & 0xFF, value >> 8
 
 #: 2010h codes (KBX §23, errata B1)
 BITRATES = {0x00: 125_000, 0x01: 250_000, 0x02: 500_000}
@@ -164,6 +180,7 @@ def describe_keybox(quirks: Quirks = "firmware", factory_node_id: int = DEFAULT_
         consumer_heartbeat=CONSUMER_HEARTBEAT,
         face=FACE,
         title="Keybox",
+        edition=f"manual rev {GENERATION}",
         eds_file="keybox.eds",
         eds_date="04-18-2019",  # KBX §42: manual rev 1.0, 18/04/2019
     )

@@ -321,6 +321,7 @@ def describe_keypad(
         led_fields=LED_FIELDS[generation],
         features=GENERATION_2_FEATURES if generation == "1.5" else frozenset(),
         title="PKP-2600-SI keypad",
+        edition=f"generation {GENERATIONS.index(generation) + 1} (manual rev {generation})",
         eds_file=eds_file,
         eds_date=eds_date,
         eds_defaults=_eds_led_mappings(generation),

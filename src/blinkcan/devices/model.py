@@ -97,8 +97,9 @@ class DeviceDescription:
     #: behaviours a twin or driver switches on: "sync" (SYNC-driven PDOs, errata G3),
     #: "node-id-at-once" (G1), "backlight-colour-pdo" (G2)
     features: frozenset[str] = frozenset()
-    #: "PKP-2600-SI keypad": how people call it
+    #: "PKP-2600-SI keypad": how people call it; "generation 2 (manual rev 1.5)": which one
     title: str = ""
+    edition: str = ""
     #: the shipped EDS file's name and date (the manual revision's date, MM-DD-YYYY)
     eds_file: str = ""
     eds_date: str = "01-01-2024"

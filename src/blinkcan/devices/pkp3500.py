@@ -226,7 +226,7 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
             u8(1, "digital_inputs", "Digital inputs IN0-IN3", Access.RO, 0),
         )),
         record(0x2005, "analog_inputs", "Read analog input", tuple(  # MT §24, M45, M49
-            u8(n + 1, f"analog_input_{n}", f"Analog input IN{n} (5 V = FFh)", Access.RO, 0)
+            u8(n + 1, f"analog_input_{n}", f"Analog input IN{n} (FFh at 5 V)", Access.RO, 0)
             for n in range(ANALOG_INPUTS)
         )),
         var(0x2006, "Set analog input message period", u8(0, "analog_period",
@@ -336,6 +336,7 @@ def describe_pkp3500(
         consumer_heartbeat=CONSUMER_HEARTBEAT,  # MT §32, M65: as the PKP-2600-SI rev 1.5 (G4)
         face=FACE,
         title="PKP-3500-MT keypad",
+        edition=f"manual rev {GENERATION}",
         eds_file="pkp-3500-mt.eds",
         eds_date="05-16-2023",  # manual rev 1.3, 16/05/2023
         led_fields=LED_FIELDS,

@@ -27,12 +27,14 @@ import can
 from blinkcan.devices.keybox import (
     FACE,
     FAULT_PERIOD_UNIT_S,
-    PIN_FAULT,
     PIN_HIGH,
     PIN_OFF,
     PIN_RESET,
+    PIN_STATE_NAMES,
+    PWM_BITS,
     PWM_LEVEL_MAX,
     describe_keybox,
+    pwm_register,
 )
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import Device
@@ -45,7 +47,7 @@ from blinkcan.protocol.sdo_client import SdoError
 
 log = logging.getLogger(__name__)
 
-STATE_NAMES = {PIN_OFF: "off", PIN_HIGH: "high", PIN_FAULT: "fault"}
+STATE_NAMES = PIN_STATE_NAMES
 
 
 @dataclass(frozen=True)
@@ -185,8 +187,8 @@ class Keybox(Device):
         if not chosen <= set(FACE.pwm_pins):
             raise ValueError(f"PWM is on pins {FACE.pwm_pins} only, not {sorted(chosen)}")
         check_range("PWM duty", duty, 0, PWM_LEVEL_MAX)
-        mask = sum(1 << i for i, pin in enumerate(FACE.pwm_pins) if pin in chosen)
-        self.write("pwm", mask | duty << 8)
+        mask = sum(PWM_BITS[pin] for pin in chosen)
+        self.write("pwm", pwm_register(mask, duty))
 
     def state(self, pin: int) -> str:
         """"off", "high" or "fault", read from the Keybox (the picture follows)."""
@@ -227,8 +229,9 @@ class Keybox(Device):
         return self.faults.iterate(timeout)
 
     def _on_faults(self, frame: Frame, now: float) -> None:
-        if len(frame.data) >= 2:
-            self._update_faults(int.from_bytes(frame.data[:2], "little"), now)
+        layout = self.description.pdo("faults")
+        if len(frame.data) >= layout.min_length:  # KBX §18: DLC 2 or more
+            self._update_faults(layout.decode(frame.data)["faults"], now)
 
     def _update_faults(self, mask: int, now: float) -> None:
         """The FAULT mask as the Keybox sent or read it: the whole truth about FAULT."""

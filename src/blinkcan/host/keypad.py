@@ -29,7 +29,13 @@ from blinkcan.devices.keypad import (
     SHOW_OFF,
     describe_keypad,
 )
-from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
+from blinkcan.devices.keypad_j1939 import (
+    DEFAULT_ADDRESS,
+    DEFAULT_HOST_ADDRESS,
+    PGN_COMMAND,
+    PRIORITY,
+)
+from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import identify
@@ -41,11 +47,15 @@ from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
+from blinkcan.protocol.j1939 import j1939_frame
 from blinkcan.protocol.sdo_client import SdoAbortError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
-J1939_RETURN = Frame(0x18EF2100, bytes.fromhex("041B8000FFFFFFFF"), extended=True)  # PKP §44
+#: PKP §44 / J1939 manual §27: the way back to CANopen, from the J1939 command table
+J1939_RETURN = j1939_frame(PGN_COMMAND, DEFAULT_HOST_ADDRESS,
+                           j1939_command("switch_to_canopen").encode(0),
+                           destination=DEFAULT_ADDRESS, priority=PRIORITY)
 
 
 @dataclass(frozen=True)
@@ -69,6 +79,17 @@ def _masks(channels_by_key: Mapping[int, int]) -> dict[str, int]:
 
 
 class Keypad(Device):
+    """Drive a keypad at ``node_id`` on ``bus`` (a python-can bus or a :class:`HostBus`): the
+    PKP-2600-SI, or the registered model ``model`` names (its driver class is built).
+
+    ``start``: send NMT start now, after every boot-up and after a watchdog trip.
+    ``long_press``: seconds a key is held before a "long press" event. ``restore``: re-send the
+    LED picture after a boot-up or a watchdog trip. ``verify``: confirm that this model answers
+    at ``node_id`` first (False only for a keypad that cannot answer SDO).
+    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md);
+    it answers no SDO, so nothing is confirmed then.
+    """
+
     # the model's description carries its keys, LED layout and PDOs; ``model=`` names
     # another registered keypad, whose driver class (a subclass) is built instead
     def __new__(cls, *args: Any, model: str | None = None, **kwargs: Any) -> Keypad:
@@ -95,16 +116,6 @@ class Keypad(Device):
         if found is None or found.kind != "keypad":
             raise ValueError(f"node {node_id:02X}h is a {model_id!r}, not a known keypad")
         return cls(bus, node_id, model=found.model, **options)
-
-    """Drive a PKP-2600-SI at ``node_id`` on ``bus`` (a python-can bus or a :class:`HostBus`).
-
-    ``start``: send NMT start now, after every boot-up and after a watchdog trip.
-    ``long_press``: seconds a key is held before a "long press" event. ``restore``: re-send the
-    LED picture after a boot-up or a watchdog trip. ``verify``: confirm that a PKP-2600-SI
-    answers at ``node_id`` first (False only for a keypad that cannot answer SDO).
-    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md);
-    it answers no SDO, so nothing is confirmed then.
-    """
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
                  long_press: float = 0.8, restore: bool = True, generation: str | None = None,

@@ -72,6 +72,11 @@ def expedited_payload(command: int, data: bytes) -> bytes:
     return data[4:8]
 
 
+def segment_payload(data: bytes) -> bytes:
+    """The data bytes of a segment frame: seven, minus the unused count in bits 3-1."""
+    return data[1 : 8 - ((data[0] >> 1) & 0x07)]
+
+
 def abort_code_of(data: bytes) -> AbortCode | int:
     """The abort code in an 80h frame, as an AbortCode where it is a known one."""
     code = int.from_bytes(data[4:8], "little")

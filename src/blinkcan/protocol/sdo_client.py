@@ -16,7 +16,9 @@ from blinkcan.protocol.sdo import (
     EXPEDITED_DOWNLOAD_COMMAND,
     TOGGLE,
     ZEROS,
+    expedited_payload,
     multiplexer,
+    segment_payload,
     split_multiplexer,
 )
 
@@ -102,8 +104,7 @@ class UploadTransfer(_Transfer):
             if data[1:4] != self.mux:
                 raise self._fail(f"reply for {split_multiplexer(data[1:4])}")
             if command & 0x02:  # expedited; size stated or all four bytes
-                size = 4 - ((command >> 2) & 3) if command & 0x01 else 4
-                self.value = bytes(data[4 : 4 + size])
+                self.value = bytes(expedited_payload(command, data))
                 self.done = True
                 return None
             self._size = int.from_bytes(data[4:8], "little") if command & 0x01 else -1
@@ -112,7 +113,7 @@ class UploadTransfer(_Transfer):
             raise self._fail(f"unexpected reply {command:02X}h")
         if command & TOGGLE != self._toggle:
             raise self._fail("toggle bit not alternated")
-        self._buffer += data[1 : 8 - ((command >> 1) & 0x07)]
+        self._buffer += segment_payload(data)
         if command & 0x01:  # last segment (errata B6: strings of any length)
             if self._size not in (None, -1) and len(self._buffer) != self._size:
                 raise self._fail(f"{len(self._buffer)} bytes, {self._size} announced")

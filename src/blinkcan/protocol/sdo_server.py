@@ -27,6 +27,8 @@ from blinkcan.protocol.sdo import (
     TOGGLE,
     ZEROS,
     abort_data,
+    expedited_payload,
+    segment_payload,
 )
 
 #: The largest segmented download the server buffers (both devices have only short objects).
@@ -163,7 +165,7 @@ class SdoServer:
             self._enter(TransferState.IDLE)
         if command & 0x02:  # expedited: n bytes when the size is indicated, else four
             if command & 0x01:
-                result = self._access.sdo_download(mux, data[4 : 8 - ((command >> 2) & 3)], True)
+                result = self._access.sdo_download(mux, expedited_payload(command, data), True)
             else:
                 result = self._access.sdo_download(mux, data[4:8], False)
             if result > 0xFF:
@@ -185,7 +187,7 @@ class SdoServer:
         if toggle != self._toggle:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
-        self._buffer += data[1 : 8 - ((command >> 1) & 0x07)]
+        self._buffer += segment_payload(data)
         if len(self._buffer) > MAX_DOWNLOAD_SIZE:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.OUT_OF_MEMORY)

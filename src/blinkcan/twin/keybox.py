@@ -19,8 +19,11 @@ from blinkcan.devices.keybox import (
     FACE,
     FAULT_PERIOD_UNIT_S,
     MODEL,
+    PIN_STATE_NAMES,
     PWM_LEVEL_MAX,
+    PWM_MASK,
     describe_keybox,
+    split_pwm_register,
 )
 from blinkcan.devices.model import Quirks
 from blinkcan.devices.objects import Value
@@ -32,7 +35,7 @@ from blinkcan.twin.base import CanopenTwin, next_due
 from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
 from blinkcan.twin.nvm import Nvm
 
-_STATE_NAMES = {PinState.OFF: "off", PinState.HIGH: "high", PinState.FAULT: "fault"}
+_STATE_NAMES = {state: PIN_STATE_NAMES[state] for state in PinState}
 _PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in FACE.pin_numbers)
 
 
@@ -127,8 +130,8 @@ class KeyboxTwin(CanopenTwin):
             self.outputs.command_masks(signals["off"], signals["high"]))
 
     def _on_pwm(self, value: int) -> AbortCode | None:
-        mask, level = value & 0xFF, value >> 8
-        if mask & ~0b11 or level > PWM_LEVEL_MAX:  # errata K16
+        mask, level = split_pwm_register(value)
+        if mask & ~PWM_MASK or level > PWM_LEVEL_MAX:  # errata K16
             return AbortCode.INVALID_VALUE
         self._outbox += self._after_outputs_change(self.outputs.set_pwm(mask, level))
         return None

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from enum import Enum, IntEnum
 
-from blinkcan.devices.keybox import FACE
+from blinkcan.devices.keybox import FACE, PWM_BITS, pwm_register
 from blinkcan.protocol.cob import check_range
 from blinkcan.protocol.items import item_numbers
 
@@ -54,7 +54,7 @@ TRANSITIONS: dict[tuple[PinState, PinEvent], PinState] = {
 }
 
 _PINS = FACE.pins
-_PWM_BITS = {pin: 1 << i for i, pin in enumerate(FACE.pwm_pins)}
+_PWM_BITS = PWM_BITS
 
 
 def check_pin(pin: int) -> int:
@@ -186,4 +186,4 @@ class Outputs:
         return levels & ((1 << _PINS) - 1)
 
     def pwm_register(self) -> int:
-        return self.pwm_mask | self.pwm_level << 8
+        return pwm_register(self.pwm_mask, self.pwm_level)

@@ -117,6 +117,7 @@ class Panel:
         for twin, device in zip(self.emulator.twins, devices, strict=True):
             description = twin.description
             device["model"], device["title"] = description.model, description.title
+            device["edition"] = description.edition
             device["face"] = self._faces.setdefault(description.model, asdict(description.face))
         return {"devices": devices, "frames": self.frames}
 

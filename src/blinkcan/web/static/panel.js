@@ -41,8 +41,7 @@ function headerView(node) {
   const facts = element("div", { class: "facts" });
   return { parts: [power, title, facts], update(device) {
     power.textContent = device.powered ? "power off" : "power on";
-    title.textContent = `${device.title} ${hex(node)}` +
-      (device.kind === "keypad" ? ` · generation ${device.generation === "1.5" ? "2 (manual rev 1.5)" : "1 (manual rev 1.1)"}` : "");
+    title.textContent = `${device.title} ${hex(node)} · ${device.edition}`;
     facts.innerHTML = `NMT <b data-test="nmt-${node}">${device.nmt_state}</b> · ` +
       `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
       (device.quirks === "cia301" ? " · CiA 301 profile" : "");
@@ -73,6 +72,7 @@ function knobView(node, encoder, cell) {
   let turned = false;
   cell.addEventListener("pointerdown", (event) => {
     event.preventDefault(); dragY = event.clientY; turned = false;
+    cell.setPointerCapture(event.pointerId);  // a drag may leave the knob and still turn it
   });
   cell.addEventListener("pointermove", (event) => {
     if (dragY === null) return;
@@ -86,7 +86,7 @@ function knobView(node, encoder, cell) {
     }
     dragY = null;
   });
-  cell.addEventListener("pointerleave", () => { dragY = null; });
+  cell.addEventListener("pointercancel", () => { dragY = null; });
   return { update(state, phase) {
     counter.textContent = state.counter;
     state.ring.forEach((led, i) => {
