@@ -152,3 +152,22 @@ def test_a_writer_killed_mid_write_leaves_the_file_whole_and_nothing_behind(
     assert twin.receive(frame("615 2B 17 10 00 C8 00 00 00"), 0.0) == [
         frame("595 60 17 10 00 00 00 00 00")]
     assert _stray_files(tmp_path, "keypad.json") == []
+
+
+def test_a_refused_value_never_reaches_the_file(tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    bench = Bench(KeyboxTwin(nvm=tmp_path / "keybox.json"))
+    bench.replay("on\n< 70C 00")
+    writes: list[tuple[str, str]] = []
+    real_replace = os.replace
+
+    def counted(source: str, target: str) -> None:
+        writes.append((source, target))
+        real_replace(source, target)
+
+    monkeypatch.setattr(os, "replace", counted)
+    bench.replay("""
+        > 60C 23 16 10 01 F4 01 00 01
+        < 58C 80 16 10 01 30 00 09 06
+    """)  # a reserved byte set: 0609 0030h (errata K8), and no NVM write at all
+    assert writes == []

@@ -6,6 +6,8 @@ the manual (the tick timer, a period) are ``??`` here.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -748,3 +750,50 @@ def test_random_traffic_never_crashes_and_every_sdo_is_answered(
         else:
             now += abs(number) / 100
             twin.advance(now)
+
+
+# -- quirks, aborts and stored settings ------------------------------------------------------------
+
+@pytest.mark.parametrize(("quirks", "code"), [("firmware", "05 04 00 01"),  # M15: as printed
+                                              ("cia301", "01 00 04 05")])  # CiA 0504 0001h
+def test_unknown_command_specifier(quirks: str, code: str) -> None:
+    bench = boot(quirks=quirks)
+    bench.replay(f"> 615 E0 00 10 00 00 00 00 00\n< 595 80 00 10 00 {code}")
+
+
+@pytest.mark.parametrize(("request_", "code"), [
+    ("2F 03 18 02 08 00 00 00", "02 00 01 06"),  # M48: 1803h read-only
+    ("2F 01 18 02 FE 00 00 00", "02 00 01 06"),  # M43: 1801h/02 read-only
+    ("2F 03 14 02 FE 00 00 00", "02 00 01 06"),  # M70: 1403h/02 read-only
+    ("2F 04 20 01 01 00 00 00", "02 00 01 06"),  # 2004h read-only
+    ("2F 05 20 01 01 00 00 00", "02 00 01 06"),  # M49: 2005h read-only
+    ("2F 17 10 00 05 00 00 00", "10 00 07 06"),  # M16: 2Fh to a U16
+    ("2B 00 20 06 05 00 00 00", "10 00 07 06"),  # M16: 2Bh to a U8
+    ("2F 03 20 03 0A 00 00 00", "30 00 09 06"),  # M57: colour 0Ah
+    ("2F 03 20 02 40 00 00 00", "30 00 09 06"),  # M55: level over 3Fh
+    ("23 16 10 01 05 00 01 00", "30 00 09 06"),  # M65: 5 ms is too short
+    ("23 16 10 01 64 00 15 00", "30 00 09 06"),  # M65: not its own id
+    ("23 11 10 01 6C 6F 61 65", "20 00 00 08"),  # M67: wrong signature
+])
+def test_per_object_aborts(bench: Bench, request_: str, code: str) -> None:
+    index_sub = request_.split()[1:4]
+    read(bench, request_, f"80 {' '.join(index_sub)} {code}")
+
+
+def test_stored_settings_survive_the_process(tmp_path: Path) -> None:
+    path = tmp_path / "mt.json"
+    twin = KeypadTwin(model="pkp-3500-mt", nvm=path)
+    twin.power_on(0.0)
+    for request in ("2F00200703000000", "2B00200502000000", "2F06200032000000",
+                    "2B01180564000000"):
+        assert twin.receive(Frame(0x615, bytes.fromhex(request)), 0.0)[0].data[0] == 0x60
+    twin.close()
+    again = KeypadTwin(model="pkp-3500-mt", nvm=path)
+    again.power_on(0.0)
+    reads = {"2000h/07": "4000200700000000", "2000h/05": "4000200500000000",
+             "2006h": "4006200000000000", "1801h/05": "4001180500000000"}
+    values = {name: again.receive(Frame(0x615, bytes.fromhex(r)), 0.0)[0].data[4]
+              for name, r in reads.items()}
+    # TOP 3, the counter started from min(startup 2, TOP 3), 500 ms, 100 ms
+    assert values == {"2000h/07": 3, "2000h/05": 2, "2006h": 0x32, "1801h/05": 0x64}
+    again.close()

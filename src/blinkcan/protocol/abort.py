@@ -12,6 +12,8 @@ from enum import IntEnum
 class AbortCode(IntEnum):
     """SDO abort codes, sent little-endian in bytes 4-7 of an 80h frame."""
 
+    #: not CiA 301: the PKP-3500-MT manual's code for an unknown command byte (MT M15)
+    COMMAND_BYTE_INVALID_BLINK = 0x01000405
     TOGGLE_BIT_NOT_ALTERNATED = 0x05030000
     SDO_PROTOCOL_TIMED_OUT = 0x05040000
     COMMAND_SPECIFIER_INVALID = 0x05040001
@@ -41,6 +43,8 @@ class AbortCode(IntEnum):
 
 
 _MEANINGS: dict[AbortCode, str] = {
+    AbortCode.COMMAND_BYTE_INVALID_BLINK: "invalid value for command byte (Blink firmware; "
+                                          "CiA 301: command specifier not valid)",
     AbortCode.TOGGLE_BIT_NOT_ALTERNATED: "toggle bit not alternated",
     AbortCode.SDO_PROTOCOL_TIMED_OUT: "SDO protocol timed out",
     AbortCode.COMMAND_SPECIFIER_INVALID: "client/server command specifier not valid or unknown",

@@ -126,7 +126,8 @@ class CanopenTwin:
         self._consumer = ConsumerState.OFF
         self._consumer_deadline: float | None = None
         if "consumer_heartbeat_time" in description.table:
-            self._store.set_hook("consumer_heartbeat_time", self._on_consumer_time)
+            self._store.set_hook("consumer_heartbeat_time", self._on_consumer_time,
+                                 check=self._check_consumer_time)
         if "restore_all_parameters" in description.table:
             self._store.set_hook("restore_all_parameters", self._on_restore, keeps_value=False)
 
@@ -399,10 +400,13 @@ class CanopenTwin:
 
     # -- consumer heartbeat and restore defaults (KBX §28/§36, PKP rev 1.5 §26/§34) ----------
 
-    def _on_consumer_time(self, value: int) -> AbortCode | None:
+    def _check_consumer_time(self, value: int) -> AbortCode | None:
         rule = self.description.consumer_heartbeat
         if rule is None or not rule.accepts(value, self._node_id):
             return AbortCode.INVALID_VALUE  # errata K8, G4
+        return None
+
+    def _on_consumer_time(self, value: int) -> AbortCode | None:
         self._store.set("consumer_heartbeat_time", value)
         self._start_consumer()
         self._routes = self._build_routes()  # listen to the newly monitored node

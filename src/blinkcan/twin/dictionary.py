@@ -8,8 +8,8 @@ is one dictionary look-up.
 A stored setting is persisted *before* it is committed: if the twin's non-volatile memory cannot
 take it, the write is refused with the persister's abort code and memory is left as it was, so
 a retry is tried again rather than acknowledged as "unchanged" (an unchanged stored value is not
-written again, as devices spare their EEPROM). If the entry's hook then refuses the value, the
-previous settings are persisted back.
+written again, as devices spare their EEPROM). An entry's ``check`` refuses a value before it is
+persisted; if its hook refuses one afterwards, the previous settings are persisted back.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ Persister = Callable[[dict[str, Value]], "AbortCode | None"]
 class _Slot:
     """One entry's live value and the facts about its type, computed once (hot path)."""
 
-    __slots__ = ("entry", "hook", "keeps_value", "raw", "readable", "reader", "signed", "size",
-                 "spans", "value", "writable")
+    __slots__ = ("check", "entry", "hook", "keeps_value", "raw", "readable", "reader", "signed",
+                 "size", "spans", "value", "writable")
 
     def __init__(self, entry: ObjectEntry, value: Value) -> None:
         self.entry = entry
@@ -41,6 +41,7 @@ class _Slot:
         self.signed = entry.data_type.is_signed
         self.spans = _valid_spans(entry)
         self.hook: WriteHook | None = None
+        self.check: WriteHook | None = None
         self.reader: Reader | None = None
         self.keeps_value = True
         self.value = value
@@ -100,12 +101,15 @@ class ObjectStore:
         """Set a value with no checks (the device itself changing its state)."""
         _store_value(self._by_name[name], value)
 
-    def set_hook(self, name: str, hook: WriteHook, keeps_value: bool = True) -> None:
+    def set_hook(self, name: str, hook: WriteHook, keeps_value: bool = True,
+                 check: WriteHook | None = None) -> None:
         """Run ``hook`` on every write of ``name`` (SDO or RPDO). With ``keeps_value=False``
         the written value is a command, not the entry's new value: the hook updates the
-        store itself (the Keybox's 2008h masks read back the pin states, KBX §21)."""
+        store itself (the Keybox's 2008h masks read back the pin states, KBX §21).
+        ``check`` refuses a value before anything happens, the NVM write included."""
         slot = self._by_name[name]
         slot.hook = hook
+        slot.check = check
         slot.keeps_value = keeps_value
 
     def set_reader(self, name: str, reader: Reader) -> None:
@@ -120,6 +124,10 @@ class ObjectStore:
         return self._commit(slot, value)
 
     def _commit(self, slot: _Slot, value: Value) -> AbortCode | None:
+        if slot.check is not None:
+            refusal = slot.check(value)  # type: ignore[arg-type]
+            if refusal is not None:
+                return refusal
         # an unchanged stored value is not written again (as devices spare their EEPROM)
         persist = self.persist if (slot.entry.stored and slot.keeps_value
                                    and value != slot.value) else None

@@ -48,6 +48,10 @@ from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode
 from blinkcan.twin.nvm import Nvm
 
 _TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
+#: M15 (Q): the firmware aborts an unknown command specifier with the code the manual lists,
+#: 0100 0405h, where CiA 301 says 0504 0001h
+_CIA_UNKNOWN_COMMAND = int(AbortCode.COMMAND_SPECIFIER_INVALID).to_bytes(4, "little")
+_FIRMWARE_UNKNOWN_COMMAND = int(AbortCode.COMMAND_BYTE_INVALID_BLINK).to_bytes(4, "little")
 
 
 def direction_byte(net: int) -> int:
@@ -279,6 +283,14 @@ class Pkp3500Twin(KeypadTwin):
         return []
 
     # -- CANopen hooks --------------------------------------------------------------------------
+
+    def _on_sdo(self, frame: Frame, now: float) -> list[Frame]:
+        frames = super()._on_sdo(frame, now)
+        if frames and self.description.quirks == "firmware":
+            reply = frames[0].data
+            if reply[0] == 0x80 and reply[4:8] == _CIA_UNKNOWN_COMMAND:  # M15 (Q)
+                frames[0] = Frame(frames[0].can_id, reply[:4] + _FIRMWARE_UNKNOWN_COMMAND)
+        return frames
 
     def _on_boot(self, now: float, application: bool) -> list[Frame]:
         frames = super()._on_boot(now, application)
