@@ -43,8 +43,11 @@ def other_event(decoder: Decoder, message: can.Message) -> Event:
                                      message.dlc, message.timestamp)
     frame = Frame.trusted(message.arbitration_id, bytes(message.data[:8]),
                           message.is_extended_id)
-    return Event(message.timestamp, frame, Kind.FRAME, f"{describe_frame(message)}, "
-                 f"{len(message.data)} bytes (CAN FD is not decoded)")
+    if kind == "fd":
+        return Event(message.timestamp, frame, Kind.FRAME, f"{describe_frame(message)}, "
+                     f"{len(message.data)} bytes (CAN FD is not decoded)")
+    return Event(message.timestamp, frame, Kind.FRAME,  # e.g. a standard id over 7FFh
+                 f"{describe_frame(message)}: not a valid classic CAN frame")
 
 
 def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:

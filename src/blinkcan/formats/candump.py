@@ -22,8 +22,9 @@ from can.io.canutils import CanutilsLogReader
 
 from blinkcan.protocol.frame import Frame
 
-_ERROR_FLAG = 0x20000000
-_trusted = Frame.trusted
+_DIRECTIONS = frozenset({"R", "T", "r", "t"})
+_NOT_DATA = frozenset({"#", "R", "r"})  # CAN FD, remote
+_new_tuple = tuple.__new__  # Frame.trusted without the call: the ids and data are checked here
 
 
 def _python_can(line: str) -> can.Message | None:
@@ -35,22 +36,30 @@ def _python_can(line: str) -> can.Message | None:
 def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
     ``can.Message`` python-can reads for anything else (remote, error, CAN FD)."""
+    new = _new_tuple
+    fromhex = bytes.fromhex
     for line in stream:
         fields = line.split()
-        if (len(fields) == 3 or (len(fields) == 4 and fields[3] in ("R", "T", "r", "t"))) \
-                and fields[0][:1] == "(":
+        count = len(fields)
+        if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
+            stamp = fields[0]
             ident, _, data = fields[2].partition("#")
-            if (data[:1] not in ("#", "R", "r") and not len(data) & 1
-                    and (len(ident) <= 3 or not int(ident, 16) & _ERROR_FLAG)):
+            size = len(ident)
+            if stamp[:1] == "(" and size and len(data) <= 16 and not len(data) & 1 \
+                    and data[:1] not in _NOT_DATA:
                 try:
-                    frame = _trusted(int(ident, 16), bytes.fromhex(data), len(ident) > 3)
-                    timestamp = float(fields[0][1:-1])
+                    can_id = int(ident, 16)
+                    payload = fromhex(data)
+                    timestamp = float(stamp[1:-1])
                 except ValueError:
                     pass
                 else:
-                    if len(frame.data) <= 8 and frame.can_id <= (
-                            0x1FFFFFFF if frame.extended else 0x7FF):
-                        yield timestamp, frame
+                    if size <= 3:
+                        if can_id <= 0x7FF:
+                            yield timestamp, new(Frame, (can_id, payload, False))
+                            continue
+                    elif can_id <= 0x1FFFFFFF:  # not an error flag: python-can's own rules
+                        yield timestamp, new(Frame, (can_id, payload, True))
                         continue
         if not fields:
             continue

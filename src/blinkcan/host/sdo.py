@@ -123,11 +123,14 @@ class SdoChannel:
             self._signal.clear()
             self._accept = accept
             self._awaiting = True
-        self.host.send(Frame(self._request_id, request))
-        self.host.wait(self._signal, timeout)
+        try:
+            self.host.send(Frame(self._request_id, request))
+            self.host.wait(self._signal, timeout)
+        finally:
+            with self._state_lock:
+                self._awaiting = False
+                self._accept = None
         with self._state_lock:
-            self._awaiting = False
-            self._accept = None
             if self.host.closed:
                 raise SdoError("the bus was shut down", self.node_id,
                                int.from_bytes(request[1:3], "little"), request[3])
