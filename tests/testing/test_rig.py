@@ -8,7 +8,7 @@ import can
 import pytest
 
 from blinkcan import Keybox, Keypad
-from blinkcan.host import KeyEvent
+from blinkcan.host import KeyEvent, SdoTimeoutError
 from blinkcan.protocol import Frame
 from blinkcan.runtime.scheduler import SimulatedScheduler
 from blinkcan.testing import Rig, TimedFrame, assert_matches_trace, frames_of, record_trace
@@ -200,3 +200,52 @@ def test_no_endpoint_receives_its_own_frames() -> None:
             received.append(message.arbitration_id)
         assert 0x000 not in received
         assert rig.emulator.stats.frames_received == 1  # the twins heard the NMT start once
+
+
+def test_recv_without_timeout_ends_after_a_virtual_minute() -> None:
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))
+        rig.settle()
+        rig.bus.clear_received()
+        rig.bus.send(can.Message(arbitration_id=0x60C, data=bytes.fromhex("4000100000000000"),
+                                 is_extended_id=False))
+        reply = rig.bus.recv()
+        assert reply is not None
+        assert reply.arbitration_id == 0x58C
+        start = rig.now
+        assert rig.bus.recv() is None  # nothing more will come: no endless wait
+        assert rig.now == start + 60.0
+
+
+def test_a_closed_bus_fails_the_command_and_leaves_the_channel_usable() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C)
+        rig.bus_down()
+        with pytest.raises(can.CanOperationError):
+            keybox.on(4)
+        rig.bus_up()
+        keybox.on(4)
+        assert twin.snapshot()["pins"][3]["state"] == "high"
+        keybox.close()
+
+
+def test_a_reboot_in_the_middle_of_a_command_is_never_reported_as_success() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C, sdo_timeout=0.2)
+
+        def reboot_on_request(frame: Frame) -> str | None:
+            if frame.can_id == 0x60C and frame.data[:4] == bytes.fromhex("2F012004"):
+                rig.scheduler.call_soon(lambda: rig.power_off(twin))
+                rig.scheduler.call_later(0.5, lambda: rig.power_on(twin))
+                return "drop"  # the Keybox lost power as the request arrived
+            return None
+
+        undo = rig.network.add_rule(reboot_on_request)
+        with pytest.raises(SdoTimeoutError):
+            keybox.on(4)
+        undo()
+        rig.advance(1.0)
+        assert keybox.state(4) == "off"  # what the rebooted Keybox really does
+        keybox.close()

@@ -96,6 +96,7 @@ class SdoChannel:
         timeout = self.timeout if timeout is None else timeout
         retries = self.retries if retries is None else retries
         with self._lock:
+            first: SdoTimeoutError | None = None
             uncertain: SdoTimeoutError | None = None  # an attempt that may have taken effect
             for attempt in range(retries + 1):
                 transfer = make()
@@ -105,9 +106,10 @@ class SdoChannel:
                     self._transfer(transfer, timeout)
                     return transfer
                 except SdoTimeoutError as error:
+                    first = first or error
                     uncertain = uncertain or (error if error.uncertain else None)
                     if attempt == retries:
-                        raise (uncertain or error) from None
+                        raise (uncertain or first) from None
                     log.debug("node %02Xh: %s; retrying", self.node_id, error)
                 except SdoError as error:
                     if error.node_id is None:
@@ -123,11 +125,14 @@ class SdoChannel:
             self._signal.clear()
             self._accept = accept
             self._awaiting = True
-        self.host.send(Frame(self._request_id, request))
-        self.host.wait(self._signal, timeout)
+        try:
+            self.host.send(Frame(self._request_id, request))
+            self.host.wait(self._signal, timeout)
+        finally:
+            with self._state_lock:
+                self._awaiting = False
+                self._accept = None
         with self._state_lock:
-            self._awaiting = False
-            self._accept = None
             if self.host.closed:
                 raise SdoError("the bus was shut down", self.node_id,
                                int.from_bytes(request[1:3], "little"), request[3])

@@ -21,6 +21,7 @@ import collections
 import heapq
 import itertools
 import logging
+import math
 import queue
 import threading
 import time
@@ -421,5 +422,6 @@ class SimulatedScheduler(Scheduler):
                 return True
             if not self.step(until):
                 break
-        self._now = max(self._now, until)
+        if until != math.inf:  # with no end given, the clock stays at the last event
+            self._now = max(self._now, until)
         return bool(predicate()) if predicate is not None else True

@@ -22,6 +22,8 @@ from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
 
 FrameHandler = Callable[[Frame, float], None]
+#: virtual seconds ``recv()`` without a timeout waits at most
+RECV_FOREVER = 60.0
 #: a wire rule: for a frame, None (unchanged), "drop", or extra delay in seconds
 Rule = Callable[[Frame], "str | float | None"]
 
@@ -103,7 +105,8 @@ class SimulatedBus(can.BusABC):
     """One endpoint of a :class:`SimulatedNetwork`, with python-can's bus interface.
 
     ``recv(timeout)`` runs the simulation until a frame arrives or ``timeout`` virtual seconds
-    passed. Do not give it to a ``can.Notifier``: the simulation has no threads.
+    passed (``recv()`` with no timeout: at most :data:`RECV_FOREVER`). Do not give it to a
+    ``can.Notifier``: the simulation has no threads.
     """
 
     def __init__(self, network: SimulatedNetwork, channel: str = "simulated",
@@ -137,14 +140,24 @@ class SimulatedBus(can.BusABC):
             raise can.CanOperationError("the simulated bus carries data frames of up to 8 bytes")
         self.send_frame(frame)
 
-    def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        """The next frame received (filters applied), running the simulation until it comes
+        or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`)."""
         received = self._received
-        if not received and timeout:
-            self.scheduler.run_until(lambda: received, self.scheduler.clock() + timeout)
-        if received:
-            when, frame = received.popleft()
-            return to_message(frame, when), False
-        return None, False
+        scheduler = self.scheduler
+        end = scheduler.clock() + (RECV_FOREVER if timeout is None else max(0.0, timeout))
+        while True:
+            while received:
+                when, frame = received.popleft()
+                message = to_message(frame, when)
+                if self._matches_filters(message):
+                    return message
+            if scheduler.clock() >= end or not scheduler.run_until(lambda: received, end):
+                return None
+
+    def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:
+        message = self.recv(timeout)
+        return message, True
 
     def clear_received(self) -> None:
         self._received.clear()

@@ -41,6 +41,15 @@ function headerView(node) {
   const facts = element("div", { class: "facts" });
   return { parts: [power, title, facts], update(device) {
     power.textContent = device.powered ? "power off" : "power on";
+    if (device.protocol === "j1939" && device.j1939) {  // spec/pkp-2600-si-j1939.md
+      const j = device.j1939;
+      title.textContent = `${device.title} J1939 ${hex(j.source_address)} · ${device.edition}`;
+      facts.innerHTML = `<b data-test="protocol-${node}">J1939</b> · source address ` +
+        `<b data-test="address-${node}">${hex(j.source_address)}</b> · identifier ` +
+        `${hex(j.identifier)} · to ${hex(j.destination_address)} · claim ${j.address_claim} · ` +
+        `${device.bitrate / 1000} kbit/s · heartbeat ${j.heartbeat_ms ? j.heartbeat_ms + " ms" : "off"}`;
+      return;
+    }
     title.textContent = `${device.title} ${hex(node)} · ${device.edition}`;
     facts.innerHTML = `NMT <b data-test="nmt-${node}">${device.nmt_state}</b> · ` +
       `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
