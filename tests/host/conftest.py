@@ -38,6 +38,7 @@ class Rig:
     sniffer: can.BusABC | _Sniffer
     generation: str = "1.1"
     bench: Bench | None = None  # set when the rig runs in simulated time
+    channel: str = ""  # the virtual channel, for a command line pointed at this bus
 
     @property
     def firmware(self) -> str:
@@ -94,7 +95,7 @@ def threaded_rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
     emulator = Emulator(buses[0], [keypad, keybox])
     host = HostBus(buses[1])
     with emulator, host:
-        rig = Rig(emulator, host, keypad, keybox, buses[2], generation)
+        rig = Rig(emulator, host, keypad, keybox, buses[2], generation, channel=channel)
         rig.sniffed()
         yield rig
     for bus in buses:

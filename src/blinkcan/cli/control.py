@@ -1,6 +1,10 @@
 """``blinkcan keypad ...`` and ``blinkcan keybox ...``: one-shot control and configuration on
 top of the host drivers. Every action prints what it did; changing a node id or bit rate and
-restoring factory defaults ask for confirmation first (``--yes`` does not ask)."""
+restoring factory defaults ask for confirmation first (``--yes`` does not ask).
+
+Every command, PDO-only ones included (``keypad led``), first confirms which device answers at
+the node id (the drivers' identity check): nothing answering, or another kind of device, is one
+line and a non-zero exit, and the bus sees no command."""
 
 from __future__ import annotations
 
@@ -13,7 +17,7 @@ import click
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import model
-from blinkcan.host import Keybox, Keypad, SdoError
+from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
 from blinkcan.protocol.j1939 import ADDRESS_MAX
 
 #: what the group passes to its commands: the device kind and its node id
@@ -42,7 +46,7 @@ def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
                 device = Keypad(bus, node_id, start=start)
             else:
                 device = Keybox(bus, node_id, start=start)
-        except (SdoError, ValueError) as error:
+        except (IdentityError, SdoError, ValueError) as error:
             raise click.ClickException(str(error)) from None
         try:
             yield device

@@ -71,7 +71,6 @@ class Controller:
                 self.keypad.set_led(key, "off", blink="red")
             elif key in self.keybox.fault_pins:
                 self.keybox.reset(key)  # a press on a faulted output resets it (OFF)
-                self.keybox.fault_pins -= {key}
                 self.toggles[key].set_state(0)
             elif state:
                 self.keybox.on(key)

@@ -3,6 +3,13 @@
 Only what traffic shows: NMT state from heartbeats, the keypad's LED picture from its LED
 PDOs, the keys held from its key-state PDOs, the Keybox's outputs as commanded (RPDO, 2001h and
 2008h writes) and as reported (the fault PDO, 2008h reads).
+
+What a device does by itself is followed by the twins' fail-safe rules (README "Decisions"):
+a boot-up means outputs OFF, LEDs dark and FAULT latches cleared (so does an NMT reset); an NMT
+stop, or a heartbeat saying "stopped", switches HIGH outputs OFF; a device that goes from
+operational to pre-operational with no NMT command asking for it tripped its consumer heartbeat
+(KBX §28, PKP rev 1.5 §26): HIGH outputs OFF, LEDs dark. FAULT stays latched through all but a
+reset.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ from blinkcan.devices.registry import describe_device
 _FOLLOWED = frozenset({"led_on", "led_blink", "key_state", "outputs", "faults"})
 _NMT_STATES = {"start": "operational", "stop": "stopped", "stop (legacy 00h)": "stopped",
                "enter pre-operational": "pre-operational"}
+_RESETS = ("reset node", "reset communication")
 
 
 @dataclass
@@ -31,6 +39,8 @@ class NodeView:
     held: list[int] = field(default_factory=list)
     outputs: dict[int, str] = field(default_factory=dict)
     face: Face = field(default_factory=Face)  # the model's keys and pins, once known
+    #: the state the last NMT command to this node asked for (None: none seen, or a reset)
+    asked: str | None = None
     #: PDO name -> what its last frame meant (encoders, analog inputs, ring LEDs, ...)
     other: dict[str, str] = field(default_factory=dict)
     #: pins in PWM (KBX §22, object "pwm"): pin -> duty in percent
@@ -40,6 +50,28 @@ class NodeView:
         if face != self.face:
             self.face = face
             self.outputs = dict.fromkeys(face.pin_numbers, "off")
+
+    def outputs_off(self) -> None:
+        """Fail-safe: every HIGH output OFF, PWM stopped, FAULT latched."""
+        self.pwm = {}
+        self.outputs = {pin: "fault" if state == "fault" else "off"
+                        for pin, state in self.outputs.items()}
+
+    def reboot(self) -> None:
+        """Power-on or reset: pre-operational, outputs OFF, no FAULT, LEDs dark, no key held."""
+        self.state, self.leds, self.blink, self.held = "pre-operational", {}, {}, []
+        self.outputs = dict.fromkeys(self.face.pin_numbers, "off")
+        self.pwm, self.asked = {}, None
+
+    def reported(self, state: str) -> None:
+        """A heartbeat's state; a change the last NMT command did not ask for is a trip."""
+        if state == "stopped":
+            self.outputs_off()
+        elif (self.state, state) == ("operational", "pre-operational") \
+                and self.asked != "pre-operational":
+            self.outputs_off()  # the watchdog tripped: KBX §28, PKP rev 1.5 §26 note 2
+            self.leds, self.blink = {}, {}
+        self.state = state
 
     def key_colours(self) -> list[tuple[int, str, str]]:
         """(key, steady colour, blink colour) for every key of the model."""
@@ -90,12 +122,17 @@ class BusView:
 
     def update(self, event: Event) -> None:
         if event.kind is Kind.NMT:
-            state = _NMT_STATES.get(event.fields.get("command", ""))
+            command = event.fields.get("command", "")
+            state = _NMT_STATES.get(command)
             target = event.fields.get("target", 0)
             targets = self.nodes.values() if target == 0 else [self.node(target)]
-            if state is not None:
-                for view in targets:
-                    view.state = state
+            for view in targets:
+                if command in _RESETS:
+                    view.reboot()
+                elif state is not None:
+                    view.asked = view.state = state
+                    if state == "stopped":
+                        view.outputs_off()
             return
         if event.node_id is None:
             return
@@ -106,11 +143,9 @@ class BusView:
             view.know(face)
         fields = event.fields
         if event.kind is Kind.BOOT_UP:
-            view.state, view.leds, view.blink, view.held = "pre-operational", {}, {}, []
-            view.pwm = {}
-            view.outputs = dict.fromkeys(view.face.pin_numbers, "off")
+            view.reboot()
         elif event.kind is Kind.HEARTBEAT:
-            view.state = fields.get("state", view.state)
+            view.reported(fields.get("state", view.state))
         elif event.kind is Kind.PDO:
             if fields.get("pdo") in _FOLLOWED:
                 self._pdo(view, fields)

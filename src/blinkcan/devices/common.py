@@ -5,9 +5,12 @@ The values differ per device; the layout does not.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from blinkcan.devices.objects import (
     Access,
     ObjectDef,
+    Ranges,
     Sub,
     record,
     text,
@@ -21,6 +24,30 @@ from blinkcan.devices.objects import (
 TIMER_MS_MAX = 0xFEFF
 #: 1011h sub 01h signature "load" (KBX §36, PKP rev 1.5 §34): UNSIGNED32 of 6C 6F 61 64
 RESTORE_SIGNATURE = int.from_bytes(b"load", "little")
+
+
+@dataclass(frozen=True)
+class ConsumerHeartbeat:
+    """What 1016h/01 accepts (KBX §28, PKP rev 1.5 §26, errata K8/G4): bits 0-15 the time in
+    ms, bits 16-23 the watched node 01h-7Fh, bits 24-31 zero. The twin and the drivers both
+    read this, so they agree on the range."""
+
+    times_ms: Ranges  # 0 (off) included
+    may_watch_itself: bool = True
+
+    @staticmethod
+    def split(value: int) -> tuple[int, int, int]:
+        """(time ms, node id, reserved byte) of a 1016h/01 value."""
+        return value & 0xFFFF, (value >> 16) & 0xFF, value >> 24
+
+    @staticmethod
+    def compose(time_ms: int, node_id: int) -> int:
+        return time_ms | node_id << 16
+
+    def accepts(self, value: int, own_node_id: int) -> bool:
+        time_ms, node, reserved = self.split(value)
+        own = node == own_node_id and not self.may_watch_itself
+        return not reserved and not own and 1 <= node <= 0x7F and time_ms in self.times_ms
 
 
 def device_type(value: int) -> ObjectDef:

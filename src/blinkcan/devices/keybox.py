@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from blinkcan.devices.common import (
     TIMER_MS_MAX,
+    ConsumerHeartbeat,
     device_type,
     identity,
     identity_strings,
@@ -39,6 +40,8 @@ PWM_PINS = (12, 13)  # KBX §5: pins 12 and 13 are MOSFET outputs with PWM
 LOW_SIDE_CAPABLE = (2, 5)  # KBX §5/§6: Ch2 and Ch5 may be built as low-side drivers (K22)
 DEFAULT_NODE_ID = 0x0C  # KBX §10
 VENDOR_ID = 0x000003E2  # KBX §37
+#: KBX §28, errata K8: 0 = off, 10..65279 ms; any node 01h-7Fh
+CONSUMER_HEARTBEAT = ConsumerHeartbeat(values(0, (10, TIMER_MS_MAX)))
 PIN_MASK = (1 << PIN_COUNT) - 1
 PWM_LEVEL_MAX = 0x0A  # KBX §22: 00h-0Ah = 0-100 % in 10 % steps
 FAULT_PERIOD_UNIT_S = 0.01  # errata K4: 2012h counts 10 ms
@@ -174,6 +177,7 @@ def describe_keybox(quirks: Quirks = "firmware", factory_node_id: int = DEFAULT_
         pdos=_pdos(),
         default_node_id=DEFAULT_NODE_ID,
         bitrates=BITRATES,
+        consumer_heartbeat=CONSUMER_HEARTBEAT,
         face=FACE,
         title="Keybox",
         edition=f"manual rev {GENERATION}",

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from blinkcan.devices.common import (
     TIMER_MS_MAX,
+    ConsumerHeartbeat,
     device_type,
     identity,
     identity_strings,
@@ -47,6 +48,8 @@ GENERATIONS = ("1.1", "1.5")
 KEY_COUNT = 12
 DEFAULT_NODE_ID = 0x15  # PKP §3
 VENDOR_ID = 0x000003E2  # PKP §32
+#: generation 2 (rev 1.5 §26, errata G4): 0 = off, 10..65535 ms; not the keypad's own id
+CONSUMER_HEARTBEAT = ConsumerHeartbeat(values(0, (10, 0xFFFF)), may_watch_itself=False)
 SERIAL_NUMBER = "FFFFFFFF"  # PKP §43, an unprogrammed unit
 #: Key LED bit table (PKP §11, §12; errata P7, P13): red bits 0-11, green 12-23, blue 24-35.
 LED_BITS_PER_COLOUR = KEY_COUNT
@@ -313,6 +316,7 @@ def describe_keypad(
         default_node_id=DEFAULT_NODE_ID,
         bitrates=BITRATES,
         nmt_aliases={0x00: NmtCommand.STOP},  # PKP §7 "old PKP sw compatibility", errata P12
+        consumer_heartbeat=CONSUMER_HEARTBEAT if generation == "1.5" else None,
         face=FACE,
         led_fields=LED_FIELDS[generation],
         features=GENERATION_2_FEATURES if generation == "1.5" else frozenset(),

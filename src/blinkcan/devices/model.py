@@ -6,6 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
+from blinkcan.devices.common import ConsumerHeartbeat
 from blinkcan.devices.objects import ObjectTable
 from blinkcan.devices.pdo import Direction, PdoLayout
 from blinkcan.protocol.nmt import NmtCommand
@@ -88,6 +89,8 @@ class DeviceDescription:
     bitrates: dict[int, int]
     #: extra NMT command bytes the device accepts (keypad: 00h = stop, errata P12)
     nmt_aliases: dict[int, NmtCommand] = field(default_factory=dict)
+    #: what 1016h/01 accepts, where the device has a consumer heartbeat (None: it has none)
+    consumer_heartbeat: ConsumerHeartbeat | None = None
     face: Face = Face()
     #: 2001h/2002h sub-indices as fields of the LED word (keypads)
     led_fields: tuple[LedField, ...] = ()

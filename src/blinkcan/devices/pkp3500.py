@@ -19,6 +19,7 @@ from blinkcan.devices.common import (
 )
 from blinkcan.devices.keypad import (
     BITRATES,
+    CONSUMER_HEARTBEAT,
     LEVEL_MAX,
     PROTOCOL_CANOPEN,
     PROTOCOL_J1939,
@@ -332,6 +333,7 @@ def describe_pkp3500(
         default_node_id=DEFAULT_NODE_ID,
         bitrates=BITRATES,  # MT §26: the PKP-2600-SI's codes (B1)
         nmt_aliases={0x00: NmtCommand.STOP},  # MT §7, M22
+        consumer_heartbeat=CONSUMER_HEARTBEAT,  # MT §32, M65: as the PKP-2600-SI rev 1.5 (G4)
         face=FACE,
         title="PKP-3500-MT keypad",
         edition=f"manual rev {GENERATION}",

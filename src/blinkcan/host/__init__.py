@@ -3,7 +3,13 @@
 from blinkcan.host.aio import AsyncKeybox, AsyncKeypad, async_scan
 from blinkcan.host.behaviours import Cycle, Momentary, Toggle
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import HealthEvent, Identity
+from blinkcan.host.device import (
+    HealthEvent,
+    Identity,
+    IdentityError,
+    NoDeviceError,
+    WrongDeviceError,
+)
 from blinkcan.host.j1939_keypad import FoundJ1939, scan_j1939
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
@@ -20,14 +26,17 @@ __all__ = [
     "HealthEvent",
     "HostBus",
     "Identity",
+    "IdentityError",
     "KeyEvent",
     "Keybox",
     "Keypad",
     "Momentary",
+    "NoDeviceError",
     "SdoAbortError",
     "SdoError",
     "SdoTimeoutError",
     "Toggle",
+    "WrongDeviceError",
     "async_scan",
     "scan",
     "scan_j1939",

@@ -3,10 +3,27 @@
 Objects are named as in ``devices/`` (``driver.read("producer_heartbeat_time")``); a value is
 checked against the table before anything is sent, so a bad argument raises ``ValueError``
 naming the valid range and the bus sees nothing.
+
+Before its first command a driver confirms which device answers at its node id (1000h device
+type, 1018h/01 vendor, 100Bh model, compared with its description in ``devices/``) and refuses
+any other with :class:`WrongDeviceError` (:class:`NoDeviceError` when nothing answers):
+a keypad driver pointed at a Keybox would otherwise switch its outputs with LED PDOs (both
+listen on 200h + node id). ``verify=False`` skips this for devices that cannot answer SDO.
+
+Health (:class:`HealthEvent`) follows what the device reports in its heartbeat, and the NMT
+commands sent to it (by this driver or heard from another master on 000h):
+
+- "boot-up": it (re)booted; "state": it reported an NMT state other than the last one;
+- "lost" / "back": its heartbeat stopped / was heard again (after :meth:`monitor_heartbeat`);
+- "watchdog": it went from operational to pre-operational with no NMT command asking for
+  that: its consumer heartbeat (1016h) missed the host's, and it switched its outputs (Keybox,
+  KBX §28) or LEDs (keypad generation 2, rev 1.5 §26) off. :meth:`watch_host` turns the
+  device's own heartbeat on (1017h, if it was off) so that the driver sees this.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -16,11 +33,21 @@ import can
 from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry, Value
+from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.events import EventSource
-from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_range
+from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
+from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame, parse_nmt
+from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
+
+BOOT_UP, STATE, LOST, BACK, WATCHDOG = "boot-up", "state", "lost", "back", "watchdog"
+#: the state an NMT command asks for (CiA 301 NMT state machine); resets answer with a boot-up
+_ASKED = {NmtCommand.START: NmtState.OPERATIONAL, NmtCommand.STOP: NmtState.STOPPED,
+          NmtCommand.ENTER_PRE_OPERATIONAL: NmtState.PRE_OPERATIONAL}
+#: what a driver compares to confirm the device: 1000h, 1018h/01, 100Bh (PKP §26/§31/§32,
+#: KBX §30/§35/§37); the values come from the description in devices/
+IDENTITY_ENTRIES = ("device_type", "vendor_id", "model_id")
 
 
 def unreversed(version: str) -> str:
@@ -44,9 +71,23 @@ class Identity:
     serial_number: str | None = None  # the keypad's 2200h; the Keybox documents none
 
 
+class IdentityError(Exception):
+    """The device at a node id is not the one the driver drives."""
+
+
+class WrongDeviceError(IdentityError):
+    """Another kind of device answered at the node id; the message names it."""
+
+
+class NoDeviceError(IdentityError):
+    """Nothing answered the identity reads at the node id."""
+
+
 @dataclass(frozen=True)
 class HealthEvent:
-    """``kind``: "boot-up", "lost" (heartbeat missed) or "back" (heard again)."""
+    """``kind``: "boot-up", "state" (a newly reported NMT ``state``), "lost" (heartbeat
+    missed), "back" (heard again) or "watchdog" (the device's consumer heartbeat tripped: it
+    went pre-operational by itself and switched its outputs or LEDs off)."""
 
     node_id: int
     kind: str
@@ -59,19 +100,25 @@ class Device:
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int, description: DeviceDescription,
                  *, sdo_timeout: float = 0.5, sdo_retries: int = 1) -> None:
+        """Set up; a subclass calls :meth:`confirm` (unless told not to) before any command."""
         self.node_id = check_node_id(node_id)
         self.description = description
         self.host = HostBus.attach(bus)  # shared by every driver on this bus
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
         self.health = EventSource[HealthEvent](self.host.scheduler)
-        self.nmt_state: NmtState | None = None
+        self.nmt_state: NmtState | None = None  # as the device last reported it
+        self._asked_state: NmtState | None = None  # what the last NMT command asked for
         self.alive: bool | None = None
         self._heartbeat_timeout: float | None = None
         self._watch: Timer | None = None
         self._producer: Timer | None = None
         self.host_node_id = 0x7F
+        #: held while an output or LED command is sent and the driver's picture updated, and
+        #: while a restore computes what to send and sends it: the two never interleave
+        self._command_lock = threading.Lock()
         self._unsubscribe: list[Callable[[], None]] = [
             self.host.subscribe(HEARTBEAT + node_id, self._on_heartbeat),
+            self.host.subscribe(NMT, self._on_nmt_heard),
         ]
 
     # -- objects by name --------------------------------------------------------------------
@@ -102,7 +149,21 @@ class Device:
     # -- NMT ----------------------------------------------------------------------------------
 
     def nmt(self, command: NmtCommand) -> None:
+        self.host.run(lambda: self._nmt_commanded(command))  # known before any reply
         self.host.send(nmt_frame(command, self.node_id))
+
+    def _on_nmt_heard(self, frame: Frame, now: float) -> None:
+        """Another master's NMT command to this node (or to all) explains what follows."""
+        request = parse_nmt(frame, self.description.nmt_aliases)
+        if request is not None and request.node_id in (0, self.node_id):
+            self._nmt_commanded(request.command)
+
+    def _nmt_commanded(self, command: NmtCommand) -> None:
+        self._asked_state = _ASKED.get(command)
+        self._on_nmt_command(command)
+
+    def _on_nmt_command(self, command: NmtCommand) -> None:
+        """An NMT command was sent to the device: drivers update their picture."""
 
     def start(self) -> None:
         self.nmt(NmtCommand.START)
@@ -125,6 +186,9 @@ class Device:
         """Make the device send a heartbeat every ``period`` s (1017h) and raise "lost" when
         none comes for ``timeout`` (default 1.5 periods + 50 ms), "back" when it returns."""
         self.write("producer_heartbeat_time", round(period * 1000))
+        self._watch_heartbeat(period, timeout)
+
+    def _watch_heartbeat(self, period: float, timeout: float | None = None) -> None:
         self._heartbeat_timeout = timeout if timeout is not None else 1.5 * period + 0.05
         self.host.run(self._rearm)
 
@@ -140,15 +204,27 @@ class Device:
         code = frame.data[0]
         if self.alive is False:
             self.alive = True
-            self.health.emit(HealthEvent(self.node_id, "back", now))
+            self.health.emit(HealthEvent(self.node_id, BACK, now))
         self.alive = True
         if code == NmtState.BOOT_UP:
-            self.nmt_state = NmtState.PRE_OPERATIONAL
-            self.health.emit(HealthEvent(self.node_id, "boot-up", now, NmtState.BOOT_UP))
+            self.nmt_state, self._asked_state = NmtState.PRE_OPERATIONAL, None
+            self.health.emit(HealthEvent(self.node_id, BOOT_UP, now, NmtState.BOOT_UP))
             self._on_boot_up(now)
-        elif code in NmtState._value2member_map_:
-            self.nmt_state = NmtState(code)
+        elif code in NmtState._value2member_map_ and code != self.nmt_state:
+            self._on_reported(NmtState(code), now)
         self._rearm()
+
+    def _on_reported(self, state: NmtState, now: float) -> None:
+        before, self.nmt_state = self.nmt_state, state
+        self.health.emit(HealthEvent(self.node_id, STATE, now, state))
+        # KBX §28 / rev 1.5 §26 note 2: a consumer heartbeat loss is the one way these
+        # devices leave operational for pre-operational unasked
+        if (before is NmtState.OPERATIONAL and state is NmtState.PRE_OPERATIONAL
+                and self._asked_state is not NmtState.PRE_OPERATIONAL):
+            self.health.emit(HealthEvent(self.node_id, WATCHDOG, now, state))
+            self._on_watchdog_trip(now)
+        else:
+            self._on_state(state, now)
 
     def _rearm(self) -> None:
         if self._watch is not None:
@@ -164,6 +240,60 @@ class Device:
 
     def _on_boot_up(self, now: float) -> None:
         """The device (re)booted: drivers restore what the application had set."""
+
+    def _on_watchdog_trip(self, now: float) -> None:
+        """The device's consumer heartbeat tripped: drivers update their picture."""
+
+    def _on_state(self, state: NmtState, now: float) -> None:
+        """The device reported a new NMT state (not a trip)."""
+
+    # -- which device answers ---------------------------------------------------------------------
+
+    def confirm(self) -> None:
+        """Read 1000h, 1018h/01 and 100Bh and compare them with this driver's description;
+        :class:`WrongDeviceError` names what answered instead, :class:`NoDeviceError` says
+        that nothing did. Drivers call it before their first command."""
+        found: dict[str, Value | None] = {}
+        for name in IDENTITY_ENTRIES:
+            try:
+                found[name] = self.read(name)
+            except SdoTimeoutError as error:
+                if found:  # it answered before: a real failure, not an absent device
+                    raise
+                raise NoDeviceError(f"no device answers at node {self.node_id:02X}h "
+                                    f"({error})") from None
+            except SdoAbortError:
+                found[name] = None  # a device without the object: not ours
+        expected = {name: self.entry(name).default_for(self.node_id) for name in IDENTITY_ENTRIES}
+        if found == expected:
+            return
+        device_type, model_id = found["device_type"], found["model_id"]
+        answered = identify(device_type if isinstance(device_type, int) else None,
+                            model_id if isinstance(model_id, str) else None)
+        if answered is not None and all(
+                found[name] == answered.table[name].default_for(self.node_id)
+                for name in IDENTITY_ENTRIES):
+            raise WrongDeviceError(f"node {self.node_id:02X}h is a {answered.title}, not a "
+                                   f"{self.description.title}")
+
+        def show(value: Value | None) -> str:
+            return "none" if value is None else f"{value:08X}h" if isinstance(value, int) \
+                else repr(value)
+
+        raise WrongDeviceError(
+            f"node {self.node_id:02X}h is not a {self.description.title}: device type "
+            f"{show(device_type)}, vendor {show(found['vendor_id'])}, model {show(model_id)} "
+            "answered")
+
+    def _confirm_or_close(self, verify: bool) -> None:
+        """:meth:`confirm` (when ``verify``); on failure the driver lets go of the bus."""
+        if not verify:
+            return
+        try:
+            self.confirm()
+        except BaseException:
+            self.close()
+            raise
 
     # -- identity -------------------------------------------------------------------------------
 
@@ -221,10 +351,14 @@ class Device:
         if "consumer_heartbeat_time" not in self.description.table:
             raise ValueError(f"this {self.description.kind} (manual {self.description.generation}"
                              ") has no consumer heartbeat (1016h)")
+        rule = self.description.consumer_heartbeat
+        assert rule is not None, "a description with 1016h says what it accepts"
         ms = round(period * 1000)
-        if ms and not 10 <= ms <= 0xFEFF:
-            raise ValueError(f"consumer heartbeat period must be 0 or 0.01..65.279 s, not {period}")
-        self.write("consumer_heartbeat_time", ms | node_id << 16)
+        if ms not in rule.times_ms:
+            spans = " or ".join(f"{lo / 1000:g}" if lo == hi else f"{lo / 1000:g}..{hi / 1000:g}"
+                                for lo, hi in rule.times_ms.spans)
+            raise ValueError(f"consumer heartbeat period must be {spans} s, not {period}")
+        self.write("consumer_heartbeat_time", rule.compose(ms, node_id))
 
     def restore_factory_defaults(self, *, confirm: bool = False) -> None:
         """Every stored setting back to factory values at the next reset (1011h "load"; the
@@ -239,9 +373,17 @@ class Device:
 
     def watch_host(self, period: float) -> None:
         """Send a host heartbeat every ``period`` s and have the device switch off when it
-        misses two (KBX §28 note 1: consumer time about twice the producer's)."""
+        misses two (KBX §28 note 1: consumer time about twice the producer's). The device's
+        own heartbeat is turned on (every ``period`` s) if it was off, so that a trip is seen:
+        a "watchdog" health event."""
         check_range("watchdog period in ms", round(period * 1000), 10, 0xFEFF // 2)
         self.set_consumer_heartbeat(self.host_node_id, 2 * period)
+        if self._heartbeat_timeout is None:
+            own_ms = int(self.read("producer_heartbeat_time"))
+            if own_ms:
+                self._watch_heartbeat(own_ms / 1000)
+            else:
+                self.monitor_heartbeat(period)
         if self._producer is not None:
             self._producer.cancel()
         frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
@@ -261,10 +403,10 @@ class Device:
             unsubscribe()
         if self._watch is not None:
             self._watch.cancel()
+        self.host.release()  # first: whoever the end of an iterator wakes finds the bus let go
         for value in list(vars(self).values()):
             if isinstance(value, EventSource):
                 value.close()  # iterators over this driver's events end
-        self.host.release()
 
     def __enter__(self) -> Any:
         return self

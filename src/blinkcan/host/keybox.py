@@ -4,12 +4,22 @@ Keybox can watch, so that if the application dies the Keybox switches its output
 Outputs are commanded by SDO (2001h per pin, 2008h masks): every command is acknowledged, and
 SDO acts in pre-operational as well as operational (errata K19). Faults arrive by the fault PDO
 (KBX §18); ``fault_poll`` adds polling of 2008h/03 for buses where PDOs may be missed.
+
+The driver keeps two pictures of the outputs. ``commanded``: the pins the application switched
+HIGH and has not switched OFF or RESET since (a pin that goes FAULT leaves it: the Keybox latched
+it off, and switching it on again is the application's call). ``actual``: every pin's state as
+the Keybox last showed it, from acknowledged commands, fault PDOs, reads, and what the Keybox
+does by itself (README "Decisions", the twin's fail-safe rules): a boot-up clears every output
+and FAULT latch, an NMT stop or reset and a watchdog trip switch HIGH outputs OFF (FAULT stays).
+Every FAULT transition of every pin is a :class:`FaultEvent`, in order, on the bus thread:
+entering (fault PDO, poll, read) and leaving (an acknowledged RESET, a reboot, a read).
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 
 import can
@@ -32,6 +42,7 @@ from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_mask, item_numbers
+from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo_client import SdoError
 
 log = logging.getLogger(__name__)
@@ -46,6 +57,10 @@ class FaultEvent:
     time: float
 
 
+#: NMT commands after which the Keybox's outputs are OFF (the twin's fail-safe rules)
+_OUTPUTS_OFF_AFTER = (NmtCommand.STOP, NmtCommand.RESET_NODE, NmtCommand.RESET_COMMUNICATION)
+
+
 def _mask(pins: Iterable[int]) -> int:
     return item_mask(pins, "pin", FACE.pins)
 
@@ -58,27 +73,34 @@ class Keybox(Device):
     """Drive a Keybox at ``node_id`` on ``bus``.
 
     ``watchdog``: seconds between host heartbeats; the Keybox is told (1016h) to switch its
-    outputs off when they stop for two periods. ``host_node_id`` names the host's heartbeat.
-    ``fault_poll``: seconds between polls of the FAULT mask (None: the fault PDO only).
-    ``restore_outputs``: after the Keybox reboots, switch back on the outputs this driver had
-    switched on (off by default: a rebooted power module should not re-energise loads unasked).
+    outputs off when they stop for two periods, and a trip is a "watchdog" health event.
+    ``host_node_id`` names the host's heartbeat. ``fault_poll``: seconds between polls of the
+    FAULT mask (None: the fault PDO only). ``start``: send NMT start now, after every boot-up
+    and after a watchdog trip (the outputs stay OFF). ``restore_outputs``: after a reboot or a
+    watchdog trip, switch back on the pins in :attr:`commanded` at that moment (off by
+    default: a power module should not re-energise loads unasked). ``verify``: confirm that
+    a Keybox answers at ``node_id`` first (False only for a device that cannot answer SDO).
     """
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x0C, *, start: bool = True,
                  watchdog: float | None = None, host_node_id: int = 0x7F,
                  fault_poll: float | None = None, restore_outputs: bool = False,
-                 sdo_timeout: float = 0.5) -> None:
+                 sdo_timeout: float = 0.5, verify: bool = True) -> None:
         super().__init__(bus, node_id, describe_keybox("cia301", node_id),
                          sdo_timeout=sdo_timeout)
         self.faults = EventSource[FaultEvent](self.host.scheduler)
         self.fault_pins: frozenset[int] = frozenset()
         self.auto_start = start
         self.restore_outputs = restore_outputs
-        self.commanded_high: set[int] = set()
         self.host_node_id = check_node_id(host_node_id)
+        self._commanded: frozenset[int] = frozenset()
+        self._actual = dict.fromkeys(FACE.pin_numbers, "off")
         self._poller: Timer | None = None
         fault_pdo = self.description.pdo("faults")
         self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
+        self._confirm_or_close(verify)
+        if verify:
+            self.states()  # the picture starts true
         if watchdog is not None:
             self.watch_host(watchdog)
         if start:
@@ -88,6 +110,19 @@ class Keybox(Device):
             self._poller = self.host.call_every(
                 fault_poll, lambda: self.host.spawn(self._poll_faults, ("fault poll", node_id)),
                 first=fault_poll)
+
+    # -- the driver's picture ---------------------------------------------------------------------
+
+    @property
+    def commanded(self) -> frozenset[int]:
+        """The pins the application switched HIGH (and not OFF, RESET, or FAULT since)."""
+        return self._commanded
+
+    @property
+    def actual(self) -> dict[int, str]:
+        """Every pin's state ("off", "high", "fault") as the Keybox last showed it; no bus
+        traffic (:meth:`states` reads the Keybox)."""
+        return dict(self._actual)
 
     # -- outputs ----------------------------------------------------------------------------------
 
@@ -107,23 +142,44 @@ class Keybox(Device):
 
     def _pin(self, pin: int, code: int) -> None:
         check_range("pin", pin, 1, FACE.pins)
-        self.write(f"pin_{pin}_state", code)
-        if code == PIN_HIGH:
-            self.commanded_high.add(pin)
-        else:
-            self.commanded_high.discard(pin)
+        with self._command_lock:
+            self.write(f"pin_{pin}_state", code)
+            self._acknowledged({pin} if code == PIN_HIGH else set(),
+                               {pin} if code == PIN_OFF else set(),
+                               {pin} if code == PIN_RESET else set())
 
     def set_outputs(self, high: Iterable[int] = (), off: Iterable[int] = ()) -> None:
         """Pins in ``high`` HIGH, pins in ``off`` OFF, the others unchanged (KBX §21)."""
         high_mask, off_mask = _mask(high), _mask(off)
         if high_mask & off_mask:
             raise ValueError(f"pins {sorted(_pins(high_mask & off_mask))} asked HIGH and OFF")
+        with self._command_lock:
+            self._write_masks(high_mask, off_mask)
+
+    def _write_masks(self, high_mask: int, off_mask: int) -> None:
         if off_mask:
             self.write("output_off_mask", off_mask)
-            self.commanded_high -= _pins(off_mask)
+            self._acknowledged(set(), _pins(off_mask), set())
         if high_mask:
             self.write("output_high_mask", high_mask)
-            self.commanded_high |= _pins(high_mask)
+            self._acknowledged(_pins(high_mask), set(), set())
+
+    def _acknowledged(self, high: AbstractSet[int], off: AbstractSet[int],
+                      reset: AbstractSet[int]) -> None:
+        """The Keybox acknowledged a command: both pictures follow (on the bus thread, in
+        order with the fault PDOs heard before the acknowledge)."""
+        def update() -> None:
+            now = self.host.clock()
+            for pin in sorted(reset & self.fault_pins):
+                self._leave_fault(pin, now)
+            for pin in sorted(off | reset):
+                if pin not in self.fault_pins:  # KBX §7, errata K12: only RESET clears FAULT
+                    self._actual[pin] = "off"
+            for pin in sorted(high - self.fault_pins):
+                self._actual[pin] = "high"
+            self._commanded = (self._commanded - off - reset) | (high - self.fault_pins)
+
+        self.host.run(update)
 
     def set_pwm(self, pins: Iterable[int], duty: int) -> None:
         """PWM on pins 12 and/or 13 at ``duty`` 0..10 (x 10 %); pins not named leave PWM."""
@@ -135,16 +191,29 @@ class Keybox(Device):
         self.write("pwm", pwm_register(mask, duty))
 
     def state(self, pin: int) -> str:
-        """"off", "high" or "fault"."""
+        """"off", "high" or "fault", read from the Keybox (the picture follows)."""
         check_range("pin", pin, 1, FACE.pins)
-        return STATE_NAMES[int(self.read(f"pin_{pin}_state"))]
+        state = STATE_NAMES[int(self.read(f"pin_{pin}_state"))]
+        self.host.run(lambda: self._seen({pin: state}, self.host.clock()))
+        return state
 
     def states(self) -> dict[int, str]:
-        """Every pin's state, from the three 2008h masks."""
+        """Every pin's state, from the three 2008h masks (the picture follows)."""
         high = _pins(int(self.read("output_high_mask")))
         fault = _pins(int(self.read("output_fault_mask")))
-        return {p: "fault" if p in fault else "high" if p in high else "off"
-                for p in FACE.pin_numbers}
+        states = {p: "fault" if p in fault else "high" if p in high else "off"
+                  for p in FACE.pin_numbers}
+        self.host.run(lambda: self._seen(states, self.host.clock()))
+        return states
+
+    def _seen(self, states: dict[int, str], now: float) -> None:
+        """States read from the Keybox replace the picture's; FAULT changes are events."""
+        for pin, state in sorted(states.items()):
+            if state == "fault":
+                self._enter_fault(pin, now)
+            elif pin in self.fault_pins:
+                self._leave_fault(pin, now)
+            self._actual[pin] = state
 
     def inputs(self) -> dict[int, bool]:
         """The level on every pin (2003h/01, errata K21)."""
@@ -165,12 +234,27 @@ class Keybox(Device):
             self._update_faults(layout.decode(frame.data)["faults"], now)
 
     def _update_faults(self, mask: int, now: float) -> None:
+        """The FAULT mask as the Keybox sent or read it: the whole truth about FAULT."""
         pins = _pins(mask)
-        before, self.fault_pins = self.fault_pins, pins
-        for pin in sorted(pins - before):
-            self.faults.emit(FaultEvent(pin, True, now))
-        for pin in sorted(before - pins):
-            self.faults.emit(FaultEvent(pin, False, now))
+        for pin in sorted(pins - self.fault_pins):
+            self._enter_fault(pin, now)
+        for pin in sorted(self.fault_pins - pins):
+            self._leave_fault(pin, now)
+
+    def _enter_fault(self, pin: int, now: float) -> None:
+        if pin in self.fault_pins:
+            return
+        self.fault_pins |= {pin}
+        self._actual[pin] = "fault"
+        self._commanded -= {pin}
+        self.faults.emit(FaultEvent(pin, True, now))
+
+    def _leave_fault(self, pin: int, now: float) -> None:
+        if pin not in self.fault_pins:
+            return
+        self.fault_pins -= {pin}
+        self._actual[pin] = "off"  # KBX §7: RESET (or a reboot) leaves FAULT to OFF
+        self.faults.emit(FaultEvent(pin, False, now))
 
     def _poll_faults(self) -> None:
         """Best effort: a poll that fails (device away, bus closing) is logged and skipped."""
@@ -186,15 +270,46 @@ class Keybox(Device):
         """Send the fault PDO every ``period`` s as well (2012h, 10 ms units); 0 = on change."""
         self.write("fault_period", round(period / FAULT_PERIOD_UNIT_S))
 
-    # -- recovery and lifecycle -------------------------------------------------------------------
+    # -- what the Keybox does by itself, and recovery ---------------------------------------------
+
+    def _outputs_went_off(self) -> None:
+        """Fail-safe: every HIGH output OFF; FAULT stays latched."""
+        for pin, state in self._actual.items():
+            if state == "high":
+                self._actual[pin] = "off"
+
+    def _on_nmt_command(self, command: NmtCommand) -> None:
+        if command in _OUTPUTS_OFF_AFTER:
+            self._outputs_went_off()
+
+    def _on_state(self, state: NmtState, now: float) -> None:
+        if state is NmtState.STOPPED:
+            self._outputs_went_off()
 
     def _on_boot_up(self, now: float) -> None:
-        self.fault_pins = frozenset()  # a reset clears FAULT latches; outputs start OFF
+        for pin in sorted(self.fault_pins):  # a reset clears FAULT latches
+            self._leave_fault(pin, now)
+        self._actual = dict.fromkeys(self._actual, "off")  # every reset starts with outputs OFF
+        self._recover()
+
+    def _on_watchdog_trip(self, now: float) -> None:
+        self._outputs_went_off()  # KBX §28 note 2
+        self._recover()
+
+    def _recover(self) -> None:
         if self.auto_start:
             self.start()
-        if self.restore_outputs and self.commanded_high:
-            pins = sorted(self.commanded_high)
-            self.host.spawn(lambda: self.set_outputs(high=pins))
+        if self.restore_outputs:
+            self.host.spawn(self._restore, ("restore outputs", self.node_id))
+
+    def _restore(self) -> None:
+        """Switch on what is commanded when this runs, never what was commanded before: an
+        application's ``off(4)`` either comes after (and wins) or before (and 4 is left out)."""
+        try:
+            with self._command_lock:
+                self._write_masks(_mask(self._commanded), 0)
+        except (SdoError, RuntimeError, TimeoutError) as error:
+            log.warning("restoring the outputs of node %02Xh failed: %s", self.node_id, error)
 
     def close(self) -> None:
         if self._poller is not None:

@@ -2,9 +2,12 @@
 
 The driver keeps the picture the application asked for and sends only what changed, at most
 one LED-on and one LED-blink PDO per change (or per ``with keypad.batch():``). When the keypad
-reboots it forgets its LEDs (errata.md, field reports): the driver starts it again and re-sends
-the whole picture. In J1939 mode (``protocol="j1939"``, or after :meth:`Keypad.switch_to_j1939`)
-the same calls go through :class:`~blinkcan.host.j1939_keypad.J1939KeypadLink`.
+reboots it forgets its LEDs (errata.md, field reports), and generation 2 switches them off when
+its watchdog trips (rev 1.5 §26): the driver starts it again and re-sends the whole picture as
+it is when it is sent (the backlight colour goes by SDO, serialised with the application's own
+backlight commands, so a restore never writes a colour the application has since changed).
+In J1939 mode (``protocol="j1939"``, or after :meth:`Keypad.switch_to_j1939`) the same calls
+go through :class:`~blinkcan.host.j1939_keypad.J1939KeypadLink`.
 """
 
 from __future__ import annotations
@@ -79,9 +82,12 @@ class Keypad(Device):
     """Drive a keypad at ``node_id`` on ``bus`` (a python-can bus or a :class:`HostBus`): the
     PKP-2600-SI, or the registered model ``model`` names (its driver class is built).
 
-    ``start``: send NMT start now and after every boot-up. ``long_press``: seconds a key is
-    held before a "long press" event. ``restore``: re-send the LED picture after a boot-up.
-    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md).
+    ``start``: send NMT start now, after every boot-up and after a watchdog trip.
+    ``long_press``: seconds a key is held before a "long press" event. ``restore``: re-send the
+    LED picture after a boot-up or a watchdog trip. ``verify``: confirm that this model answers
+    at ``node_id`` first (False only for a keypad that cannot answer SDO).
+    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md);
+    it answers no SDO, so nothing is confirmed then.
     """
 
     # the model's description carries its keys, LED layout and PDOs; ``model=`` names
@@ -114,7 +120,7 @@ class Keypad(Device):
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
                  long_press: float = 0.8, restore: bool = True, generation: str | None = None,
                  watchdog: float | None = None, host_node_id: int = 0x7F,
-                 sdo_timeout: float = 0.5, model: str | None = None,
+                 sdo_timeout: float = 0.5, verify: bool = True, model: str | None = None,
                  protocol: str = "canopen", address: int = DEFAULT_ADDRESS) -> None:
         if protocol not in ("canopen", "j1939"):
             raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
@@ -141,6 +147,8 @@ class Keypad(Device):
         self.j1939: J1939KeypadLink | None = None
         if protocol == "j1939":
             self._use_j1939(address)
+        else:
+            self._confirm_or_close(verify)
         if watchdog is not None:
             self.watch_host(watchdog)
         if start and self.j1939 is None:
@@ -172,6 +180,10 @@ class Keypad(Device):
         if self.generation != "1.5":
             raise ValueError("this keypad (manual 1.1) has no consumer heartbeat (1016h)")
         super().watch_host(period)
+
+    def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
+        self.generation  # noqa: B018  (1016h is generation 2's: find out which this is)
+        super().set_consumer_heartbeat(node_id, period)
 
     def set_synchronous(self, leds: bool = True, key_state_every: int | None = 1) -> None:
         """Generation 2: LED PDOs applied at the next SYNC and the key state sent every n-th
@@ -310,21 +322,24 @@ class Keypad(Device):
         code = BacklightColour.from_name(colour) if colour is not None else None
         if level is not None:
             check_range("backlight level", level, 0, LEVEL_MAX)
-        if code is not None:
-            self.write("backlight_colour", int(code))
-            self._backlight_colour = int(code)
-        if level is not None:
-            self._backlight_level = level
-            if self.j1939 is not None:
-                self.j1939.send("backlight_level", level)
-            else:
-                self.host.send(self._backlight_frame(level))
+        with self._command_lock:
+            if code is not None:
+                self.write("backlight_colour", int(code))
+                self._backlight_colour = int(code)
+            if level is not None:
+                self._backlight_level = level
+                if self.j1939 is not None:
+                    self.j1939.send("backlight_level", level)
+                else:
+                    self.host.send(self._backlight_frame(level))
 
     def _restore_backlight(self) -> None:
-        if self._backlight_colour is not None:
-            self.write("backlight_colour", self._backlight_colour)
-        if self._backlight_level is not None:
-            self.host.send(self._backlight_frame(self._backlight_level))
+        """The backlight as it is when this runs (after any backlight command in flight)."""
+        with self._command_lock:
+            if self._backlight_colour is not None:
+                self.write("backlight_colour", self._backlight_colour)
+            if self._backlight_level is not None:
+                self.host.send(self._backlight_frame(self._backlight_level))
 
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
@@ -413,6 +428,12 @@ class Keypad(Device):
             timer.cancel()
         self._long_timers.clear()
         self.pressed = frozenset()
+        self._recover()
+
+    def _on_watchdog_trip(self, now: float) -> None:
+        self._recover()  # rev 1.5 §26 note 2: the keypad switched its LEDs off
+
+    def _recover(self) -> None:
         if self.auto_start:
             self.start()
         if not self.restore:

@@ -27,7 +27,7 @@ from collections.abc import Callable, Iterable, Mapping
 from enum import Enum
 from typing import Any
 
-from blinkcan.devices.common import RESTORE_SIGNATURE, TIMER_MS_MAX
+from blinkcan.devices.common import RESTORE_SIGNATURE, ConsumerHeartbeat
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
@@ -82,17 +82,11 @@ class ConsumerState(Enum):
     LOST = "lost"
 
 
-def split_consumer_entry(value: int) -> tuple[int, int, int]:
-    """1016h/01 (errata K8, G4): (time ms, node id, reserved byte)."""
-    return value & 0xFFFF, (value >> 16) & 0xFF, value >> 24
+split_consumer_entry = ConsumerHeartbeat.split  # 1016h/01 (errata K8, G4), from devices/
 
 
 class CanopenTwin:
     """The CANopen side of a Blink device; see the module docstring."""
-
-    #: 1016h: the longest consumer time in ms, and whether the device's own id may be watched
-    CONSUMER_TIME_MAX = TIMER_MS_MAX
-    CONSUMER_MAY_WATCH_ITSELF = True
 
     def __init__(self, description: DeviceDescription, node_id: int,
                  nvm: str | os.PathLike[str] | Nvm | None = None,
@@ -407,10 +401,8 @@ class CanopenTwin:
     # -- consumer heartbeat and restore defaults (KBX §28/§36, PKP rev 1.5 §26/§34) ----------
 
     def _check_consumer_time(self, value: int) -> AbortCode | None:
-        period, node, reserved = split_consumer_entry(value)
-        own = node == self._node_id and not self.CONSUMER_MAY_WATCH_ITSELF
-        if reserved or own or not 1 <= node <= 0x7F or not (
-                period == 0 or 10 <= period <= self.CONSUMER_TIME_MAX):
+        rule = self.description.consumer_heartbeat
+        if rule is None or not rule.accepts(value, self._node_id):
             return AbortCode.INVALID_VALUE  # errata K8, G4
         return None
 

@@ -59,9 +59,6 @@ class KeypadTwin(CanopenTwin):
     claims its address with (J-5).
     """
 
-    CONSUMER_TIME_MAX = 0xFFFF  # errata G4: 10..65535 ms (the Keybox stops at 65279)
-    CONSUMER_MAY_WATCH_ITSELF = False  # errata G4: not the keypad's own id
-
     def __new__(cls, *args: Any, model: str = MODEL, **kwargs: Any) -> KeypadTwin:
         """``KeypadTwin(model="pkp-3500-mt")`` builds the twin class the registry names."""
         target: type[KeypadTwin] = cls

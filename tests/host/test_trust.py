@@ -1,0 +1,162 @@
+"""Drivers a controller can trust (issue #10): every FAULT transition and every health change is
+an event, the output picture follows the device, restores never race the application."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from blinkcan.host import FaultEvent, HealthEvent, Keybox, Keypad
+from blinkcan.protocol.nmt import NmtState
+from tests.host.conftest import Rig, wait_until
+
+
+def _until(events: Iterator[HealthEvent], kind: str) -> list[HealthEvent]:
+    """Events up to and including the first of ``kind``."""
+    seen = []
+    for event in events:
+        seen.append(event)
+        if event.kind == kind:
+            return seen
+    raise AssertionError(f"no {kind!r} event; saw {[e.kind for e in seen]}")
+
+
+def _hold_blocking_work(rig: Rig, monkeypatch: pytest.MonkeyPatch
+                        ) -> list[Callable[[], object]]:
+    """Hold back the blocking work drivers hand off (``host.spawn``), to run it when the test
+    says."""
+    held: list[Callable[[], object]] = []
+    monkeypatch.setattr(rig.host, "spawn", lambda action, key=None: held.append(action))
+    return held
+
+
+# -- item 2: every FAULT transition of every pin, in order --------------------------------------
+
+def test_every_fault_transition_of_a_pin_is_an_event_in_order(rig: Rig) -> None:
+    keybox = Keybox(rig.host)
+    seen: list[FaultEvent] = []
+    keybox.on_fault(seen.append)
+    keybox.on(6)
+    rig.emulator.run(lambda now: rig.keybox.blow_fuse(6, now))
+    wait_until(lambda: len(seen) == 1)
+    keybox.reset(6)  # out of FAULT, the fuse still blown
+    keybox.on(6)  # into the blown fuse: FAULT again
+    wait_until(lambda: len(seen) == 3)
+    rig.emulator.run(lambda now: rig.keybox.replace_fuse(6, now))
+    keybox.reset(6)
+    keybox.on(6)
+    rig.emulator.run(lambda now: rig.keybox.blow_fuse(6, now))  # the new fuse blows too
+    wait_until(lambda: len(seen) == 5)
+    assert keybox.fault_pins == {6}
+    rig.emulator.power_cycle(rig.keybox)  # a power cycle clears the latch
+    wait_until(lambda: len(seen) == 6)
+    assert [(e.pin, e.fault) for e in seen] == [
+        (6, True), (6, False), (6, True), (6, False), (6, True), (6, False)]
+    assert keybox.fault_pins == frozenset()
+
+
+def test_a_state_read_keeps_the_fault_picture_true(rig: Rig) -> None:
+    keybox = Keybox(rig.host, start=False)  # pre-operational: no fault PDO (KBX §18)
+    seen: list[FaultEvent] = []
+    keybox.on_fault(seen.append)
+    keybox.on(2)
+    rig.emulator.run(lambda now: rig.keybox.blow_fuse(2, now))
+    assert keybox.states()[2] == "fault"
+    assert [(e.pin, e.fault) for e in seen] == [(2, True)]
+    assert keybox.actual[2] == "fault"
+
+
+# -- item 3: health events, the output picture, restores -----------------------------------------
+
+def test_every_reported_nmt_state_and_a_boot_up_are_health_events(rig: Rig) -> None:
+    keybox = Keybox(rig.host, start=False)
+    events = keybox.health_events(timeout=2.0)
+    keybox.monitor_heartbeat(0.05)
+    assert _until(events, "state")[-1].state is NmtState.PRE_OPERATIONAL
+    keybox.on(3)
+    keybox.start()
+    assert _until(events, "state")[-1].state is NmtState.OPERATIONAL
+    keybox.stop()
+    assert _until(events, "state")[-1].state is NmtState.STOPPED
+    assert keybox.actual[3] == "off"  # fail-safe: a stopped Keybox switches outputs off
+    keybox.enter_pre_operational()
+    kinds = [e.kind for e in _until(events, "state")]
+    assert "watchdog" not in kinds  # asked for: not a trip
+    rig.emulator.power_cycle(rig.keybox)
+    assert [e.kind for e in _until(events, "boot-up")][-1] == "boot-up"
+
+
+def test_a_watchdog_trip_is_an_event_and_the_picture_follows_the_device(rig: Rig) -> None:
+    keybox = Keybox(rig.host, watchdog=0.15)  # margin: a busy machine delays heartbeats
+    events = keybox.health_events(timeout=3.0)
+    keybox.on(4)
+    assert (keybox.commanded, keybox.actual[4]) == (frozenset({4}), "high")
+    keybox.stop_host_heartbeat()
+    trip = _until(events, "watchdog")[-1]
+    assert trip.state is NmtState.PRE_OPERATIONAL
+    assert keybox.actual[4] == "off"  # the Keybox switched it off
+    assert keybox.commanded == {4}  # what the application asked is kept
+    time.sleep(0.1)
+    assert keybox.state(4) == "off"  # not re-energised unasked
+
+
+def test_a_watchdog_trip_restores_outputs_when_asked(rig: Rig) -> None:
+    keybox = Keybox(rig.host, watchdog=0.15, restore_outputs=True)
+    events = keybox.health_events(timeout=3.0)
+    keybox.set_outputs(high=[3, 5])
+    keybox.stop_host_heartbeat()
+    _until(events, "watchdog")
+    wait_until(lambda: {p for p, s in keybox.states().items() if s == "high"} == {3, 5})
+    assert {p for p, s in keybox.actual.items() if s == "high"} == {3, 5}
+
+
+def test_a_restore_never_switches_back_on_what_the_application_switched_off(
+        rig: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
+    keybox = Keybox(rig.host, restore_outputs=True)
+    keybox.set_outputs(high=[4, 6])
+    held = _hold_blocking_work(rig, monkeypatch)
+    rig.emulator.power_cycle(rig.keybox)
+    wait_until(lambda: held)  # the driver has planned its restore
+    keybox.off(4)  # ... and the application switches 4 off before the restore runs
+    for work in held:
+        work()
+    assert {p for p, s in keybox.states().items() if s == "high"} == {6}
+
+
+def test_the_keypad_restore_never_writes_a_stale_backlight_colour(
+        rig: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
+    keypad = Keypad(rig.host)
+    keypad.set_backlight("blue", 20)
+    held = _hold_blocking_work(rig, monkeypatch)
+    rig.emulator.power_cycle(rig.keypad)
+    wait_until(lambda: held)
+    rig.emulator.response_delay = 0.3  # the application's write is slow to be acknowledged
+    application = threading.Thread(target=lambda: keypad.set_backlight("red"))
+    application.start()
+    time.sleep(0.1)  # its write is in flight when the restore runs
+    restore = [threading.Thread(target=work) for work in held]
+    for thread in restore:
+        thread.start()
+    application.join()
+    for thread in restore:
+        thread.join()
+    rig.emulator.response_delay = 0.0
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["backlight"]["colour"] == "red")
+    time.sleep(0.05)
+    assert rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "red", "level": 20}
+
+
+# -- item 10: the consumer heartbeat range, from devices/ ------------------------------------------
+
+def test_driver_and_twin_agree_on_the_consumer_heartbeat_range(rig: Rig) -> None:
+    keybox = Keybox(rig.host)
+    with pytest.raises(ValueError, match=r"0\.01\.\.65\.279 s"):
+        keybox.set_consumer_heartbeat(0x7F, 65.535)  # KBX §28: 10..65279 ms
+    if rig.generation == "1.5":
+        keypad = Keypad(rig.host)
+        keypad.set_consumer_heartbeat(0x7F, 65.535)  # errata G4: 10..65535 ms
+        consumer = rig.emulator.snapshot(rig.keypad)["heartbeat_consumer"]
+        assert consumer == {"node_id": 0x7F, "time_ms": 65535, "state": "waiting"}
