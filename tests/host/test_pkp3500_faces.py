@@ -255,3 +255,34 @@ def test_scan_names_the_model() -> None:
         rig.add(KeypadTwin(node_id=0x16))
         found = {f.node_id: (f.kind, f.model) for f in scan(rig.bus, listen=0.05)}
     assert found == {0x15: ("keypad", MT), 0x16: ("keypad", "pkp-2600-si")}
+
+
+def test_asyncio_face_offers_encoder_events_and_ring_leds() -> None:
+    import asyncio
+    import uuid
+
+    import can
+
+    from blinkcan.host.pkp3500 import AsyncPkp3500Keypad
+    from blinkcan.runtime import Emulator
+
+    channel = f"mt-aio-{uuid.uuid4().hex}"
+    device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
+    twin = quiet(mt_twin())
+
+    async def main() -> None:
+        async with AsyncPkp3500Keypad(host_bus, 0x15) as keypad:
+            await keypad.set_ring(2, [17, 18])
+            events = keypad.encoder_events(timeout=2.0)
+            await asyncio.sleep(0.1)
+            emulator.run(lambda now: twin.turn(1, 2, now))  # type: ignore[attr-defined]
+            first = await events.__anext__()
+            assert (first.encoder, first.ticks, first.counter) == (1, 1, 1)
+            assert await keypad.read_counter(1) == 2
+
+    emulator = Emulator(device_bus, [twin])
+    with emulator:
+        asyncio.run(main())
+        assert twin.objects["led_on_rings"] == 0x0003_0000
+    device_bus.shutdown()
+    host_bus.shutdown()

@@ -7,7 +7,7 @@ Built as ``Keypad(bus, 0x15, model="pkp-3500-mt")``, ``Keypad.connect(bus, 0x15)
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import AsyncIterator, Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,10 +16,11 @@ import can
 from blinkcan.devices.keypad import LEVEL_MAX
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.pkp3500 import GENERATION, MODEL, describe_pkp3500
+from blinkcan.host.aio import _AsyncDevice, _iterate
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
-from blinkcan.host.keypad import Keypad
+from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.protocol.cob import check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_mask, item_numbers
@@ -190,3 +191,16 @@ class Pkp3500Keypad(Keypad):
         super()._on_boot_up(now)
         if self.restore and self._rings is not None:
             self.host.send(self._pdo_frame("ring_leds", {"rings": self._rings}))
+
+
+class AsyncPkp3500Keypad(_AsyncDevice[Pkp3500Keypad]):
+    """The asyncio face, as ``AsyncKeypad``: ``await keypad.set_ring(1, [1, 2])``,
+    ``async for event in keypad.encoder_events()``."""
+
+    _driver = Pkp3500Keypad
+
+    def events(self, timeout: float | None = None) -> AsyncIterator[KeyEvent]:
+        return _iterate(self, lambda device: device.keys, timeout)
+
+    def encoder_events(self, timeout: float | None = None) -> AsyncIterator[EncoderEvent]:
+        return _iterate(self, lambda device: device.encoders, timeout)
