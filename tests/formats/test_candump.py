@@ -11,7 +11,7 @@ import can
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from blinkcan.formats.candump import read_candump
+from blinkcan.formats.candump import read_candump, with_error_details
 from blinkcan.formats.logs import read_frames, read_log
 from blinkcan.protocol import Frame
 
@@ -34,8 +34,9 @@ def _ours(text: str) -> list[tuple[object, ...]]:
 
 
 def _python_cans(path: Path) -> list[tuple[object, ...]]:
-    with can.LogReader(str(path)) as reader:
-        return [_as_tuple(message) for message in reader]
+    """python-can's reader, error frames completed from their lines (restore_error_details)."""
+    with can.LogReader(str(path)) as reader, path.open() as lines:
+        return [_as_tuple(message) for message in with_error_details(iter(reader), lines)]
 
 
 _line = st.one_of(
@@ -45,7 +46,8 @@ _line = st.one_of(
               st.binary(max_size=8)),
     st.builds(lambda i: f"{i:03X}#R", st.integers(0, 0x7FF)),
     st.builds(lambda i, n: f"{i:03X}#R{n}", st.integers(0, 0x7FF), st.integers(0, 8)),
-    st.builds(lambda d: f"20000080#{d.hex()}", st.binary(min_size=8, max_size=8)),
+    st.builds(lambda c, d: f"{0x20000000 | c:08X}#{d.hex()}", st.integers(0, 0x1FF),
+              st.binary(min_size=8, max_size=8)),
     st.builds(lambda i, d: f"{i:03X}##1{d.hex()}", st.integers(0, 0x7FF),
               st.sampled_from([b"", bytes(12), bytes(range(64))])),
 )

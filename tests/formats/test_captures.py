@@ -232,3 +232,29 @@ def test_record_stops_cleanly_on_sigterm_keeping_every_frame(tmp_path: Path,
     kinds = [(frame_kind(m), m.arbitration_id) for m in read_messages(target)]
     assert ("remote", 0x70C) in kinds
     assert ("data", 0x715) in kinds
+
+
+def test_can_fd_frames_go_through_a_pcap_whole(tmp_path: Path) -> None:
+    source = tmp_path / "fd.log"
+    source.write_text("(1.0) can0 123##1" + bytes(range(12)).hex().upper() + "\n"
+                      "(2.0) can0 715#05\n")
+    target = tmp_path / "fd.pcap"
+    result = CliRunner().invoke(cli, ["convert", str(source), str(target)])
+    assert result.exit_code == 0, result.output
+    messages = list(read_messages(target))
+    assert messages[0].is_fd
+    assert bytes(messages[0].data) == bytes(range(12))
+    assert bytes(messages[1].data) == b"\x05"
+
+
+def test_an_error_frames_class_and_data_survive_a_candump_log(tmp_path: Path) -> None:
+    source = tmp_path / "errors.log"
+    source.write_text("(1.0) can0 715#05\n\n(2.0) can0 20000044#0000000000000000\n")
+    target = tmp_path / "errors.pcap"
+    assert CliRunner().invoke(cli, ["convert", str(source), str(target)]).exit_code == 0
+    error = list(read_messages(target))[1]
+    assert error.is_error_frame
+    assert error.arbitration_id == 0x44  # python-can's reader alone keeps 0 and no data
+    assert bytes(error.data) == bytes(8)
+    decoded = CliRunner().invoke(cli, ["decode", str(source)])
+    assert "error frame: controller problem, bus-off" in decoded.stdout

@@ -272,3 +272,11 @@ def test_fault_polls_of_an_absent_keybox_stay_bounded() -> None:
         assert counts[-1] <= counts[0]
     finally:
         bus.shutdown()
+
+
+def test_a_silent_node_times_out_with_a_plain_message() -> None:
+    with Rig() as rig:
+        keybox = Keybox(rig.bus, 0x0C, **_NO_VERIFY)
+        with pytest.raises(SdoTimeoutError, match=r"^node 0Ch 2008h/0\d: no reply within 0.5 s$"):
+            keybox.states()
+        keybox.close()

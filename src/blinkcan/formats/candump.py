@@ -7,8 +7,9 @@ plain data-frame line is split once and its data read by ``bytes.fromhex``, abou
 
 Every other line (remote frames ``R``, CAN FD ``##``, error-flag identifiers, odd digit counts,
 anything unusual) is handed to python-can's own reader, one line at a time, so the result is
-python-can's by construction; tests/formats/test_candump.py checks the fast path against
-python-can's reader on generated logs.
+python-can's by construction, with one correction where python-can loses what the line says
+(:func:`restore_error_details`: error frames); tests/formats/test_candump.py checks the fast
+path against python-can's reader (plus that correction) on generated logs.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from can.io.canutils import CanutilsLogReader
 
 from blinkcan.protocol.frame import Frame
 
+_ERROR_FLAG = 0x20000000  # linux/can.h CAN_ERR_FLAG
 _DIRECTIONS = frozenset({"R", "T", "r", "t"})
 _NOT_DATA = frozenset({"#", "R", "r"})  # CAN FD, remote
 _new_tuple = tuple.__new__  # Frame.trusted without the call: the ids and data are checked here
@@ -30,7 +32,35 @@ _new_tuple = tuple.__new__  # Frame.trusted without the call: the ids and data a
 def _python_can(line: str) -> can.Message | None:
     """The message python-can reads from one line (None for a blank line)."""
     reader = CanutilsLogReader(io.StringIO(line))
-    return next(iter(reader), None)
+    message = next(iter(reader), None)
+    return restore_error_details(message, line) if message is not None else None
+
+
+def restore_error_details(message: can.Message, line: str) -> can.Message:
+    """A SocketCAN error frame as what it is. python-can's candump reader takes an identifier
+    with CAN_ERR_FLAG for an error frame only when CAN_ERR_BUSERROR is set too, and then keeps
+    its time and nothing else (no error class bits, no data: can/io/canutils.py); any other
+    error class becomes a data frame. Every CAN_ERR_FLAG identifier is an error frame
+    (linux/can/error.h), with its class bits and data."""
+    if not (message.is_error_frame or message.is_extended_id):
+        return message
+    ident, _, data = line.split()[2].partition("#")
+    can_id = int(ident, 16)
+    if len(ident) == 8 and can_id & _ERROR_FLAG:
+        message.is_error_frame, message.is_remote_frame, message.is_fd = True, False, False
+        message.arbitration_id = can_id & 0x1FFFFFFF
+        message.data = bytearray.fromhex(data[: 2 * 8])
+        message.dlc = len(message.data)
+    return message
+
+
+def with_error_details(messages: Iterator[can.Message], lines: Iterator[str]
+                       ) -> Iterator[can.Message]:
+    """python-can's messages of a candump log, each error frame completed from its line
+    (python-can reads one message per line that is not blank)."""
+    text_lines = (line for line in lines if line.strip())
+    for message, line in zip(messages, text_lines, strict=True):
+        yield restore_error_details(message, line)
 
 
 def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:

@@ -23,7 +23,7 @@ from typing import BinaryIO
 import can
 from can.io.blf import BLFParseError
 
-from blinkcan.formats.candump import read_candump
+from blinkcan.formats.candump import read_candump, with_error_details
 from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_message
@@ -73,7 +73,11 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
-            yield from reader
+            if source.suffix.lower() == ".log":
+                with source.open(encoding="utf-8") as lines:
+                    yield from with_error_details(iter(reader), lines)
+            else:
+                yield from reader
         except _READ_ERRORS as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 

@@ -50,8 +50,8 @@ def encode_record(message: can.Message) -> bytes:
     can_id = message.arbitration_id | (CAN_EFF_FLAG if message.is_extended_id else 0)
     if message.is_remote_frame:
         return _CAN.pack(can_id | CAN_RTR_FLAG, message.dlc, 0, bytes(8))
-    data = bytes(message.data)
-    if message.is_fd:
+    data = bytes(message.data[:64])
+    if message.is_fd or len(data) > 8:  # more than 8 bytes only fit a CAN FD frame
         flags = CANFD_FDF | (CANFD_BRS if message.bitrate_switch else 0) | (
             CANFD_ESI if message.error_state_indicator else 0)
         return _CANFD.pack(can_id, len(data), flags, data.ljust(64, b"\x00"))

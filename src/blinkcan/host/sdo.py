@@ -96,6 +96,7 @@ class SdoChannel:
         timeout = self.timeout if timeout is None else timeout
         retries = self.retries if retries is None else retries
         with self._lock:
+            first: SdoTimeoutError | None = None
             uncertain: SdoTimeoutError | None = None  # an attempt that may have taken effect
             for attempt in range(retries + 1):
                 transfer = make()
@@ -105,9 +106,10 @@ class SdoChannel:
                     self._transfer(transfer, timeout)
                     return transfer
                 except SdoTimeoutError as error:
+                    first = first or error
                     uncertain = uncertain or (error if error.uncertain else None)
                     if attempt == retries:
-                        raise (uncertain or error) from None
+                        raise (uncertain or first) from None
                     log.debug("node %02Xh: %s; retrying", self.node_id, error)
                 except SdoError as error:
                     if error.node_id is None:
