@@ -67,3 +67,26 @@ def test_emulate_builds_keypads_in_j1939_mode() -> None:
     assert _name(build_twins(("keypad",), None, None, "firmware")[0]) == "keypad 15h (rev 1.1)"
     with pytest.raises(click.UsageError, match="only the PKP-2600-SI"):
         build_twins(("keybox",), None, None, "firmware", (), "j1939")
+
+
+def test_scan_lists_j1939_keypads_beside_canopen_devices() -> None:
+    channel = f"scan-j1939-{uuid.uuid4().hex}"
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    claiming = KeypadTwin(protocol="j1939", node_id=0x16)
+    try:
+        with Emulator(device_bus, [KeypadTwin(), claiming]) as emulator:
+            emulator.run(lambda now: claiming.receive(Frame(
+                0x18EF2100, bytes.fromhex("041B7030FFFFFFFF"), extended=True), now))
+            emulator.run(lambda now: claiming.receive(Frame(
+                0x18EF3000, bytes.fromhex("041B7401FFFFFFFF"), extended=True), now))
+            emulator.power_cycle(claiming)
+            result = CliRunner().invoke(cli, ["scan", "--listen", "0.05", "-i", "virtual",
+                                              "-c", channel], env={"COLUMNS": "150"})
+    finally:
+        device_bus.shutdown()
+    assert result.exit_code == 0, result.output
+    assert "PKP2600SI" in result.output  # the CANopen keypad
+    row = next(line for line in result.output.splitlines() if "J1939" in line)
+    assert "30h" in row
+    assert "V2.6" in row
+    assert "claimed" in row

@@ -7,7 +7,7 @@ from rich.console import Console
 from rich.table import Table
 
 from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
-from blinkcan.host import scan
+from blinkcan.host import scan, scan_j1939
 
 
 @click.command("scan")
@@ -15,13 +15,15 @@ from blinkcan.host import scan
               help="Seconds to listen for boot-ups and heartbeats first.")
 @bus_options
 def command(listen: float) -> None:
-    """Find devices: boot-up and heartbeat heard, SDO read of 1000h, 1018h, 100Bh."""
+    """Find devices: boot-up and heartbeat heard, SDO read of 1000h, 1018h, 100Bh; keypads in
+    J1939 mode by a software revision request and a request for address claimed, to all."""
     bus = cli_bus()
     try:
         found = scan(bus, listen=listen)
+        j1939 = scan_j1939(bus, listen=max(listen, 0.2))
     finally:
         bus.shutdown()
-    if not found:
+    if not found and not j1939:
         raise click.ClickException(f"no device answered on {describe_bus(bus_settings())}")
     table = Table("node", "device", "model", "firmware", "hardware", "device type", "heard")
     for device in found:
@@ -29,4 +31,7 @@ def command(listen: float) -> None:
                       device.model_id or "", device.software_version or "",
                       device.hardware_version or "", f"{device.device_type:08X}h",
                       "yes" if device.heard else "")
+    for keypad in j1939:  # "node" is the J1939 source address
+        table.add_row(f"{keypad.address:02X}h", "keypad (J1939)", "", keypad.software_revision
+                      or "", "", "", "claimed" if keypad.name else "")
     Console().print(table)
