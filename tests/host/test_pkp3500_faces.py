@@ -304,7 +304,9 @@ def test_monitor_draws_the_3_by_5_face_and_the_knobs_and_inputs(tmp_path: Path) 
                                       "0x15=pkp-3500-mt"], env={"COLUMNS": "160"})
     assert result.exit_code == 0, result.output
     rows = [line for line in result.output.splitlines() if "[11" in line]
-    assert rows and "[ 6" in rows[0] and "[ 1" in rows[0]  # MT §2: 11, 6, 1 on the top row
+    assert rows  # MT §2: 11, 6, 1 on the top row
+    assert "[ 6" in rows[0]
+    assert "[ 1" in rows[0]
     assert "[ 3 yellow" in result.output
     assert "encoder 1 state: ticks since the last report 1, tick counter 3" in result.output
     assert "analog inputs: in0 5 V, in1 2 V, in2 3 V, in3 1 V" in result.output
