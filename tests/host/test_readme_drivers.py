@@ -31,8 +31,8 @@ class Program:
         code = re.search(r"```python\n(.*?)```", section, re.S)
         assert code is not None, f"no program under {title}"
         assert CAN0 in code.group(1), f"no program on can0 under {title}"
-        bus = f'can.Bus(interface="virtual", channel="{channel}")'
-        self.code = code.group(1).replace(CAN0, bus)
+        virtual = f'can.Bus(interface="virtual", channel="{channel}")'
+        self.code = code.group(1).replace(CAN0, virtual)
         self.names: dict[str, Any] = {}
         self.error: BaseException | None = None
         self._thread = threading.Thread(target=self._run, daemon=True)
