@@ -8,6 +8,7 @@ import io
 import json
 import os
 import random
+import shutil
 import signal
 import struct
 import subprocess
@@ -258,3 +259,20 @@ def test_an_error_frames_class_and_data_survive_a_candump_log(tmp_path: Path) ->
     assert bytes(error.data) == bytes(8)
     decoded = CliRunner().invoke(cli, ["decode", str(source)])
     assert "error frame: controller problem, bus-off" in decoded.stdout
+
+
+def test_wireshark_reads_remote_error_and_fd_frames_of_our_pcap(candump: Path,
+                                                                 tmp_path: Path) -> None:
+    tshark = shutil.which("tshark")
+    if tshark is None:
+        pytest.skip("tshark is not installed (apt-get install tshark to run this check)")
+    with candump.open("a") as stream:
+        stream.write("(1000.040000) can0 123##1" + bytes(range(12)).hex() + "\n")
+    target = tmp_path / "all.pcap"
+    assert CliRunner().invoke(cli, ["convert", str(candump), str(target)]).exit_code == 0
+    result = subprocess.run([tshark, "-r", str(target), "-V"], capture_output=True, text=True,
+                            timeout=60, check=True)
+    assert "Remote Transmission Request Flag: True" in result.stdout
+    assert "Error Message Flag: True" in result.stdout
+    assert "Bus error: True" in result.stdout
+    assert "Controller Area Network FD, ID: 291 (0x123), Length: 12" in result.stdout

@@ -30,7 +30,7 @@ class Program:
         section = README.read_text().split(f"## {title}\n", 1)[1]
         code = re.search(r"```python\n(.*?)```", section, re.S)
         assert code is not None, f"no program under {title}"
-        assert CAN0 in code.group(1), f"the program under {title} is not on can0"
+        assert CAN0 in code.group(1), f"no program on can0 under {title}"
         virtual = f'can.Bus(interface="virtual", channel="{channel}")'
         self.code = code.group(1).replace(CAN0, virtual)
         self.names: dict[str, Any] = {}

@@ -37,6 +37,7 @@ from blinkcan.devices.keypad_j1939 import (
     LEVEL_MAX as J1939_LEVEL_MAX,
 )
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import (
     GLOBAL_ADDRESS,
     NULL_ADDRESS,
@@ -154,7 +155,7 @@ class J1939KeypadDecoder:
         if code == HEARTBEAT:  # §18
             self.addresses.add(source)
             keys = data[4] | (data[5] & 0x0F) << 8
-            held = [k for k in range(1, 13) if keys >> (k - 1) & 1]
+            held = item_numbers(keys)
             listing = ", ".join(map(str, held)) if held else "none"
             return J1939Meaning(f"heartbeat {data[3]}, keys held: {listing}", source, True,
                                 {"message": "heartbeat", "counter": data[3], "keys": held,

@@ -31,6 +31,7 @@ from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState, heartbeat_frame, parse_nmt
 from blinkcan.twin.base import CanopenTwin, next_due
@@ -152,7 +153,7 @@ class KeypadTwin(CanopenTwin):
 
     @property
     def keys_pressed(self) -> frozenset[int]:
-        return frozenset(k for k in self._face.key_numbers if self._keys >> (k - 1) & 1)
+        return frozenset(item_numbers(self._keys))
 
     def _set_key(self, key: int, down: bool, now: float) -> list[Frame]:
         if not self._powered:
@@ -177,8 +178,7 @@ class KeypadTwin(CanopenTwin):
     def _key_state_frame(self, now: float) -> Frame:
         # errata P8: byte 4 advances every 100 ms from power-on and wraps
         tick = int((now - self._boot_time) / TICK_PERIOD_S) & 0xFF
-        data = self._keys.to_bytes(2, "little") + b"\x00\x00" + bytes((tick,))
-        return Frame(self._key_cob_id, data)
+        return Frame(self._key_cob_id, self._key_pdo.encode({"keys": self._keys, "tick": tick}))
 
     # -- the LED picture and its object views -------------------------------------------------
 
