@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
+from click.testing import CliRunner
 from hypothesis import given
 from hypothesis import strategies as st
 
+from blinkcan.cli.main import cli
 from blinkcan.decode import Decoder, Kind
+from blinkcan.formats.pcap import read_pcap, write_pcap
 from blinkcan.protocol import Frame
 from tests.conftest import frame
 
@@ -98,3 +103,21 @@ def test_random_extended_frames_decode(can_id: int, data: bytes) -> None:
     event = decoder.decode(Frame(can_id, data, extended=True))
     assert event.text
     assert decoder.json_line(Frame(can_id, data, extended=True))
+
+
+def test_a_pcap_keeps_the_29_bit_frames_and_decode_reads_them(tmp_path: Path) -> None:
+    """pcap (SocketCAN link type, EFF flag) keeps J1939 identifiers; ``blinkcan decode``
+    names what the keypad did."""
+    frames = [(0.0, frame("18EF2100 04 1B 01 0B 01 03 02 FF")),
+              (0.5, frame("18EFFF21 04 1B 01 05 01 21 FF FF")),
+              (1.0, frame("18EFFF21 04 1B F9 00 10 00 FF 21"))]
+    path = tmp_path / "j1939.pcap"
+    with path.open("wb") as stream:
+        write_pcap(stream, frames)
+    with path.open("rb") as stream:
+        assert [f for _, f in read_pcap(stream)] == [f for _, f in frames]
+    result = CliRunner().invoke(cli, ["decode", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "keypad 21h: LED 11 alternates red/green" in result.output
+    assert "keypad 21h: key 5 pressed" in result.output
+    assert "keypad 21h: heartbeat 0, keys held: 5" in result.output

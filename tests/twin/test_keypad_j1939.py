@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from blinkcan.devices.keypad_j1939 import BITRATES, COMMANDS, Persistence
 from blinkcan.protocol import Frame
 from blinkcan.protocol.j1939 import J1939Name, address_claim_frame
 from blinkcan.twin import KeypadTwin, NvmError
@@ -519,3 +520,29 @@ def test_two_keypads_do_not_take_each_others_messages_for_commands() -> None:
     identifier_01.receive(frame("18EF2100 04 1B 70 23 01 FF FF FF"), 0.0)
     second.receive(identifier_01.press(5, 10.0)[0], 10.0)  # 01 05 01 01 FF: state on
     assert second.snapshot()["keys"][4]["colour"] == "off"
+
+
+_STORED = [c for c in COMMANDS if c.persistence is Persistence.STORED]
+
+
+@st.composite
+def stored_commands(draw: st.DrawFn) -> bytes:
+    command = draw(st.sampled_from(_STORED))
+    values = [draw(st.sampled_from([v for lo, hi in f.valid.spans for v in range(lo, hi + 1)]))
+              for f in command.fields]
+    return command.encode(*values)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(stored_commands(), max_size=8))
+def test_j1939_settings_survive_power_cycles(commands: list[bytes]) -> None:
+    twin = KeypadTwin(protocol="j1939")
+    twin.power_on(0.0)
+    for data in commands:
+        twin.receive(Frame(0x18EF0000 | twin.j1939.address << 8, data, extended=True), 1.0)
+    stored = dict(twin.j1939.settings)
+    twin.power_off()
+    twin.power_on(2.0)
+    assert twin.j1939.settings == stored
+    assert twin.snapshot()["j1939"]["source_address"] == stored["source_address"]
+    assert twin.snapshot()["bitrate"] == BITRATES[stored["baud_rate"]]
