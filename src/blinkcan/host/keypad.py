@@ -149,6 +149,8 @@ class Keypad(Device):
             self._use_j1939(address)
         else:
             self._confirm_or_close(verify)
+            if verify:  # known from now on: no property reads the device later
+                self._detect_or_close()
         if watchdog is not None:
             self.watch_host(watchdog)
         if start and self.j1939 is None:
@@ -158,8 +160,14 @@ class Keypad(Device):
 
     @property
     def generation(self) -> str:
-        """"1.1" or "1.5": given, or found by probing 1016h, which only generation 2 has
-        (pkp-rev1.1-vs-rev1.5.md); the LED objects and the backlight PDO differ."""
+        """"1.1" or "1.5": given, or found when the driver confirmed the device (the LED
+        objects and the backlight PDO differ). With ``verify=False`` and no generation given,
+        the first use reads the device (see :meth:`detect_generation`)."""
+        return self.detect_generation()
+
+    def detect_generation(self) -> str:
+        """Find the generation by probing 1016h, which only generation 2 has
+        (pkp-rev1.1-vs-rev1.5.md): one SDO read, the first time only."""
         if self._generation is None:
             try:
                 self.sdo.upload(0x1016, 0)
@@ -170,6 +178,13 @@ class Keypad(Device):
             self.description = self._describe(found, self.node_id)
         return self._generation
 
+    def _detect_or_close(self) -> None:
+        try:
+            self.detect_generation()
+        except BaseException:
+            self.close()
+            raise
+
     def _describe(self, generation: str | None, node_id: int) -> DeviceDescription:
         """This driver's model at ``generation`` (None: the first), CiA 301 profile."""
         return describe_keypad(generation or "1.1", "cia301", node_id)
@@ -177,19 +192,19 @@ class Keypad(Device):
     def watch_host(self, period: float) -> None:
         """Generation 2 only: the keypad switches its LEDs off when the controller's
         heartbeat stops (rev 1.5 §26)."""
-        if self.generation != "1.5":
+        if self.detect_generation() != "1.5":
             raise ValueError("this keypad (manual 1.1) has no consumer heartbeat (1016h)")
         super().watch_host(period)
 
     def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
-        self.generation  # noqa: B018  (1016h is generation 2's: find out which this is)
+        self.detect_generation()  # 1016h is generation 2's: find out which this is
         super().set_consumer_heartbeat(node_id, period)
 
     def set_synchronous(self, leds: bool = True, key_state_every: int | None = 1) -> None:
         """Generation 2: LED PDOs applied at the next SYNC and the key state sent every n-th
         SYNC (rev 1.5 §36/§37/§44a); run a SYNC producer (``host.produce_sync``). With
         ``leds=False`` and ``key_state_every=None`` the keypad is event-driven again."""
-        if self.generation != "1.5":
+        if self.detect_generation() != "1.5":
             raise ValueError("this keypad (manual 1.1) has no synchronous PDOs")
         led_type = 0x00 if leds else 0xFE
         self.write("rpdo1_transmission_type", led_type)
