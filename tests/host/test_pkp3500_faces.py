@@ -286,3 +286,27 @@ def test_asyncio_face_offers_encoder_events_and_ring_leds() -> None:
         assert twin.objects["led_on_rings"] == 0x0003_0000
     device_bus.shutdown()
     host_bus.shutdown()
+
+
+def test_monitor_draws_the_3_by_5_face_and_the_knobs_and_inputs(tmp_path: Path) -> None:
+    from blinkcan.formats.logs import FrameWriter
+
+    path = tmp_path / "mt.log"
+    with FrameWriter(path) as writer:
+        for timestamp, frame in enumerate((
+                Frame(0x715, b"\x00"), Frame(0x000, b"\x01\x15"),
+                Frame(0x215, bytes.fromhex("0400040000000000")),  # amber key-LED 3
+                Frame(0x195, bytes.fromhex("0104000011")),  # keys 1 and 11 (the knobs) held
+                Frame(0x295, bytes.fromhex("0103000800000000")),
+                Frame(0x495, bytes.fromhex("F401C8002C016400")))):
+            writer.write(float(timestamp), frame)
+    result = CliRunner().invoke(cli, ["monitor", "--file", str(path), "--device",
+                                      "0x15=pkp-3500-mt"], env={"COLUMNS": "160"})
+    assert result.exit_code == 0, result.output
+    rows = [line for line in result.output.splitlines() if "[11" in line]
+    assert rows  # MT §2: 11, 6, 1 on the top row
+    assert "[ 6" in rows[0]
+    assert "[ 1" in rows[0]
+    assert "[ 3 yellow" in result.output
+    assert "encoder 1 state: ticks since the last report 1, tick counter 3" in result.output
+    assert "analog inputs: in0 5 V, in1 2 V, in2 3 V, in3 1 V" in result.output

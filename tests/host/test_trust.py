@@ -160,3 +160,16 @@ def test_driver_and_twin_agree_on_the_consumer_heartbeat_range(rig: Rig) -> None
         keypad.set_consumer_heartbeat(0x7F, 65.535)  # errata G4: 10..65535 ms
         consumer = rig.emulator.snapshot(rig.keypad)["heartbeat_consumer"]
         assert consumer == {"node_id": 0x7F, "time_ms": 65535, "state": "waiting"}
+
+
+def test_a_generation_2_keypad_gets_its_leds_back_after_a_watchdog_trip(rig: Rig) -> None:
+    if rig.generation != "1.5":
+        pytest.skip("generation 1 has no consumer heartbeat")
+    keypad = Keypad(rig.host, watchdog=0.15)  # restore=True: the default
+    keypad.set_led(7, "red")
+    events = keypad.health_events(timeout=3.0)
+    keypad.stop_host_heartbeat()
+    trip = _until(events, "watchdog")[-1]
+    assert trip.state is NmtState.PRE_OPERATIONAL
+    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["keys"][6]["colour"] == "red")
+    assert rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational"

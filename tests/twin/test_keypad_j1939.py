@@ -546,3 +546,24 @@ def test_j1939_settings_survive_power_cycles(commands: list[bytes]) -> None:
     assert twin.j1939.settings == stored
     assert twin.snapshot()["j1939"]["source_address"] == stored["source_address"]
     assert twin.snapshot()["bitrate"] == BITRATES[stored["baud_rate"]]
+
+
+def test_the_pkp3500_in_j1939_mode_is_silent_and_only_comes_back() -> None:
+    """MT M82: its J1939 behaviour is outside its manual; errata "Protocol switch"."""
+    bench = Bench(KeypadTwin(model="pkp-3500-mt"))
+    bench.replay("""
+        on
+        < 715 00
+        > 615 2B FF 20 01 01
+        < 595 60 FF 20 01 00 00 00 00
+        wait 10
+        press 1
+        < -
+        > 18EF2100 04 1B 2A FF FF FF FF FF
+        < -
+        > 18EF2100 04 1B 80 00 FF FF FF FF
+        < 715 00
+    """)
+    assert len(snapshot(bench)["keys"]) == 15
+    with pytest.raises(ValueError, match="no documented J1939 mode"):
+        KeypadTwin(model="pkp-3500-mt", protocol="j1939")

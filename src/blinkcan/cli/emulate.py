@@ -48,7 +48,7 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
         if protocol != "canopen":  # spec/pkp-2600-si-j1939.md: the PKP-2600-SI's J1939 mode
-            if found.name != "pkp-2600-si":
+            if "j1939" not in found.description().features:
                 raise click.UsageError(f"--protocol {protocol}: only the PKP-2600-SI keypad has "
                                        f"a J1939 mode, not {found.name}")
             options["protocol"] = protocol

@@ -43,7 +43,7 @@ def command(kind: str, device: str, output: str | None, quirks: str, node_id: in
     if output is not None:
         check_target(output, force)
     if protocol == "j1939" or address is not None:
-        if kind != "dbc" or description.model != "pkp-2600-si":
+        if kind != "dbc" or "j1939" not in description.features:
             raise click.UsageError("J1939 mode: a DBC of the PKP-2600-SI keypad "
                                    "(blinkcan export dbc keypad --protocol j1939)")
         text = j1939_dbc_text(address if address is not None else DEFAULT_ADDRESS)

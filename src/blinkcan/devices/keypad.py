@@ -319,7 +319,7 @@ def describe_keypad(
         consumer_heartbeat=CONSUMER_HEARTBEAT if generation == "1.5" else None,
         face=FACE,
         led_fields=LED_FIELDS[generation],
-        features=GENERATION_2_FEATURES if generation == "1.5" else frozenset(),
+        features=(GENERATION_2_FEATURES if generation == "1.5" else frozenset()) | {"j1939"},
         title="PKP-2600-SI keypad",
         edition=f"generation {GENERATIONS.index(generation) + 1} (manual rev {generation})",
         eds_file=eds_file,
@@ -328,6 +328,7 @@ def describe_keypad(
     )
 
 
+#: "j1939": the J1939 mode of both generations (devices/keypad_j1939.py, pkp-2600-si-j1939.md)
 #: rev 1.5 (pkp-rev1.1-vs-rev1.5.md): SYNC (G3), node id at once (G1), backlight colour (G2)
 GENERATION_2_FEATURES = frozenset({"sync", "node-id-at-once", "backlight-colour-pdo"})
 

@@ -100,7 +100,10 @@ class KeypadTwin(CanopenTwin):
             nvm = JsonFileNvm(nvm, description.model, description.generation, description.table,
                               {NVM_PREFIX + key: f.valid for key, f in STORED_SETTINGS.items()})
         j1939_name = name if isinstance(name, J1939Name) else J1939Name.from_bytes(name)
-        self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939)
+        speaks = "j1939" in description.features
+        if protocol == "j1939" and not speaks:
+            raise ValueError(f"the {description.model} has no documented J1939 mode")
+        self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939, speaks)
         fresh = nvm.load() is None  # a corrupt or foreign file fails here
         super().__init__(description, node_id, nvm, settings)
         self._j1939_keypad.settings.update(self._stored_j1939_settings(self._nvm.load() or {}))
@@ -477,7 +480,7 @@ class KeypadTwin(CanopenTwin):
                 "level": self._store.get_int("backlight_brightness")}
 
     def _snapshot(self) -> dict[str, Any]:
-        if self._j1939:
+        if self._j1939 and self._j1939_keypad.speaks:
             return {**self._j1939_keypad.snapshot(), "blink_period_s": BLINK_PERIOD_S}
         if not self._powered:
             on = blink = 0

@@ -92,7 +92,10 @@ class J1939Keypad:
     """
 
     def __init__(self, name: J1939Name, settings: dict[str, int],
-                 save: Callable[[dict[str, int]], bool]) -> None:
+                 save: Callable[[dict[str, int]], bool], speaks: bool = True) -> None:
+        #: False for a model whose J1939 mode is not documented (PKP-3500-MT, MT M82): it is
+        #: silent and answers only the way back (errata "Protocol switch")
+        self.speaks = speaks
         self.name = name
         self.settings = {**default_settings(), **settings}
         self._save = save
@@ -127,6 +130,9 @@ class J1939Keypad:
         self._powered = True
         self._now = now
         self.wants_canopen = False
+        if not self.speaks:
+            self._keys = keys
+            return []
         settings = self.settings
         self._bitrate_code = settings["baud_rate"]  # §15, J-3: applied at power-on
         self.address = settings["source_address"]
@@ -189,7 +195,7 @@ class J1939Keypad:
         if len(data) != 8 or data[:2] != HEADER:
             return []  # J-2: malformed, no change, no answer
         command = COMMANDS_BY_CODE.get(data[2])
-        if command is None:
+        if command is None or (not self.speaks and command.name != "switch_to_canopen"):
             return []
         fields = command.decode(data)
         if fields is None:
@@ -201,7 +207,7 @@ class J1939Keypad:
 
     def _on_multiple_leds(self, which: int, data: bytes) -> list[Frame]:
         # §7b: only in LED management mode 02h (§13); 8 bytes, LEDs in nibbles
-        if self.settings["led_management"] != 0x02 or len(data) != 8:
+        if not self.speaks or self.settings["led_management"] != 0x02 or len(data) != 8:
             return []
         self._demo = None
         self._nibbles[which][:] = split_nibbles(data)
@@ -300,7 +306,7 @@ class J1939Keypad:
         self._now = now
         if down and self._demo is not None:
             self._demo.press(key, now)
-        if not self._powered or not self.settings["event_key_state"]:  # §17 event mode
+        if not self._powered or not self.speaks or not self.settings["event_key_state"]:  # §17
             return []
         return self._send(key_message(key, down, self.settings["identifier"]))
 
