@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-from benchmarks import decode_log, emulator_capacity, sdo_roundtrip, sdo_twin, simulated_time
+from benchmarks import (
+    decode_log,
+    emulator_capacity,
+    j1939_decode,
+    sdo_roundtrip,
+    sdo_twin,
+    simulated_time,
+)
 
 
 def main() -> None:
@@ -16,6 +23,7 @@ def main() -> None:
     emulator_capacity.main(smoke=args.smoke)
     decode_log.main(smoke=args.smoke)
     simulated_time.main(smoke=args.smoke)
+    j1939_decode.main(smoke=args.smoke)
 
 
 main()

@@ -8,7 +8,7 @@ decoder and the DBC writer all read these tables; none restates a code or a rang
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 
 from blinkcan.devices.colours import BacklightColour
@@ -18,6 +18,7 @@ from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, J1939Name
 #: §4: every message on PGN EF00h starts with these two bytes; unused bytes are FFh.
 HEADER = bytes((0x04, 0x1B))
 UNUSED = 0xFF
+_PADDING = bytes((UNUSED,)) * 8
 PGN_COMMAND = 0xEF00  # §3: proprietary A, PDU1 (PS = destination address)
 PGN_LEDS_COLOUR_1 = 0xA700  # §7b
 PGN_LEDS_COLOUR_2 = 0xA600  # §7b
@@ -64,9 +65,17 @@ class J1939Field:
     default: int | None = None
     setting: str | None = None
     keep: int | None = None
+    #: every byte value accepted, ``keep`` included (computed: a set look-up per byte)
+    accepted: frozenset[int] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        accepted = {value for value in range(256) if value in self.valid}
+        if self.keep is not None:
+            accepted.add(self.keep)
+        object.__setattr__(self, "accepted", frozenset(accepted))
 
     def accepts(self, value: int) -> bool:
-        return value == self.keep or value in self.valid
+        return value in self.accepted
 
 
 @dataclass(frozen=True)
@@ -82,9 +91,9 @@ class J1939Command:
         """``04 1B <code> <fields...>`` padded with FFh to 8 bytes; ValueError if out of range."""
         if len(values_) != len(self.fields):
             raise ValueError(f"J1939 command {self.name} takes {len(self.fields)} value(s)")
-        for field, value in zip(self.fields, values_, strict=True):
-            if not field.accepts(value):
-                raise ValueError(f"{self.name} {field.name} must be {field.valid}, not "
+        for each, value in zip(self.fields, values_, strict=True):
+            if not each.accepts(value):
+                raise ValueError(f"{self.name} {each.name} must be {each.valid}, not "
                                  f"{value:#x}")
         data = HEADER + bytes((self.code, *values_))
         return data + bytes((UNUSED,)) * (8 - len(data))
@@ -98,14 +107,14 @@ class J1939Command:
         secondary colour) no LED command (blinkcan decision, J-2)."""
         used = 3 + len(self.fields)
         if len(data) != 8 or data[:2] != HEADER or data[2] != self.code or \
-                any(byte != UNUSED for byte in data[used:]):
+                data[used:] != _PADDING[used:]:
             return None
         decoded = {}
-        for offset, field in enumerate(self.fields, start=3):
+        for offset, each in enumerate(self.fields, start=3):
             value = data[offset]
-            if not field.accepts(value):
+            if value not in each.accepted:
                 return None
-            decoded[field.name] = value
+            decoded[each.name] = value
         return decoded
 
 

@@ -76,7 +76,8 @@ def compose_id(pgn: int, source: int, destination: int = GLOBAL_ADDRESS,
 
 def parse_id(can_id: int) -> J1939Id:
     """Priority, PGN (PS = 00h for PDU1), source and destination of a 29-bit identifier."""
-    _check("29-bit identifier", can_id, 0x1FFFFFFF)
+    if not 0 <= can_id <= 0x1FFFFFFF:
+        raise ValueError(f"29-bit identifier must be 0..0x1fffffff, not {can_id:#x}")
     pgn = (can_id >> 8) & PGN_MAX
     if is_pdu1(pgn):
         return J1939Id(can_id >> 26, pgn & ~0xFF, can_id & 0xFF, pgn & 0xFF)
