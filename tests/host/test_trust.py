@@ -1,5 +1,8 @@
 """Drivers a controller can trust (issue #10): every FAULT transition and every health change is
-an event, the output picture follows the device, restores never race the application."""
+an event, the output picture follows the device, restores never race the application.
+
+In simulated time (``sim``), so watchdog trips are deterministic; the test that needs two
+threads racing for the SDO channel runs on a real bus (``rig``)."""
 
 from __future__ import annotations
 
@@ -11,7 +14,12 @@ import pytest
 
 from blinkcan.host import FaultEvent, HealthEvent, Keybox, Keypad
 from blinkcan.protocol.nmt import NmtState
-from tests.host.conftest import Rig, wait_until
+from tests.host.conftest import FLAVOUR_IDS, FLAVOURS, Rig, simulated_rig, wait_until
+
+
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
+def sim(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    yield from simulated_rig(request)
 
 
 def _until(events: Iterator[HealthEvent], kind: str) -> list[HealthEvent]:
@@ -35,35 +43,35 @@ def _hold_blocking_work(rig: Rig, monkeypatch: pytest.MonkeyPatch
 
 # -- item 2: every FAULT transition of every pin, in order --------------------------------------
 
-def test_every_fault_transition_of_a_pin_is_an_event_in_order(rig: Rig) -> None:
-    keybox = Keybox(rig.host)
+def test_every_fault_transition_of_a_pin_is_an_event_in_order(sim: Rig) -> None:
+    keybox = Keybox(sim.host)
     seen: list[FaultEvent] = []
     keybox.on_fault(seen.append)
     keybox.on(6)
-    rig.emulator.run(lambda now: rig.keybox.blow_fuse(6, now))
-    wait_until(lambda: len(seen) == 1)
+    sim.emulator.run(lambda now: sim.keybox.blow_fuse(6, now))
+    sim.wait_until(lambda: len(seen) == 1)
     keybox.reset(6)  # out of FAULT, the fuse still blown
     keybox.on(6)  # into the blown fuse: FAULT again
-    wait_until(lambda: len(seen) == 3)
-    rig.emulator.run(lambda now: rig.keybox.replace_fuse(6, now))
+    sim.wait_until(lambda: len(seen) == 3)
+    sim.emulator.run(lambda now: sim.keybox.replace_fuse(6, now))
     keybox.reset(6)
     keybox.on(6)
-    rig.emulator.run(lambda now: rig.keybox.blow_fuse(6, now))  # the new fuse blows too
-    wait_until(lambda: len(seen) == 5)
+    sim.emulator.run(lambda now: sim.keybox.blow_fuse(6, now))  # the new fuse blows too
+    sim.wait_until(lambda: len(seen) == 5)
     assert keybox.fault_pins == {6}
-    rig.emulator.power_cycle(rig.keybox)  # a power cycle clears the latch
-    wait_until(lambda: len(seen) == 6)
+    sim.emulator.power_cycle(sim.keybox)  # a power cycle clears the latch
+    sim.wait_until(lambda: len(seen) == 6)
     assert [(e.pin, e.fault) for e in seen] == [
         (6, True), (6, False), (6, True), (6, False), (6, True), (6, False)]
     assert keybox.fault_pins == frozenset()
 
 
-def test_a_state_read_keeps_the_fault_picture_true(rig: Rig) -> None:
-    keybox = Keybox(rig.host, start=False)  # pre-operational: no fault PDO (KBX §18)
+def test_a_state_read_keeps_the_fault_picture_true(sim: Rig) -> None:
+    keybox = Keybox(sim.host, start=False)  # pre-operational: no fault PDO (KBX §18)
     seen: list[FaultEvent] = []
     keybox.on_fault(seen.append)
     keybox.on(2)
-    rig.emulator.run(lambda now: rig.keybox.blow_fuse(2, now))
+    sim.emulator.run(lambda now: sim.keybox.blow_fuse(2, now))
     assert keybox.states()[2] == "fault"
     assert [(e.pin, e.fault) for e in seen] == [(2, True)]
     assert keybox.actual[2] == "fault"
@@ -71,8 +79,8 @@ def test_a_state_read_keeps_the_fault_picture_true(rig: Rig) -> None:
 
 # -- item 3: health events, the output picture, restores -----------------------------------------
 
-def test_every_reported_nmt_state_and_a_boot_up_are_health_events(rig: Rig) -> None:
-    keybox = Keybox(rig.host, start=False)
+def test_every_reported_nmt_state_and_a_boot_up_are_health_events(sim: Rig) -> None:
+    keybox = Keybox(sim.host, start=False)
     events = keybox.health_events(timeout=2.0)
     keybox.monitor_heartbeat(0.05)
     assert _until(events, "state")[-1].state is NmtState.PRE_OPERATIONAL
@@ -85,41 +93,43 @@ def test_every_reported_nmt_state_and_a_boot_up_are_health_events(rig: Rig) -> N
     keybox.enter_pre_operational()
     kinds = [e.kind for e in _until(events, "state")]
     assert "watchdog" not in kinds  # asked for: not a trip
-    rig.emulator.power_cycle(rig.keybox)
+    sim.emulator.power_cycle(sim.keybox)
     assert [e.kind for e in _until(events, "boot-up")][-1] == "boot-up"
 
 
-def test_a_watchdog_trip_is_an_event_and_the_picture_follows_the_device(rig: Rig) -> None:
-    keybox = Keybox(rig.host, watchdog=0.15)  # margin: a busy machine delays heartbeats
+def test_a_watchdog_trip_is_an_event_and_the_picture_follows_the_device(sim: Rig) -> None:
+    keybox = Keybox(sim.host, watchdog=0.15)  # margin: a busy machine delays heartbeats
     events = keybox.health_events(timeout=3.0)
     keybox.on(4)
     assert (keybox.commanded, keybox.actual[4]) == (frozenset({4}), "high")
+    sim.sleep(0.4)  # the device has heard the host: it watches from the first heartbeat
     keybox.stop_host_heartbeat()
     trip = _until(events, "watchdog")[-1]
     assert trip.state is NmtState.PRE_OPERATIONAL
     assert keybox.actual[4] == "off"  # the Keybox switched it off
     assert keybox.commanded == {4}  # what the application asked is kept
-    time.sleep(0.1)
+    sim.sleep(0.1)
     assert keybox.state(4) == "off"  # not re-energised unasked
 
 
-def test_a_watchdog_trip_restores_outputs_when_asked(rig: Rig) -> None:
-    keybox = Keybox(rig.host, watchdog=0.15, restore_outputs=True)
+def test_a_watchdog_trip_restores_outputs_when_asked(sim: Rig) -> None:
+    keybox = Keybox(sim.host, watchdog=0.15, restore_outputs=True)
     events = keybox.health_events(timeout=3.0)
     keybox.set_outputs(high=[3, 5])
+    sim.sleep(0.4)  # the device has heard the host: it watches from the first heartbeat
     keybox.stop_host_heartbeat()
     _until(events, "watchdog")
-    wait_until(lambda: {p for p, s in keybox.states().items() if s == "high"} == {3, 5})
+    sim.wait_until(lambda: {p for p, s in keybox.states().items() if s == "high"} == {3, 5})
     assert {p for p, s in keybox.actual.items() if s == "high"} == {3, 5}
 
 
 def test_a_restore_never_switches_back_on_what_the_application_switched_off(
-        rig: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
-    keybox = Keybox(rig.host, restore_outputs=True)
+        sim: Rig, monkeypatch: pytest.MonkeyPatch) -> None:
+    keybox = Keybox(sim.host, restore_outputs=True)
     keybox.set_outputs(high=[4, 6])
-    held = _hold_blocking_work(rig, monkeypatch)
-    rig.emulator.power_cycle(rig.keybox)
-    wait_until(lambda: held)  # the driver has planned its restore
+    held = _hold_blocking_work(sim, monkeypatch)
+    sim.emulator.power_cycle(sim.keybox)
+    sim.wait_until(lambda: held)  # the driver has planned its restore
     keybox.off(4)  # ... and the application switches 4 off before the restore runs
     for work in held:
         work()
@@ -151,25 +161,26 @@ def test_the_keypad_restore_never_writes_a_stale_backlight_colour(
 
 # -- item 10: the consumer heartbeat range, from devices/ ------------------------------------------
 
-def test_driver_and_twin_agree_on_the_consumer_heartbeat_range(rig: Rig) -> None:
-    keybox = Keybox(rig.host)
+def test_driver_and_twin_agree_on_the_consumer_heartbeat_range(sim: Rig) -> None:
+    keybox = Keybox(sim.host)
     with pytest.raises(ValueError, match=r"0\.01\.\.65\.279 s"):
         keybox.set_consumer_heartbeat(0x7F, 65.535)  # KBX §28: 10..65279 ms
-    if rig.generation == "1.5":
-        keypad = Keypad(rig.host)
+    if sim.generation == "1.5":
+        keypad = Keypad(sim.host)
         keypad.set_consumer_heartbeat(0x7F, 65.535)  # errata G4: 10..65535 ms
-        consumer = rig.emulator.snapshot(rig.keypad)["heartbeat_consumer"]
+        consumer = sim.emulator.snapshot(sim.keypad)["heartbeat_consumer"]
         assert consumer == {"node_id": 0x7F, "time_ms": 65535, "state": "waiting"}
 
 
-def test_a_generation_2_keypad_gets_its_leds_back_after_a_watchdog_trip(rig: Rig) -> None:
-    if rig.generation != "1.5":
+def test_a_generation_2_keypad_gets_its_leds_back_after_a_watchdog_trip(sim: Rig) -> None:
+    if sim.generation != "1.5":
         pytest.skip("generation 1 has no consumer heartbeat")
-    keypad = Keypad(rig.host, watchdog=0.15)  # restore=True: the default
+    keypad = Keypad(sim.host, watchdog=0.15)  # restore=True: the default
     keypad.set_led(7, "red")
     events = keypad.health_events(timeout=3.0)
+    sim.sleep(0.4)  # the device has heard the host: it watches from the first heartbeat
     keypad.stop_host_heartbeat()
     trip = _until(events, "watchdog")[-1]
     assert trip.state is NmtState.PRE_OPERATIONAL
-    wait_until(lambda: rig.emulator.snapshot(rig.keypad)["keys"][6]["colour"] == "red")
-    assert rig.emulator.snapshot(rig.keypad)["nmt_state"] == "operational"
+    sim.wait_until(lambda: sim.emulator.snapshot(sim.keypad)["keys"][6]["colour"] == "red")
+    assert sim.emulator.snapshot(sim.keypad)["nmt_state"] == "operational"
