@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from blinkcan.cli.main import cli
 from blinkcan.decode import Decoder, Kind
+from blinkcan.decode.view import BusView
 from blinkcan.formats.pcap import read_pcap, write_pcap
 from blinkcan.protocol import Frame
 from tests.conftest import frame
@@ -121,3 +122,20 @@ def test_a_pcap_keeps_the_29_bit_frames_and_decode_reads_them(tmp_path: Path) ->
     assert "keypad 21h: LED 11 alternates red/green" in result.output
     assert "keypad 21h: key 5 pressed" in result.output
     assert "keypad 21h: heartbeat 0, keys held: 5" in result.output
+
+
+def test_the_monitor_view_follows_a_j1939_keypad() -> None:
+    decoder = Decoder()
+    view = BusView(decoder)
+    for text in ("18EF2100 04 1B 01 0B 01 03 02 FF",  # LED 11 alternates red/green
+                 "18EF2100 04 1B 01 02 03 02 00 FF",  # LED 2 blinks blue
+                 "18EFFF21 04 1B 01 05 01 21 FF FF",  # key 5 pressed
+                 "18EFFF21 04 1B 01 07 01 21 FF FF"):
+        view.update(decoder.decode(frame(text)))
+    keypad = view.nodes[0x21]
+    assert (keypad.device, keypad.state, keypad.held) == ("keypad", "J1939", [5, 7])
+    phases = {key: (a, b) for key, a, b in keypad.key_phases()}
+    assert phases[11] == ("red", "green")
+    assert phases[2] == ("blue", "off")
+    view.update(decoder.decode(frame("18EFFF21 04 1B F9 00 40 00 FF 21")))  # heartbeat: key 7
+    assert keypad.held == [7]

@@ -4,18 +4,27 @@ from __future__ import annotations
 
 import asyncio
 import uuid
+from collections.abc import Iterator
 
 import can
 import canopen
+import pytest
 
 import blinkcan
 from blinkcan.host import AsyncKeybox, AsyncKeypad, HostBus, Keypad, async_scan, scan
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin
-from tests.host.conftest import Rig, quiet_keypad
+from tests.host.conftest import FLAVOUR_IDS, FLAVOURS, Rig, quiet_keypad, simulated_rig
 
 
-def test_scan_finds_both_models_with_their_versions(rig: Rig) -> None:
+@pytest.fixture(params=FLAVOURS, ids=FLAVOUR_IDS)
+def sim(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    yield from simulated_rig(request)
+
+
+def test_scan_finds_both_models_with_their_versions(sim: Rig) -> None:
+    """In simulated time: the 0.1 s timeouts hold however busy the machine is."""
+    rig = sim
     found = scan(rig.host, listen=0.05, timeout=0.1, node_ids=range(1, 32))
     assert [(f.node_id, f.kind, f.model_id, f.software_version) for f in found] == [
         (0x0C, "keybox", "Keybox3", "1.00"), (0x15, "keypad", "PKP2600SI", rig.firmware)]

@@ -17,8 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
-from blinkcan.devices.colours import blink_phases, channel_name
+from blinkcan.devices.colours import Channel, blink_phases, channel_name
 from blinkcan.devices.keybox import PWM_LEVEL_MAX
+from blinkcan.devices.keypad_j1939 import LedLook, LedState, look_channels
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import describe_device
 
@@ -97,6 +98,27 @@ class NodeView:
         return found
 
 
+def _follow_j1939(view: NodeView, fields: dict[str, object]) -> None:
+    """A keypad in J1939 mode (spec/pkp-2600-si-j1939.md): keys held from its key messages and
+    heartbeats, LEDs from single-LED commands, on the CANopen picture (J-4)."""
+    view.state = "J1939"
+    message, command = fields.get("message"), fields.get("command")
+    if message == "key" and isinstance(key := fields.get("key"), int):
+        held = set(view.held) - {key}
+        view.held = sorted(held | {key} if fields.get("pressed") else held)
+    elif message == "heartbeat" and isinstance(keys := fields.get("keys"), list):
+        view.held = list(keys)
+    elif command == "single_led":
+        key = int(fields["key"])  # type: ignore[call-overload]
+        on, blink = look_channels(LedLook(LedState(fields["state"]), int(fields["colour"]),  # type: ignore[call-overload]
+                                          int(fields["secondary"])))  # type: ignore[call-overload]
+        for picture, channels in ((view.leds, on), (view.blink, blink)):
+            for name, channel in (("red", Channel.RED), ("green", Channel.GREEN),
+                                  ("blue", Channel.BLUE)):
+                keys_lit = set(picture.get(name, [])) - {key}
+                picture[name] = sorted(keys_lit | {key} if channels & channel else keys_lit)
+
+
 class BusView:
     """``decoder`` (the one making the events) tells each node's model; without it the
     device names of the events are looked up in the model registry."""
@@ -153,6 +175,8 @@ class BusView:
                 view.other[str(fields.get("pdo"))] = event.text
         elif event.kind in (Kind.SDO_WRITE, Kind.SDO_VALUE):
             self._object(view, event.kind, fields)
+        elif event.kind is Kind.J1939 and view.device == "keypad":
+            _follow_j1939(view, fields)
 
     @staticmethod
     def _pdo(view: NodeView, fields: dict[str, object]) -> None:

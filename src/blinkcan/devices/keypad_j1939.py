@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import Enum
 
-from blinkcan.devices.colours import BacklightColour
+from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel
 from blinkcan.devices.objects import Ranges, values
 from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, J1939Name
 
@@ -273,6 +273,26 @@ class LedLook:
     state: LedState
     colour: int = COLOUR_OFF
     secondary: int = COLOUR_OFF
+
+
+def colour_channels(code: int) -> Channel:
+    """A §7a colour code as the key's RGB channels (J-4: CANopen mode's colours)."""
+    if 1 <= code <= 9:
+        return BACKLIGHT_CHANNELS[BacklightColour(code)]
+    return Channel.NONE
+
+
+def look_channels(look: LedLook) -> tuple[Channel, Channel]:
+    """(on, blink) channels of one LED in CANopen mode's picture (PKP §12 phases, J-4): on =
+    the phase A colour, blink = the channels that change in phase B."""
+    primary, secondary = colour_channels(look.colour), colour_channels(look.secondary)
+    if look.state is LedState.ON:
+        return primary, Channel.NONE
+    if look.state is LedState.BLINK:
+        return primary, primary
+    if look.state is LedState.ALTERNATE:
+        return primary, primary ^ secondary
+    return Channel.NONE, Channel.NONE
 
 
 def nibbles_to_look(colour_1: int, colour_2: int) -> LedLook:

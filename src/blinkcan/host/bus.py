@@ -30,7 +30,7 @@ import can
 from blinkcan.host.sdo import SdoChannel, SdoClient
 from blinkcan.protocol.cob import SYNC
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import OwnFrames, to_frame, to_message
+from blinkcan.runtime.canbus import BusReader, OwnFrames, to_frame, to_message
 from blinkcan.runtime.scheduler import (
     RealTimeScheduler,
     Scheduler,
@@ -77,8 +77,7 @@ class HostBus:
         self.scheduler: Scheduler = (bus.scheduler if isinstance(bus, SimulatedBus)
                                      else RealTimeScheduler("blinkcan-host", clock))
         self._given_notifier = notifier
-        self._notifier: can.Notifier | None = None
-        self._joined: can.Notifier | None = None
+        self._reader: BusReader | None = None
         self._listener = _Listener(self)
         self._handlers: dict[int, list[Handler]] = {}
         self._fast: dict[int, Handler] = {}
@@ -138,15 +137,7 @@ class HostBus:
             bus.host = self
             self._detach = bus.add_frame_listener(self._from_simulation)
             return self
-        notifier = self._given_notifier
-        if notifier is None:
-            found = can.Notifier.find_instances(bus)
-            notifier = found[0] if found else None
-        if notifier is not None:
-            notifier.add_listener(self._listener)
-            self._joined = notifier
-        else:
-            self._notifier = can.Notifier(bus, [self._listener], timeout=0.1)
+        self._reader = BusReader(bus, self._listener, self._given_notifier)
         return self
 
     def stop(self) -> None:
@@ -158,16 +149,9 @@ class HostBus:
             self._detach = None
             if isinstance(self.bus, SimulatedBus) and self.bus.host is self:
                 self.bus.host = None
-        if self._notifier is not None:
-            notifier, self._notifier = self._notifier, None
-            if threading.current_thread().name.startswith("can.notifier"):
-                threading.Thread(target=notifier.stop, daemon=True).start()
-            else:
-                notifier.stop()
-        elif self._joined is not None:
-            if self._listener in self._joined.listeners:
-                self._joined.remove_listener(self._listener)
-            self._joined = None
+        if self._reader is not None:
+            self._reader.stop()
+            self._reader = None
         self.scheduler.stop()
 
     def __enter__(self) -> HostBus:
@@ -298,9 +282,8 @@ class HostBus:
         self.error = None
 
     def _stop_reader(self) -> None:
-        if self._notifier is not None:
-            notifier, self._notifier = self._notifier, None
-            notifier.stop()
+        if self._reader is not None:
+            self._reader.stop()
 
     # -- services -----------------------------------------------------------------------------
 

@@ -116,3 +116,36 @@ class OwnFrames:
                 pending.pop(key, None)
             else:
                 pending[key] = count - 1
+
+
+class BusReader:
+    """Reads ``bus`` for one listener: joins the notifier that already reads it (``notifier``,
+    or the one python-can's ``Notifier.find_instances`` finds: a python-canopen ``Network``'s,
+    the application's, another blinkcan part's), else starts one. Never two notifiers on one
+    bus (python-can refuses them)."""
+
+    def __init__(self, bus: can.BusABC, listener: can.Listener,
+                 notifier: can.Notifier | None = None) -> None:
+        self.listener = listener
+        if notifier is None:
+            found = can.Notifier.find_instances(bus)
+            notifier = found[0] if found else None
+        self._joined = notifier
+        self._own: can.Notifier | None = None
+        if notifier is not None:
+            notifier.add_listener(listener)
+        else:
+            self._own = can.Notifier(bus, [listener], timeout=0.1)
+
+    def stop(self) -> None:
+        """Stop reading: our own notifier stops (from any thread, its own included), a joined
+        one keeps reading for the others."""
+        own, self._own = self._own, None
+        if own is not None:
+            if threading.current_thread().name.startswith("can.notifier"):
+                threading.Thread(target=own.stop, daemon=True).start()
+            else:
+                own.stop()
+        joined, self._joined = self._joined, None
+        if joined is not None and self.listener in joined.listeners:
+            joined.remove_listener(self.listener)

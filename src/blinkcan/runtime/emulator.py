@@ -34,7 +34,7 @@ from typing import Any, TypeVar
 import can
 
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import OwnFrames, to_frame, to_message
+from blinkcan.runtime.canbus import BusReader, OwnFrames, to_frame, to_message
 from blinkcan.runtime.scheduler import RealTimeScheduler, Scheduler, Timer
 from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.twin.base import CanopenTwin
@@ -86,8 +86,7 @@ class Emulator:
                                      else RealTimeScheduler("blinkcan-emulator", clock))
         self._clock = self.scheduler.clock
         self._given_notifier = notifier
-        self._notifier: can.Notifier | None = None
-        self._joined: can.Notifier | None = None
+        self._reader: BusReader | None = None
         self._detach: Callable[[], None] | None = None
         self._listener = _Listener(self)
         self._own = OwnFrames(bus)
@@ -116,15 +115,7 @@ class Emulator:
         if isinstance(bus, SimulatedBus):
             self._detach = bus.add_frame_listener(self._from_simulation)
         else:
-            notifier = self._given_notifier
-            if notifier is None:
-                found = can.Notifier.find_instances(bus)
-                notifier = found[0] if found else None
-            if notifier is not None:
-                notifier.add_listener(self._listener)
-                self._joined = notifier
-            else:
-                self._notifier = can.Notifier(bus, [self._listener], timeout=0.1)
+            self._reader = BusReader(bus, self._listener, self._given_notifier)
         self.run(self._power_on_all)
         return self
 
@@ -138,13 +129,9 @@ class Emulator:
         if self._detach is not None:
             self._detach()
             self._detach = None
-        if self._notifier is not None:
-            self._notifier.stop()
-            self._notifier = None
-        elif self._joined is not None:
-            if self._listener in self._joined.listeners:
-                self._joined.remove_listener(self._listener)
-            self._joined = None
+        if self._reader is not None:
+            self._reader.stop()
+            self._reader = None
         if not self.scheduler.simulated:
             self.scheduler.stop()
 

@@ -23,12 +23,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel
+from blinkcan.devices.colours import BacklightColour, Channel
 from blinkcan.devices.keypad import FACE
 from blinkcan.devices.keypad_j1939 import (
     BITRATES,
     COMMANDS_BY_CODE,
-    COMMANDS_BY_NAME,
     HEADER,
     PGN_COMMAND,
     PGN_LEDS_COLOUR_1,
@@ -44,6 +43,7 @@ from blinkcan.devices.keypad_j1939 import (
     heartbeat_message,
     key_message,
     led_acknowledge,
+    look_channels,
     nibbles_to_look,
     software_revision_message,
     split_nibbles,
@@ -71,13 +71,6 @@ from blinkcan.twin.keypad_display import (
 _KEYS = FACE.keys  # the PKP-2600-SI's keys (its J1939 mode, pkp-2600-si-j1939.md)
 _KEY_BITS = (1 << _KEYS) - 1
 _LED_PGNS = (PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2)
-
-
-def colour_channels(code: int) -> Channel:
-    """A §7a colour code as the key's RGB channels (J-4: CANopen mode's colours)."""
-    if 1 <= code <= 9:
-        return BACKLIGHT_CHANNELS[BacklightColour(code)]
-    return Channel.NONE
 
 
 def _clear_key(word: int, key: int) -> int:
@@ -247,13 +240,7 @@ class J1939Keypad:
     def _show_look(self, key: int, look: LedLook) -> None:
         """One LED in the CANopen picture's terms (PKP §12 phases): on = phase A colour,
         blink = the channels that change in phase B."""
-        primary, secondary = colour_channels(look.colour), colour_channels(look.secondary)
-        on, blink = {
-            LedState.OFF: (Channel.NONE, Channel.NONE),
-            LedState.ON: (primary, Channel.NONE),
-            LedState.BLINK: (primary, primary),
-            LedState.ALTERNATE: (primary, primary ^ secondary),
-        }[look.state]
+        on, blink = look_channels(look)
         bit = 1 << (key - 1)
         self._words["led_on"] = _clear_key(self._words["led_on"], key) | fill(bit, on)
         self._words["led_blink"] = _clear_key(self._words["led_blink"], key) | fill(bit, blink)
@@ -426,4 +413,4 @@ class J1939Keypad:
         }
 
 
-__all__ = ["COMMANDS_BY_NAME", "J1939Keypad", "colour_channels"]
+__all__ = ["J1939Keypad"]
