@@ -159,6 +159,21 @@ def test_the_keypad_restore_never_writes_a_stale_backlight_colour(
     assert rig.emulator.snapshot(rig.keypad)["backlight"] == {"colour": "red", "level": 20}
 
 
+def test_the_output_picture_matches_the_keybox(sim: Rig) -> None:
+    keybox = Keybox(sim.host)
+    steps: list[Callable[[], None]] = [
+        lambda: keybox.on(1), lambda: keybox.set_outputs(high=[2, 3], off=[1]),
+        lambda: keybox.set_pwm([12], 5), lambda: keybox.set_pwm([13], 0),
+        lambda: keybox.on(13), lambda: keybox.set_pwm([12, 13], 3),
+        lambda: keybox.off(12), keybox.stop]
+    for step in steps:
+        step()
+        sim.sleep(0.01)
+        shown = {pin["pin"]: pin["state"] for pin in sim.emulator.snapshot(sim.keybox)["pins"]}
+        assert keybox.actual == shown  # no read needed: the driver kept it
+    assert keybox.commanded == {2, 3}  # PWM is not a HIGH command; a stop keeps the intent
+
+
 # -- item 10: the consumer heartbeat range, from devices/ ------------------------------------------
 
 def test_driver_and_twin_agree_on_the_consumer_heartbeat_range(sim: Rig) -> None:

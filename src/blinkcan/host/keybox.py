@@ -95,6 +95,7 @@ class Keybox(Device):
         self.host_node_id = check_node_id(host_node_id)
         self._commanded: frozenset[int] = frozenset()
         self._actual = dict.fromkeys(FACE.pin_numbers, "off")
+        self._in_pwm: frozenset[int] = frozenset()
         self._poller: Timer | None = None
         fault_pdo = self.description.pdo("faults")
         self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
@@ -178,6 +179,7 @@ class Keybox(Device):
             for pin in sorted(high - self.fault_pins):
                 self._actual[pin] = "high"
             self._commanded = (self._commanded - off - reset) | (high - self.fault_pins)
+            self._in_pwm -= high | off | reset  # errata K16: a command takes a pin out of PWM
 
         self.host.run(update)
 
@@ -188,7 +190,20 @@ class Keybox(Device):
             raise ValueError(f"PWM is on pins {FACE.pwm_pins} only, not {sorted(chosen)}")
         check_range("PWM duty", duty, 0, PWM_LEVEL_MAX)
         mask = sum(PWM_BITS[pin] for pin in chosen)
-        self.write("pwm", pwm_register(mask, duty))
+        with self._command_lock:
+            self.write("pwm", pwm_register(mask, duty))
+            self.host.run(lambda: self._pwm_acknowledged(frozenset(chosen), duty))
+
+    def _pwm_acknowledged(self, chosen: frozenset[int], duty: int) -> None:
+        """errata K16: named pins run PWM (read as HIGH, OFF at duty 0), pins leaving PWM go
+        OFF, a pin in FAULT stays FAULT. PWM is not a HIGH command: those pins leave
+        ``commanded`` (a restore does not restart PWM)."""
+        for pin in sorted(self._in_pwm - chosen - self.fault_pins):
+            self._actual[pin] = "off"
+        for pin in sorted(chosen - self.fault_pins):
+            self._actual[pin] = "high" if duty else "off"
+        self._commanded -= self._in_pwm | chosen
+        self._in_pwm = chosen - self.fault_pins
 
     def state(self, pin: int) -> str:
         """"off", "high" or "fault", read from the Keybox (the picture follows)."""
@@ -273,7 +288,8 @@ class Keybox(Device):
     # -- what the Keybox does by itself, and recovery ---------------------------------------------
 
     def _outputs_went_off(self) -> None:
-        """Fail-safe: every HIGH output OFF; FAULT stays latched."""
+        """Fail-safe: every HIGH output OFF, PWM stopped; FAULT stays latched."""
+        self._in_pwm = frozenset()
         for pin, state in self._actual.items():
             if state == "high":
                 self._actual[pin] = "off"
@@ -290,6 +306,7 @@ class Keybox(Device):
         for pin in sorted(self.fault_pins):  # a reset clears FAULT latches
             self._leave_fault(pin, now)
         self._actual = dict.fromkeys(self._actual, "off")  # every reset starts with outputs OFF
+        self._in_pwm = frozenset()
         self._recover()
 
     def _on_watchdog_trip(self, now: float) -> None:
