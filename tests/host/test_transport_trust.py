@@ -280,3 +280,27 @@ def test_a_silent_node_times_out_with_a_plain_message() -> None:
         with pytest.raises(SdoTimeoutError, match=r"^node 0Ch 2008h/0\d: no reply within 0.5 s$"):
             keybox.states()
         keybox.close()
+
+
+def test_drivers_opened_and_closed_from_many_threads_share_the_bus_safely(
+        bench: Bench) -> None:
+    bus, _emulator, _kp, keybox_twin = bench
+    errors: list[BaseException] = []
+
+    def user(pin: int) -> None:
+        try:
+            for _ in range(5):
+                keybox = Keybox(bus, 0x0C)
+                keybox.on(pin)
+                keybox.close()
+        except BaseException as error:
+            errors.append(error)
+
+    threads = [threading.Thread(target=user, args=(pin,)) for pin in range(1, 7)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+    assert {p for p in range(1, 7) if _pin(keybox_twin, p) == "high"} == set(range(1, 7))
+    assert len(can.Notifier.find_instances(bus)) <= 1

@@ -66,6 +66,10 @@ class HostBus:
     closes); a ``HostBus`` you make and start yourself stays yours to stop.
     """
 
+    #: drivers attach and release one at a time, process-wide (rare, and never two hosts
+    #: for one bus: two SDO channels to one node would take each other's replies)
+    _attaching = threading.RLock()
+
     def __init__(self, bus: can.BusABC | None = None, *, notifier: can.Notifier | None = None,
                  network: Any = None, clock: Callable[[], float] = time.monotonic) -> None:
         if network is not None:
@@ -99,14 +103,18 @@ class HostBus:
     def attach(cls, bus: HostBus | can.BusABC) -> HostBus:
         """The running ``HostBus`` of ``bus``, shared by every driver on it; call
         :meth:`release` when done."""
-        if isinstance(bus, HostBus):
-            host = bus
-        else:
-            host = cls._find(bus) or cls(bus)
-            if not host._started:
-                host._auto = True
-        host._users += 1
-        return host.start()
+        with cls._attaching:
+            if isinstance(bus, HostBus):
+                bus._users += 1
+                return bus.start()
+            found = cls._find(bus)
+            if found is not None:
+                found._users += 1
+                return found
+            host = cls(bus)
+            host._auto = True
+            host._users = 1
+            return host.start()
 
     @staticmethod
     def _find(bus: can.BusABC) -> HostBus | None:
@@ -120,10 +128,12 @@ class HostBus:
         return None
 
     def release(self) -> None:
-        """One driver fewer; the last one out stops a ``HostBus`` that :meth:`attach` made."""
-        self._users = max(0, self._users - 1)
-        if self._users == 0 and self._auto:
-            self.stop()
+        """One driver fewer; the last one out stops a ``HostBus`` that :meth:`attach` made
+        (fully, before another driver can attach: no one joins a reader that is stopping)."""
+        with self._attaching:
+            self._users = max(0, self._users - 1)
+            if self._users == 0 and self._auto:
+                self.stop()
 
     # -- lifecycle --------------------------------------------------------------------------
 

@@ -127,15 +127,23 @@ class BusReader:
     def __init__(self, bus: can.BusABC, listener: can.Listener,
                  notifier: can.Notifier | None = None) -> None:
         self.listener = listener
-        if notifier is None:
-            found = can.Notifier.find_instances(bus)
-            notifier = found[0] if found else None
-        self._joined = notifier
         self._own: can.Notifier | None = None
+        for _attempt in range(3):
+            if notifier is None:
+                found = can.Notifier.find_instances(bus)
+                notifier = found[0] if found else None
+            if notifier is not None:
+                break
+            try:
+                self._own = can.Notifier(bus, [listener], timeout=0.1)
+                break
+            except ValueError:  # another thread put a notifier on the bus meanwhile: join it
+                continue
+        self._joined = notifier
         if notifier is not None:
             notifier.add_listener(listener)
-        else:
-            self._own = can.Notifier(bus, [listener], timeout=0.1)
+        elif self._own is None:
+            raise RuntimeError(f"could not read {bus.channel_info}: its notifier kept changing")
 
     def stop(self) -> None:
         """Stop reading: our own notifier stops (from any thread, its own included), a joined
