@@ -15,6 +15,7 @@ import can
 import pytest
 
 from blinkcan.host import AsyncKeypad, HostBus, Keybox, Keypad, SdoTimeoutError, scan
+from blinkcan.host.device import NoDeviceError, WrongDeviceError
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.runtime.simbus import SimulatedBus
@@ -304,3 +305,33 @@ def test_drivers_opened_and_closed_from_many_threads_share_the_bus_safely(
     assert errors == []
     assert {p for p in range(1, 7) if _pin(keybox_twin, p) == "high"} == set(range(1, 7))
     assert len(can.Notifier.find_instances(bus)) <= 1
+
+
+def test_a_boot_up_during_the_identity_check_commands_nothing() -> None:
+    """A device that boots while the driver reads its identity is not started or given PDOs
+    before the driver knows what it is (here: a keypad driver pointed at a Keybox)."""
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))  # its boot-up is still on the wire
+        with pytest.raises(WrongDeviceError):
+            Keypad(rig.bus, 0x0C)
+        sent = [f for _, f in rig.frames if f.can_id in (0x000, 0x20C, 0x30C, 0x40C, 0x50C)]
+        assert sent == []
+
+
+def test_a_generation_2_keypad_acknowledges_its_new_node_id_from_it() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15, manual="1.5"))
+        keypad = Keypad(rig.bus, 0x15)
+        keypad.set_node_id(0x18, confirm=True)  # errata G1: in use at once, acked from 598h
+        assert twin.node_id == 0x18
+        assert Keypad(rig.bus, 0x18).identity().node_id == 0x18
+        keypad.close()
+
+
+def test_connect_names_a_wrong_or_absent_device_like_the_drivers_do() -> None:
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))
+        with pytest.raises(WrongDeviceError, match="node 0Ch is a Keybox"):
+            Keypad.connect(rig.bus, 0x0C)
+        with pytest.raises(NoDeviceError, match="no device answers at node 33h"):
+            Keypad.connect(rig.bus, 0x33)

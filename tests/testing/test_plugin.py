@@ -40,3 +40,5 @@ def test_golden_trace_fixture_compares_with_a_recorded_trace(
     golden_trace(rig.frames, str(trace))  # an absolute path is taken as it is
     with pytest.raises(AssertionError):
         golden_trace(rig.frames[1:], str(trace))
+    with pytest.raises(AssertionError, match="--blinkcan-record"):
+        golden_trace(rig.frames, str(tmp_path / "never-recorded.log"))

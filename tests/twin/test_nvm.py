@@ -171,3 +171,11 @@ def test_a_refused_value_never_reaches_the_file(tmp_path: Path,
         < 58C 80 16 10 01 30 00 09 06
     """)  # a reserved byte set: 0609 0030h (errata K8), and no NVM write at all
     assert writes == []
+
+
+def test_a_directory_or_a_missing_directory_is_refused_naming_it(tmp_path: Path) -> None:
+    with pytest.raises(NvmError, match="is a directory"):
+        KeypadTwin(nvm=tmp_path)
+    with pytest.raises(NvmError, match=r"directory .*nodir does not exist"):
+        KeypadTwin(nvm=tmp_path / "nodir" / "x.json")
+    assert not (tmp_path / "nodir").exists()

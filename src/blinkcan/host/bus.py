@@ -235,9 +235,19 @@ class HostBus:
         self._extended.append(handler)
         return lambda: self._extended.remove(handler) if handler in self._extended else None
 
-    def subscribe_fast(self, can_id: int, handler: Handler) -> None:
-        """Run ``handler`` on the reader thread: it must only hand the frame over."""
+    def subscribe_fast(self, can_id: int, handler: Handler) -> Callable[[], None]:
+        """Run ``handler`` on the reader thread: it must only hand the frame over. Returns
+        the function that puts back the handler it replaced (if any)."""
+        previous = self._fast.get(can_id)
         self._fast[can_id] = handler
+
+        def restore() -> None:
+            if previous is None:
+                self._fast.pop(can_id, None)
+            else:
+                self._fast[can_id] = previous
+
+        return restore
 
     def _from_reader(self, message: can.Message) -> None:
         frame = to_frame(message)

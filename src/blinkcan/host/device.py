@@ -106,6 +106,9 @@ class Device:
         self.host = HostBus.attach(bus)  # shared by every driver on this bus
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
         self.health = EventSource[HealthEvent](self.host.scheduler)
+        #: True once the device at ``node_id`` was confirmed to be this driver's model (or the
+        #: application said not to check): until then a boot-up restores nothing
+        self.confirmed = False
         self.nmt_state: NmtState | None = None  # as the device last reported it
         self._asked_state: NmtState | None = None  # what the last NMT command asked for
         self.alive: bool | None = None
@@ -209,7 +212,8 @@ class Device:
         if code == NmtState.BOOT_UP:
             self.nmt_state, self._asked_state = NmtState.PRE_OPERATIONAL, None
             self.health.emit(HealthEvent(self.node_id, BOOT_UP, now, NmtState.BOOT_UP))
-            self._on_boot_up(now)
+            if self.confirmed:  # never command a device before knowing what it is
+                self._on_boot_up(now)
         elif code in NmtState._value2member_map_ and code != self.nmt_state:
             self._on_reported(NmtState(code), now)
         self._rearm()
@@ -222,8 +226,9 @@ class Device:
         if (before is NmtState.OPERATIONAL and state is NmtState.PRE_OPERATIONAL
                 and self._asked_state is not NmtState.PRE_OPERATIONAL):
             self.health.emit(HealthEvent(self.node_id, WATCHDOG, now, state))
-            self._on_watchdog_trip(now)
-        else:
+            if self.confirmed:
+                self._on_watchdog_trip(now)
+        elif self.confirmed:
             self._on_state(state, now)
 
     def _rearm(self) -> None:
@@ -266,6 +271,7 @@ class Device:
                 found[name] = None  # a device without the object: not ours
         expected = {name: self.entry(name).default_for(self.node_id) for name in IDENTITY_ENTRIES}
         if found == expected:
+            self.confirmed = True
             return
         device_type, model_id = found["device_type"], found["model_id"]
         answered = identify(device_type if isinstance(device_type, int) else None,
@@ -288,6 +294,7 @@ class Device:
     def _confirm_or_close(self, verify: bool) -> None:
         """:meth:`confirm` (when ``verify``); on failure the driver lets go of the bus."""
         if not verify:
+            self.confirmed = True  # the application vouches for the device
             return
         try:
             self.confirm()
@@ -317,11 +324,17 @@ class Device:
     # -- settings both devices have -------------------------------------------------------------
 
     def set_node_id(self, node_id: int, *, confirm: bool = False) -> None:
-        """Store a new node id; it applies at the next reset. Needs ``confirm=True``."""
+        """Store a new node id; it applies at the next reset, or at once on devices that say
+        so (keypad generation 2, errata G1: the acknowledge then comes from the new id, and
+        the device is to be driven there by a new driver). Needs ``confirm=True``."""
         check_node_id(node_id)
         if not confirm:
             raise ValueError("changing the node id moves the device on the bus at its next "
                              "reset: pass confirm=True")
+        if "node-id-at-once" in self.description.features and node_id != self.node_id:
+            with self.sdo.channel.replies_also_from(node_id):
+                self.write("node_id", node_id)
+            return
         self.write("node_id", node_id)
 
     def set_bitrate(self, bitrate: int, *, confirm: bool = False) -> None:

@@ -40,7 +40,7 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device
+from blinkcan.host.device import Device, NoDeviceError, WrongDeviceError
 from blinkcan.host.events import EventSource
 from blinkcan.host.j1939_keypad import J1939KeypadLink, look_of
 from blinkcan.host.registry import driver_class
@@ -48,7 +48,7 @@ from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import j1939_frame
-from blinkcan.protocol.sdo_client import SdoAbortError
+from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
@@ -104,17 +104,24 @@ class Keypad(Device):
     @classmethod
     def connect(cls, bus: HostBus | can.BusABC, node_id: int = 0x15, **options: Any) -> Keypad:
         """The driver of whichever keypad answers at ``node_id``: its 100Bh model id names the
-        model (two models share 1000h, MT M59). ValueError for a device that is no keypad."""
+        model (two models share 1000h, MT M59). :class:`WrongDeviceError` for a device that is
+        no keypad, :class:`NoDeviceError` when nothing answers."""
         host = HostBus.attach(bus)
         try:
             raw = host.sdo(check_node_id(node_id), options.get("sdo_timeout", 0.5), 1).upload(
                 0x100B, 0)
+        except SdoTimeoutError as error:
+            raise NoDeviceError(f"no device answers at node {node_id:02X}h ({error})") from None
+        except SdoAbortError as error:
+            raise WrongDeviceError(f"node {node_id:02X}h has no model id (100Bh): not a "
+                                   f"keypad ({error})") from None
         finally:
             host.release()
         model_id = raw.decode("ascii", "replace")
         found = identify(model_id=model_id)
         if found is None or found.kind != "keypad":
-            raise ValueError(f"node {node_id:02X}h is a {model_id!r}, not a known keypad")
+            what = found.title if found is not None else f"{model_id!r}"
+            raise WrongDeviceError(f"node {node_id:02X}h is a {what}, not a keypad")
         return cls(bus, node_id, model=found.model, **options)
 
     def __init__(self, bus: HostBus | can.BusABC, node_id: int = 0x15, *, start: bool = True,
@@ -146,6 +153,7 @@ class Keypad(Device):
         #: the J1939 side while the keypad is in J1939 mode, else None
         self.j1939: J1939KeypadLink | None = None
         if protocol == "j1939":
+            self.confirmed = True  # J1939 keypads are not asked by SDO
             self._use_j1939(address)
         else:
             self._confirm_or_close(verify)

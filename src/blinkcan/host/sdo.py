@@ -21,9 +21,10 @@ reply may still come and would complete the next request to the same object. Wha
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING
 
 from blinkcan.protocol.abort import AbortCode
@@ -77,6 +78,16 @@ class SdoChannel:
             self._awaiting = False
             self._reply = data
             self._signal.set()
+
+    @contextlib.contextmanager
+    def replies_also_from(self, node_id: int) -> Iterator[None]:
+        """Inside: replies from ``node_id``'s SDO server count too (a device that takes a new
+        node id at once acknowledges the write from it: PKP rev 1.5, errata G1)."""
+        restore = self.host.subscribe_fast(SDO_TX + node_id, self._on_reply)
+        try:
+            yield
+        finally:
+            restore()
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:

@@ -80,6 +80,9 @@ def golden_trace(request: pytest.FixtureRequest) -> Callable[..., None]:
         if recording:
             target.parent.mkdir(parents=True, exist_ok=True)
             record_trace(frames, target, replace=True)
+        elif not target.exists():
+            raise AssertionError(f"no golden trace {target} yet: run pytest with "
+                                 "--blinkcan-record to write it from this run")
         else:
             assert_matches_trace(frames, target, tolerance)
 

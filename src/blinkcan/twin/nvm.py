@@ -82,6 +82,11 @@ class JsonFileNvm:
     def __init__(self, path: str | os.PathLike[str], model: str, generation: str,
                  table: ObjectTable, others: Mapping[str, Ranges] | None = None) -> None:
         self.path = Path(path)
+        if self.path.is_dir() or not self.path.name:
+            raise NvmError(f"NVM file {self.path} is a directory; name a file in it")
+        if not self.path.parent.is_dir():  # a typo is not silently made a new directory
+            raise NvmError(f"cannot open NVM file {self.path}: directory {self.path.parent} "
+                           "does not exist")
         self.model = model
         self.generation = generation
         self._table = table
@@ -106,7 +111,6 @@ class JsonFileNvm:
     def _acquire(self) -> IO[str] | None:
         lock_path = self.path.with_name(f".{self.path.name}.lock")
         try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
             stream = open(lock_path, "a+", encoding="utf-8")  # noqa: SIM115 held until close()
         except OSError as error:
             raise NvmError(f"cannot open NVM file {self.path}: {error.strerror}") from error
