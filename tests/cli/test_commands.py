@@ -257,3 +257,13 @@ def test_scan_that_finds_nothing_names_the_bus_it_listened_on() -> None:
     channel = f"empty-{uuid.uuid4().hex}"
     assert_one_line_error(invoke("scan", "--listen", "0", "-i", "virtual", "-c", channel),
                           f"no device answered on virtual {channel}")
+
+
+def test_one_led_command_keeps_the_other_keys(bench: Bench) -> None:
+    bus, emulator, keypad, _ = bench
+    run("keypad", "led", "3", "red", *bus)
+    run("keypad", "led", "4", "green", *bus)
+    run("keypad", "led", "5", "blue", "--blink", *bus)
+    shown = emulator.snapshot(keypad)["commanded"]
+    assert [shown[k - 1]["phases"] for k in (3, 4, 5)] == [
+        ["red", "red"], ["green", "green"], ["blue", "off"]]

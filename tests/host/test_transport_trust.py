@@ -335,3 +335,24 @@ def test_connect_names_a_wrong_or_absent_device_like_the_drivers_do() -> None:
             Keypad.connect(rig.bus, 0x0C)
         with pytest.raises(NoDeviceError, match="no device answers at node 33h"):
             Keypad.connect(rig.bus, 0x33)
+
+
+@pytest.mark.parametrize("manual", ["1.1", "1.5"])
+def test_read_leds_takes_the_keypads_picture_so_one_change_keeps_the_others(
+        manual: str) -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15, manual=manual,
+                                  settings={"startup_led_show": 0}))
+        first = Keypad(rig.bus, 0x15)
+        first.set_led(3, "red")
+        first.set_led(4, "green", blink="green")
+        first.set_led(9, "blue", blink="red")
+        first.close()
+        later = Keypad(rig.bus, 0x15)  # another program, knowing nothing of the first
+        later.read_leds()
+        later.set_led(5, "white")
+        rig.settle()
+        shown = twin.snapshot()["commanded"]
+        assert [shown[k - 1]["phases"] for k in (3, 4, 5, 9)] == [
+            ["red", "red"], ["green", "off"], ["white", "white"], ["blue", "red"]]
+        later.close()

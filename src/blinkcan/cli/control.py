@@ -234,8 +234,8 @@ def _blink_words(colour: str, blink: str | None) -> str:
 @node_id_option
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
-    """Light KEY (1-12) in COLOUR (off, red, green, blue, amber, cyan, magenta, white). Starts
-    the keypad; other keys go dark (a one-shot command knows no earlier picture).
+    """Light KEY (1-12) in COLOUR (off, red, green, blue, yellow/amber, cyan, magenta,
+    white). Starts the keypad; the other keys keep what they show (read from the keypad first).
 
     \b
     blinkcan keypad led 3 red
@@ -245,6 +245,8 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     blink = colour if blink == "" else blink
     with _device(target, start=True) as device:
         assert isinstance(device, Keypad)
+        if device.j1939 is None:  # CANopen: the LED PDO carries every key, so read them first
+            device.read_leds()
         device.set_led(key, colour, blink=blink)
     _done(target, f"key {key} {_blink_words(colour, blink)}")
 

@@ -43,6 +43,17 @@ _CHANNEL_NAMES: dict[Channel, str] = {
 }
 
 
+def key_channels(word: int, key: int, width: int) -> int:
+    """The channels of ``key`` lit in an LED word of ``width`` bits per colour, red, green,
+    blue from bit 0 (PKP §11; the word behind 2001h/2002h and the LED PDOs)."""
+    bit = key - 1
+    return (
+        (word >> bit) & 1
+        | ((word >> (width + bit)) & 1) << 1
+        | ((word >> (2 * width + bit)) & 1) << 2
+    )
+
+
 def channel_name(channels: int) -> str:
     """The colour name of a set of channels ("yellow" for red + green)."""
     return _CHANNEL_NAMES[Channel(channels & 7)]

@@ -20,7 +20,7 @@ from typing import Any
 
 import can
 
-from blinkcan.devices.colours import BacklightColour, Channel, led_colour
+from blinkcan.devices.colours import BacklightColour, Channel, key_channels, led_colour
 from blinkcan.devices.keypad import (
     LEVEL_MAX,
     MODEL,
@@ -286,6 +286,31 @@ class Keypad(Device):
         else:
             self._blink[key] = int(steady ^ blinking)
         self._flush()
+
+    def read_leds(self) -> None:
+        """Take the LEDs the keypad shows now (2001h/2002h, PKP §11) as this driver's picture,
+        so that the next change sends only itself: a program that starts against a keypad
+        lit by someone else changes one key, not all (six SDO reads)."""
+        width = self.description.pdo("led_on").signal("red").length
+        words = []
+        for index in (0x2001, 0x2002):  # LED on, LED blink: fields of one word each
+            word = 0
+            for field in self.description.led_fields:
+                value = int.from_bytes(self.sdo.upload(index, field.subindex), "little")
+                word |= (value & ((1 << field.width) - 1)) << field.shift
+            words.append(word)
+        on, blink = words
+        keys = range(1, self.description.face.keys + 1)
+        steady = {key: key_channels(on, key, width) for key in keys}
+        blinking = {key: key_channels(blink, key, width) for key in keys}
+
+        def take() -> None:
+            self._steady = {key: channels for key, channels in steady.items() if channels}
+            self._blink = {key: channels for key, channels in blinking.items() if channels}
+            self._sent = (self._pdo_frame("led_on", _masks(self._steady)),
+                          self._pdo_frame("led_blink", _masks(self._blink)))
+
+        self.host.run(take)
 
     def set_leds(self, colours: Mapping[int, str], blink: Mapping[int, str] | None = None) -> None:
         """Several keys at once, in at most two PDOs."""

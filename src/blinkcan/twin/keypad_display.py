@@ -22,6 +22,7 @@ from blinkcan.devices.colours import (
     blink_phases,
     channel_name,
 )
+from blinkcan.devices.colours import key_channels as colour_key_channels
 from blinkcan.devices.keypad import FACE, LEVEL_MAX, SHOW_COMPLETE, SHOW_FAST_FLASH
 
 BLINK_PERIOD_S = 0.5  # one phase A + one phase B; not in the manual
@@ -47,12 +48,7 @@ def fill(keys_mask: int, channels: int, width: int = _KEYS) -> int:
 
 def key_channels(word: int, key: int, width: int = _KEYS) -> int:
     """The channels of ``key`` lit in an LED word of ``width`` bits per colour."""
-    bit = key - 1
-    return (
-        (word >> bit) & 1
-        | ((word >> (width + bit)) & 1) << 1
-        | ((word >> (2 * width + bit)) & 1) << 2
-    )
+    return colour_key_channels(word, key, width)
 
 
 def render_key(on: int, blink: int, key: int, width: int = _KEYS) -> dict[str, object]:
