@@ -267,3 +267,10 @@ def test_one_led_command_keeps_the_other_keys(bench: Bench) -> None:
     shown = emulator.snapshot(keypad)["commanded"]
     assert [shown[k - 1]["phases"] for k in (3, 4, 5)] == [
         ["red", "red"], ["green", "green"], ["blue", "off"]]
+
+
+def test_restore_defaults_on_generation_1_says_so_before_asking(bench: Bench) -> None:
+    bus = bench[0]
+    result = invoke("keypad", "restore-defaults", *bus, answer="y\n")
+    assert_one_line_error(result, "cannot restore defaults")
+    assert "factory value" not in result.output  # it did not ask first

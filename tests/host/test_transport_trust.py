@@ -356,3 +356,16 @@ def test_read_leds_takes_the_keypads_picture_so_one_change_keeps_the_others(
         assert [shown[k - 1]["phases"] for k in (3, 4, 5, 9)] == [
             ["red", "red"], ["green", "off"], ["white", "white"], ["blue", "red"]]
         later.close()
+
+
+def test_a_node_id_another_device_answers_at_is_refused() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15))
+        rig.add(KeyboxTwin(node_id=0x0C))
+        keypad = Keypad(rig.bus, 0x15)
+        with pytest.raises(ValueError, match="node id 0Ch is taken"):
+            keypad.set_node_id(0x0C, confirm=True)
+        assert twin.snapshot()["settings"]["node_id"] == 0x15
+        keypad.set_node_id(0x18, confirm=True)
+        assert twin.snapshot()["settings"]["node_id"] == 0x18
+        keypad.close()

@@ -207,11 +207,13 @@ for group in (keypad, keybox):
     @click.pass_obj
     def restore_defaults(target: Target, yes: bool) -> None:
         """Every stored setting back to factory values (1011h), applied at the next reset."""
-        _confirm(f"Every stored setting of the {target[0]} (node id, bit rate, heartbeat...) "
-                 "goes back to its factory value at the next reset", yes)
         with _device(target) as device:
-            if isinstance(device, Keypad):
-                _ = device.generation  # probed: generation 2 has 1011h, generation 1 does not
+            if "restore_all_parameters" not in device.description.table:  # before asking
+                edition = device.description.edition or "this firmware"
+                raise click.ClickException(f"this {device.description.title} ({edition}) "
+                                           "cannot restore defaults (it has no 1011h)")
+            _confirm(f"Every stored setting of the {target[0]} (node id, bit rate, "
+                     "heartbeat...) goes back to its factory value at the next reset", yes)
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")
 

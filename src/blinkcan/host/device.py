@@ -331,11 +331,24 @@ class Device:
         if not confirm:
             raise ValueError("changing the node id moves the device on the bus at its next "
                              "reset: pass confirm=True")
+        if node_id != self.node_id:
+            self._check_free(node_id)
         if "node-id-at-once" in self.description.features and node_id != self.node_id:
             with self.sdo.channel.replies_also_from(node_id):
                 self.write("node_id", node_id)
             return
         self.write("node_id", node_id)
+
+    def _check_free(self, node_id: int) -> None:
+        """ValueError when a device already answers at ``node_id``: two devices on one node id
+        would answer each other's SDO requests (one 1000h read, 0.2 s)."""
+        try:
+            self.host.sdo(node_id, 0.2, 0).upload(0x1000, 0)
+        except SdoTimeoutError:
+            return
+        except SdoAbortError:
+            pass  # it answered, if only with an abort
+        raise ValueError(f"node id {node_id:02X}h is taken: a device answers there")
 
     def set_bitrate(self, bitrate: int, *, confirm: bool = False) -> None:
         """Store a bit rate (the device's own code, errata B1); it applies at the next reset."""
