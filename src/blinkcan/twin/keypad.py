@@ -40,6 +40,7 @@ from blinkcan.twin.keypad_display import (
     SHOW_NAMES,
     DemoMode,
     ShowPlayer,
+    displayed_words,
     fill,
     render_key,
     startup_shows,
@@ -462,13 +463,8 @@ class KeypadTwin(CanopenTwin):
         now = self._now if now is None else now
         if self._j1939:
             return self._j1939_keypad.displayed_leds(now)
-        if self._show is not None:
-            step = self._show.step(now)
-            if step is not None:
-                return step.on, step.blink
-        if self._demo is not None:
-            return self._demo.leds(now)
-        return self._words["led_on"], self._words["led_blink"]
+        return displayed_words(self._show, self._demo, self._words["led_on"],
+                               self._words["led_blink"], now)
 
     def _backlight(self) -> dict[str, object]:
         if self._demo is not None:

@@ -225,3 +225,17 @@ class DemoMode:
             "step": None if self.step is None else DEMO_STEP_NAMES[self.step],
             "level": self.level,
         }
+
+
+def displayed_words(show: ShowPlayer | None, demo: DemoMode | None, on: int, blink: int,
+                    now: float) -> tuple[int, int]:
+    """(on word, blink word) the keys show at ``now``: a startup show still playing (PKP §23),
+    else DEMO mode (§24), else the LED objects ``on`` and ``blink``. CANopen and J1939 modes
+    alike."""
+    if show is not None:
+        step = show.step(now)
+        if step is not None:
+            return step.on, step.blink
+    if demo is not None:
+        return demo.leds(now)
+    return on, blink

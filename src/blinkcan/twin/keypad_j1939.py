@@ -64,6 +64,7 @@ from blinkcan.twin.keypad_display import (
     STARTUP_SHOWS,
     DemoMode,
     ShowPlayer,
+    displayed_words,
     fill,
     render_key,
 )
@@ -354,13 +355,8 @@ class J1939Keypad:
     # -- what the keypad shows ------------------------------------------------------------------
 
     def displayed_leds(self, now: float) -> tuple[int, int]:
-        if self._show is not None:
-            step = self._show.step(now)
-            if step is not None:
-                return step.on, step.blink
-        if self._demo is not None:
-            return self._demo.leds(now)
-        return self._words["led_on"], self._words["led_blink"]
+        return displayed_words(self._show, self._demo, self._words["led_on"],
+                               self._words["led_blink"], now)
 
     def snapshot(self) -> dict[str, Any]:
         now = self._now
