@@ -10,6 +10,9 @@ anything unusual) is handed to python-can's own reader, one line at a time, so t
 python-can's by construction, with one correction where python-can loses what the line says
 (:func:`restore_error_details`: error frames); tests/formats/test_candump.py checks the fast
 path against python-can's reader (plus that correction) on generated logs.
+
+Lines are read with a bounded length (:func:`~blinkcan.formats.log_source.bounded_lines`): a
+file without newlines is refused at its first line, never read whole.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from typing import TextIO
 import can
 from can.io.canutils import CanutilsLogReader
 
+from blinkcan.formats.log_source import bounded_line_blocks, bounded_lines
 from blinkcan.protocol.frame import Frame
 
 _ERROR_FLAG = 0x20000000  # linux/can.h CAN_ERR_FLAG
@@ -63,36 +67,51 @@ def with_error_details(messages: Iterator[can.Message], lines: Iterator[str]
         yield restore_error_details(message, line)
 
 
+def candump_messages(stream: TextIO) -> Iterator[can.Message]:
+    """python-can's messages of a candump log, each error frame completed from its line, the
+    lines bounded: one pass, so a stream is read once."""
+    last = [""]  # the line python-can's reader read last: the one of the message it yields
+
+    def lines() -> Iterator[str]:
+        for line in bounded_lines(stream, "candump"):
+            last[0] = line
+            yield line
+
+    for message in CanutilsLogReader(lines()):  # type: ignore[arg-type]  # iterates it only
+        yield restore_error_details(message, last[0])
+
+
 def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
     ``can.Message`` python-can reads for anything else (remote, error, CAN FD)."""
     new = _new_tuple
     fromhex = bytes.fromhex
-    for line in stream:
-        fields = line.split()
-        count = len(fields)
-        if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
-            stamp = fields[0]
-            ident, _, data = fields[2].partition("#")
-            size = len(ident)
-            if stamp[:1] == "(" and size and len(data) <= 16 and not len(data) & 1 \
-                    and data[:1] not in _NOT_DATA:
-                try:
-                    can_id = int(ident, 16)
-                    payload = fromhex(data)
-                    timestamp = float(stamp[1:-1])
-                except ValueError:
-                    pass
-                else:
-                    if size <= 3:
-                        if can_id <= 0x7FF:
-                            yield timestamp, new(Frame, (can_id, payload, False))
+    for lines in bounded_line_blocks(stream, "candump"):
+        for line in lines:
+            fields = line.split()
+            count = len(fields)
+            if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
+                stamp = fields[0]
+                ident, _, data = fields[2].partition("#")
+                size = len(ident)
+                if stamp[:1] == "(" and size and len(data) <= 16 and not len(data) & 1 \
+                        and data[:1] not in _NOT_DATA:
+                    try:
+                        can_id = int(ident, 16)
+                        payload = fromhex(data)
+                        timestamp = float(stamp[1:-1])
+                    except ValueError:
+                        pass
+                    else:
+                        if size <= 3:
+                            if can_id <= 0x7FF:
+                                yield timestamp, new(Frame, (can_id, payload, False))
+                                continue
+                        elif can_id <= 0x1FFFFFFF:  # not an error flag: python-can's own rules
+                            yield timestamp, new(Frame, (can_id, payload, True))
                             continue
-                    elif can_id <= 0x1FFFFFFF:  # not an error flag: python-can's own rules
-                        yield timestamp, new(Frame, (can_id, payload, True))
-                        continue
-        if not fields:
-            continue
-        message = _python_can(line)
-        if message is not None:
-            yield message.timestamp, message
+            if not fields:
+                continue
+            message = _python_can(line)
+            if message is not None:
+                yield message.timestamp, message

@@ -1,6 +1,9 @@
 """Frames from and to files: every log format python-can reads and writes (ASC, BLF, candump,
 TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type.
 
+Reading checks what a path is and reads text in lines of a bounded length (a stream, a
+device, a file without newlines: formats/log_source.py).
+
 Lossless: remote (RTR) and error frames are read and written like data frames. Where a target
 format cannot carry a kind of frame (python-can's TRC writer drops remote, error and CAN FD
 frames), :class:`FrameWriter` counts and names what it did not write instead of losing it
@@ -22,16 +25,25 @@ from typing import BinaryIO
 
 import can
 from can.io.blf import BLFParseError
+from can.io.generic import TextIOMessageReader
+from can.io.player import MESSAGE_READERS
 
-from blinkcan.formats.candump import read_candump, with_error_details
+from blinkcan.formats.candump import candump_messages, read_candump
+from blinkcan.formats.log_source import (
+    LineTooLongError,
+    LogError,
+    LogSource,
+    bounded_lines,
+    log_source,
+    open_binary,
+    open_text,
+)
 from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_message
 
-
-class LogError(ValueError):
-    """A file that cannot be read or written as a CAN log."""
-
+__all__ = ["FrameWriter", "LogError", "describe_frame", "frame_kind", "read_frames", "read_log",
+           "read_messages"]
 
 #: errors python-can's readers raise on a file that is not what its name says
 _READ_ERRORS = (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError,
@@ -50,34 +62,48 @@ def frame_kind(message: can.Message) -> str:
     return "fd" if message.is_fd or len(message.data) > 8 else "data"
 
 
-def _source(path: str | os.PathLike[str]) -> Path:
-    source = Path(path)
-    if not source.is_file():
-        raise LogError(f"no such file: {source}")
-    return source
-
-
 def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
-    """Every frame of a log file as python-can messages: data, remote, error, CAN FD."""
-    source = _source(path)
-    if is_pcap(source):
-        with source.open("rb") as stream:
+    """Every frame of a log file as python-can messages: data, remote, error, CAN FD. The
+    path is checked and text is read in bounded lines (formats/log_source.py)."""
+    return _messages(log_source(path))
+
+
+def _messages(source: LogSource) -> Iterator[can.Message]:
+    if is_pcap(source.path):
+        with open_binary(source) as stream:
             try:
                 yield from read_pcap_messages(stream)
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
+    reader_type = MESSAGE_READERS.get(source.suffix)
+    if source.stream or (reader_type is not None and issubclass(reader_type,
+                                                                 TextIOMessageReader)):
+        yield from _text_messages(source)
+        return
     try:
-        reader = can.LogReader(str(source))
+        reader = can.LogReader(str(source.path))
     except _READ_ERRORS as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
-            if source.suffix.lower() == ".log":
-                with source.open(encoding="utf-8") as lines:
-                    yield from with_error_details(iter(reader), lines)
+            yield from reader
+        except _READ_ERRORS as error:
+            raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _text_messages(source: LogSource) -> Iterator[can.Message]:
+    """A text log's messages from python-can's reader of its format, fed bounded lines."""
+    candump = source.suffix == ".log"
+    with open_text(source, "utf-8" if candump else None) as stream:
+        try:
+            if candump:
+                yield from candump_messages(stream)
             else:
-                yield from reader
+                lines = bounded_lines(stream, source.kind)
+                yield from MESSAGE_READERS[source.suffix](lines)  # type: ignore[arg-type]
+        except LineTooLongError as error:
+            raise LogError(f"{source}: {error}") from None
         except _READ_ERRORS as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
@@ -85,16 +111,18 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
 def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) pairs: a :class:`Frame` for each classic data frame, the
     ``can.Message`` for a remote, error or CAN FD frame. candump logs take a fast path."""
-    source = _source(path)
-    if source.suffix.lower() == ".log":
-        with source.open(encoding="utf-8") as stream:
+    source = log_source(path)
+    if source.suffix == ".log":
+        with open_text(source, "utf-8") as stream:
             try:
                 yield from read_candump(stream)
+            except LineTooLongError as error:
+                raise LogError(f"{source}: {error}") from None
             except _READ_ERRORS as error:
                 raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
         return
     trusted = Frame.trusted  # python-can (or our pcap reader) parsed and checked the frames
-    for message in read_messages(source):
+    for message in _messages(source):
         if frame_kind(message) == "data":
             yield message.timestamp, trusted(message.arbitration_id, bytes(message.data),
                                              message.is_extended_id)
