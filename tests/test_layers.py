@@ -4,7 +4,8 @@
 protocol``, plus the explicit rules: ``protocol/``, ``devices/`` and ``twin/`` import none of
 ``can``, ``threading``, ``asyncio``, ``time``; ``host/``, ``decode/``, ``formats/`` and
 ``fleet/`` never import ``twin/``; the pure core imports without python-can. Every import
-counts, also the ones inside a function. A new subpackage must be placed in ``ALLOWED`` before it can land.
+counts, also the ones inside a function. A new subpackage must be placed in ``ALLOWED`` before
+it can land.
 """
 
 from __future__ import annotations
