@@ -10,6 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 import blinkcan.cli.nmt as nmt_cli
+from blinkcan.cli.bus_options import cli_bus
 from blinkcan.cli.main import cli
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeypadTwin
@@ -27,7 +28,7 @@ def channel() -> Iterator[str]:
 
 def test_a_heartbeat_sent_before_the_command_is_not_its_answer(
         channel: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    opened = nmt_cli.cli_bus
+    opened = cli_bus
 
     def bus_with_a_heartbeat_in_flight() -> can.BusABC:
         bus = opened()
