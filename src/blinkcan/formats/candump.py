@@ -18,7 +18,7 @@ file without newlines is refused at its first line, never read whole.
 from __future__ import annotations
 
 import io
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import TextIO
 
 import can
@@ -83,10 +83,22 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message]:
 
 def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
-    ``can.Message`` python-can reads for anything else (remote, error, CAN FD)."""
+    ``can.Message`` python-can reads for anything else (remote, error, CAN FD). Lines over
+    MAX_LINE raise :class:`~blinkcan.formats.log_source.LineTooLongError`."""
+    return _read_blocks(bounded_line_blocks(stream, "candump"))
+
+
+def read_candump_lines(lines: Iterable[str]) -> Iterator[tuple[float, Frame | can.Message]]:
+    """:func:`read_candump` of lines the caller reads, one pulled per frame yielded (so the
+    caller knows the line of each frame); bound them with
+    :func:`~blinkcan.formats.log_source.bounded_lines`."""
+    return _read_blocks((lines,))
+
+
+def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame | can.Message]]:
     new = _new_tuple
     fromhex = bytes.fromhex
-    for lines in bounded_line_blocks(stream, "candump"):
+    for lines in blocks:
         for line in lines:
             fields = line.split()
             count = len(fields)
