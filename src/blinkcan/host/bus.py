@@ -9,7 +9,8 @@ Handlers and timers run on the bus's scheduler (``runtime.scheduler``), one at a
 drivers need no locks for their state: a thread of its own on real buses, the simulation
 itself on a ``SimulatedBus`` (``blinkcan.testing.Rig``). SDO replies take a fast path: they are
 handed to the waiting caller straight from the reader. An exception in a handler is logged
-with its traceback; the loop goes on.
+with its traceback and the loop goes on; in simulated time it is raised again from the call
+that ran the simulation (``Scheduler.guarded``), so a test sees it.
 
 A bus that fails (unplugged adapter, shut down) is reported once, then read with a back-off
 instead of a busy loop; a shut-down bus stops the reader and fails waiting SDO calls at once.
@@ -36,7 +37,6 @@ from blinkcan.runtime.scheduler import (
     Scheduler,
     Signal,
     Timer,
-    guarded,
 )
 from blinkcan.runtime.simbus import SimulatedBus
 
@@ -274,7 +274,7 @@ class HostBus:
     def _dispatch(self, frame: Frame, now: float) -> None:
         handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())
         for handler in list(handlers):
-            guarded(handler, frame, now)
+            self.scheduler.guarded(handler, frame, now)
 
     def _on_bus_error(self, error: Exception) -> None:
         """On the reader thread: report once, then back off (a failing bus must not make the

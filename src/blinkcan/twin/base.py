@@ -32,7 +32,7 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, check_node_id
+from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import (
     PDO_ALLOWED,
@@ -46,6 +46,7 @@ from blinkcan.protocol.nmt import (
 from blinkcan.protocol.sdo_server import SdoServer
 from blinkcan.twin.dictionary import ObjectStore
 from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm, NvmError
+from blinkcan.twin.schedule import Periodic, milliseconds
 
 _Route = Callable[[Frame, float], list[Frame]]
 _new_tuple = tuple.__new__
@@ -64,13 +65,6 @@ def open_nvm(nvm: str | os.PathLike[str] | Nvm | None, description: DeviceDescri
     if isinstance(nvm, (str, os.PathLike)):
         return JsonFileNvm(nvm, description.model, description.generation, description.table)
     return nvm
-
-
-def next_due(due: float, period: float, now: float) -> float:
-    """The next time of a periodic event that was due at ``due``: no drift, and no burst of
-    catch-up frames after a stall."""
-    due += period
-    return due if due > now else now + period
 
 
 class ConsumerState(Enum):
@@ -120,8 +114,7 @@ class CanopenTwin:
         self._after_reply: list[Callable[[float], list[Frame]]] = []
         self._now = 0.0
         self._boot_time = 0.0
-        self._heartbeat_next: float | None = None
-        self._heartbeat_period = 0.0
+        self._heartbeat = Periodic()
         self._store.set_hook("producer_heartbeat_time", self._on_heartbeat_time)
         self._consumer = ConsumerState.OFF
         self._consumer_deadline: float | None = None
@@ -174,6 +167,7 @@ class CanopenTwin:
 
     def power_on(self, now: float) -> list[Frame]:
         """Apply power: boot, send the boot-up frame, enter the startup state."""
+        check_time("now", now)
         if self._powered:
             return []
         self._powered = True
@@ -189,7 +183,7 @@ class CanopenTwin:
         self._powered = False
         self._nmt = NmtState.BOOT_UP
         self._routes = {}
-        self._heartbeat_next = None
+        self._heartbeat.stop()
         self._consumer = ConsumerState.OFF
         self._consumer_deadline = None
         self._sdo.reset()
@@ -197,6 +191,8 @@ class CanopenTwin:
 
     def receive(self, frame: Frame, now: float) -> list[Frame]:
         """The frames the device sends in reaction to ``frame`` (often none)."""
+        if now - now:  # NaN or infinite (cheaper than math.isfinite on every frame)
+            check_time("now", now)
         if not self._powered:
             return []
         if frame.extended:
@@ -208,15 +204,16 @@ class CanopenTwin:
         return route(frame, now)
 
     def advance(self, now: float) -> list[Frame]:
-        """Frames due by ``now``: heartbeat, periodic PDOs, timeouts."""
+        """Frames due by ``now``: heartbeat, periodic PDOs, timeouts. Every deadline
+        :meth:`next_deadline` named up to ``now`` is consumed (twin/schedule.py)."""
+        if now - now:  # NaN or infinite
+            check_time("now", now)
         if not self._powered:
             return []
         self._now = now
         frames: list[Frame] = []
-        due = self._heartbeat_next
-        if due is not None and now >= due:
+        if self._heartbeat.fire(now):
             frames.append(self._heartbeat_frames[self._nmt])
-            self._heartbeat_next = next_due(due, self._heartbeat_period, now)
         deadline = self._consumer_deadline
         if deadline is not None and now >= deadline:
             frames += self._heartbeat_lost(now)
@@ -228,8 +225,8 @@ class CanopenTwin:
         if not self._powered:
             return None
         deadlines = [d for d in self._deadlines() if d is not None]
-        if self._heartbeat_next is not None:
-            deadlines.append(self._heartbeat_next)
+        if self._heartbeat.due is not None:
+            deadlines.append(self._heartbeat.due)
         if self._consumer_deadline is not None:
             deadlines.append(self._consumer_deadline)
         return min(deadlines) if deadlines else None
@@ -395,8 +392,7 @@ class CanopenTwin:
     def _schedule_heartbeat(self, period_ms: int, now: float) -> None:
         """The running period is kept apart from the stored value, which may change (restore
         defaults) without taking effect until the next reset."""
-        self._heartbeat_period = period_ms / 1000
-        self._heartbeat_next = now + self._heartbeat_period if period_ms else None
+        self._heartbeat.start(now, milliseconds(period_ms))
 
     # -- consumer heartbeat and restore defaults (KBX §28/§36, PKP rev 1.5 §26/§34) ----------
 

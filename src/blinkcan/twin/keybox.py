@@ -29,11 +29,13 @@ from blinkcan.devices.model import Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
+from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState
-from blinkcan.twin.base import CanopenTwin, next_due
+from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
 from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.schedule import Periodic, ticks
 
 _STATE_NAMES = {state: PIN_STATE_NAMES[state] for state in PinState}
 _PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in FACE.pin_numbers)
@@ -68,8 +70,7 @@ class KeyboxTwin(CanopenTwin):
         self._inputs_changed = True
         self._fault_pdo: PdoLayout = description.pdo("faults")
         self._fault_cob_id = self._fault_pdo.cob_id(node_id)
-        self._fault_next: float | None = None
-        self._fault_period = 0.0
+        self._faults_timer = Periodic()
         self._fault_frame_cache: Frame | None = None
         store = self._store
         for pin in FACE.pin_numbers:
@@ -92,6 +93,7 @@ class KeyboxTwin(CanopenTwin):
     def set_input(self, pin: int, level: bool, now: float) -> list[Frame]:
         """The external level on ``pin`` (read by 2003h, errata K21)."""
         check_pin(pin)
+        check_time("now", now)
         if not isinstance(level, bool):
             raise TypeError(f"level must be a bool, not {type(level).__name__}")
         self.outputs.external[pin - 1] = level
@@ -100,6 +102,7 @@ class KeyboxTwin(CanopenTwin):
         return []
 
     def _physical(self, action: Any, pin: int, now: float) -> list[Frame]:
+        check_time("now", now)
         faults = action(pin)
         self._inputs_changed = True  # a fuse changes what the pin reads
         if not self._powered:
@@ -185,9 +188,8 @@ class KeyboxTwin(CanopenTwin):
         return None
 
     def _schedule_faults(self, units: int, now: float) -> None:
-        self._fault_period = units * FAULT_PERIOD_UNIT_S
         operational = self._nmt is NmtState.OPERATIONAL
-        self._fault_next = now + self._fault_period if operational and units else None
+        self._faults_timer.start(now, units * ticks(FAULT_PERIOD_UNIT_S) if operational else 0)
 
     # -- CanopenTwin hooks ------------------------------------------------------------------
 
@@ -195,12 +197,12 @@ class KeyboxTwin(CanopenTwin):
         self._fault_cob_id = self._fault_pdo.cob_id(self._node_id)
         self.outputs.power_on()  # fail-safe: every reset starts with outputs OFF
         self._refresh()
-        self._fault_next = None
+        self._faults_timer.stop()
         return []
 
     def _on_power_off(self) -> None:
         self.outputs.power_on()
-        self._fault_next = None
+        self._faults_timer.stop()
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
         if state is NmtState.STOPPED:
@@ -211,21 +213,19 @@ class KeyboxTwin(CanopenTwin):
 
     def _on_advance(self, now: float) -> list[Frame]:
         frames: list[Frame] = []
-        due = self._fault_next
-        if due is not None and now >= due:
+        if self._faults_timer.fire(now):
             frames.append(self._fault_frame())  # KBX §25 periodic fault message
-            self._fault_next = next_due(due, self._fault_period, now)
         return frames
 
     def _deadlines(self) -> Iterable[float | None]:
-        return (self._fault_next,)
+        return (self._faults_timer.due,)
 
     def next_deadline(self) -> float | None:
         # the emulator asks after every call; two timers plus the heartbeat, without lists
         if not self._powered:
             return None
-        best = self._heartbeat_next
-        for deadline in (self._consumer_deadline, self._fault_next):
+        best = self._heartbeat.due
+        for deadline in (self._consumer_deadline, self._faults_timer.due):
             if deadline is not None and (best is None or deadline < best):
                 best = deadline
         return best

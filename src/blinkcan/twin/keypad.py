@@ -29,12 +29,12 @@ from blinkcan.devices.model import DeviceDescription, Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
+from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState, heartbeat_frame, parse_nmt
-from blinkcan.twin.base import CanopenTwin, next_due
+from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keypad_display import (
     BLINK_PERIOD_S,
     SHOW_NAMES,
@@ -47,6 +47,7 @@ from blinkcan.twin.keypad_display import (
 )
 from blinkcan.twin.keypad_j1939 import J1939Keypad
 from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
+from blinkcan.twin.schedule import Periodic, milliseconds
 
 PROTOCOLS = {"canopen": PROTOCOL_CANOPEN, "j1939": PROTOCOL_J1939}
 
@@ -115,8 +116,7 @@ class KeypadTwin(CanopenTwin):
         self._key_pdo = description.pdo("key_state")
         self._key_cob_id = self._key_pdo.cob_id(node_id)
         self._keys = 0
-        self._periodic_next: float | None = None
-        self._periodic_period = 0.0
+        self._periodic = Periodic()  # PKP §41b: the key state every 1800h/05 ms
         self._show: ShowPlayer | None = None
         self._show_mode = 0
         self._demo: DemoMode | None = None
@@ -160,6 +160,7 @@ class KeypadTwin(CanopenTwin):
         return frozenset(item_numbers(self._keys))
 
     def _set_key(self, key: int, down: bool, now: float) -> list[Frame]:
+        check_time("now", now)
         if not self._powered:
             return []
         self._now = now
@@ -314,7 +315,7 @@ class KeypadTwin(CanopenTwin):
 
     def _on_boot(self, now: float, application: bool) -> list[Frame]:
         self._key_cob_id = self._key_pdo.cob_id(self._node_id)
-        self._periodic_next = None
+        self._periodic.stop()
         if application:
             self._show = None
             self._show_mode = self._store.get_int("startup_led_show")
@@ -339,7 +340,7 @@ class KeypadTwin(CanopenTwin):
         self._store.set("keys_pressed", 0)
         self._show = None
         self._demo = None
-        self._periodic_next = None
+        self._periodic.stop()
         self._j1939_keypad.power_off()
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
@@ -353,8 +354,7 @@ class KeypadTwin(CanopenTwin):
     def _schedule_periodic(self, period_ms: int, now: float) -> None:
         # the event timer runs in event-driven mode only (rev 1.5 silent; blinkcan decision)
         operational = self._nmt is NmtState.OPERATIONAL and not self._tpdo_synchronous()
-        self._periodic_period = period_ms / 1000
-        self._periodic_next = now + self._periodic_period if operational and period_ms else None
+        self._periodic.start(now, milliseconds(period_ms) if operational else 0)
 
     def _on_can_protocol(self, value: int) -> AbortCode | None:
         if value == PROTOCOL_J1939:
@@ -390,8 +390,9 @@ class KeypadTwin(CanopenTwin):
             super()._boot(now, application)
             self._routes = {}
             self._nmt = NmtState.BOOT_UP
-            self._heartbeat_next = None
-            self._show = self._demo = self._periodic_next = None
+            self._heartbeat.stop()
+            self._periodic.stop()
+            self._show = self._demo = None
             self._j1939_keypad.settings.update(self._stored_j1939_settings(stored))
             return self._j1939_keypad.power_on(now, self._keys)
         return super()._boot(now, application)
@@ -438,10 +439,8 @@ class KeypadTwin(CanopenTwin):
         if self._j1939:
             return self._j1939_keypad.advance(now)
         frames: list[Frame] = []
-        due = self._periodic_next
-        if due is not None and now >= due:
+        if self._periodic.fire(now):
             frames.append(self._key_state_frame(now))  # PKP §41b periodic state transmission
-            self._periodic_next = next_due(due, self._periodic_period, now)
         if self._show is not None and self._show.finished(now):
             self._show = None
         return frames
@@ -451,7 +450,7 @@ class KeypadTwin(CanopenTwin):
             return self._j1939_keypad.deadlines()
         now = self._now
         return (
-            self._periodic_next,
+            self._periodic.due,
             self._show.next_change(now) if self._show is not None else None,
             self._demo.next_change(now) if self._demo is not None else None,
         )

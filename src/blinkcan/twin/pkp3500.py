@@ -38,14 +38,14 @@ from blinkcan.devices.pkp3500 import (
     describe_pkp3500,
 )
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.cob import check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState
-from blinkcan.twin.base import next_due
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
 from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.schedule import Periodic, milliseconds, ticks
 
 _TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
 #: M15 (Q): the firmware aborts an unknown command specifier with the code the manual lists,
@@ -67,8 +67,7 @@ class _Encoder:
         self.number = number
         self.counter = 0
         self.net = 0
-        self.timer_next: float | None = None
-        self.timer_period = 0.0
+        self.timer = Periodic()  # 1801h/1802h sub 05h (M38)
         self.bar = 0  # DEMO mode: ring LEDs lit as a bar graph (M81)
 
 
@@ -139,7 +138,7 @@ class Pkp3500Twin(KeypadTwin):
         self._encoder_layouts = [description.pdo(e.pdo) for e in face.encoders]
         self._analog_layout = description.pdo("analog_inputs")
         self._counts = [0] * face.analog_inputs  # 10 mV units (M44)
-        self._analog_next: float | None = None
+        self._analog = Periodic()  # 495h every 2006h x 10 ms (M47)
         self._temporary_colour: int | None = None  # M51: set by 515h or 2003h/03 since power-on
         self._init_keypad(description, node_id, nvm, protocol, name, settings)
         store = self._store
@@ -159,6 +158,7 @@ class Pkp3500Twin(KeypadTwin):
         knob = self._encoders[check_range("encoder", encoder, 1, len(self._encoders)) - 1]
         if isinstance(ticks, bool) or not isinstance(ticks, int):
             raise TypeError(f"ticks must be an int, not {type(ticks).__name__}")
+        check_time("now", now)
         if not self._powered or not ticks:
             return []
         self._now = now
@@ -177,6 +177,7 @@ class Pkp3500Twin(KeypadTwin):
         if isinstance(volts, bool) or not isinstance(volts, (int, float)) \
                 or not 0 <= volts < float("inf"):  # NaN fails the comparison
             raise ValueError(f"volts must be a number >= 0, not {volts!r}")
+        check_time("now", now)
         self._now = now
         self._counts[input] = min(ANALOG_COUNTS, round(volts * 100))  # 10 mV per count (M44)
         self._refresh_inputs()
@@ -240,22 +241,21 @@ class Pkp3500Twin(KeypadTwin):
         return on_write
 
     def _schedule_encoder(self, knob: _Encoder, period_ms: int, now: float) -> None:
-        knob.timer_period = period_ms / 1000
-        running = self._sends_pdos() and period_ms
-        knob.timer_next = now + knob.timer_period if running else None
+        knob.timer.start(now, milliseconds(period_ms) if self._sends_pdos() else 0)
 
     def _sends_pdos(self) -> bool:
         return self._nmt is NmtState.OPERATIONAL and not self._j1939
 
     # -- analog inputs --------------------------------------------------------------------------
 
-    def _analog_period(self) -> float:
-        return self._store.get_int("analog_period") * ANALOG_PERIOD_UNIT_S
+    def _analog_period(self) -> int:
+        """2006h in ticks (10 ms units, M47)."""
+        return self._store.get_int("analog_period") * ticks(ANALOG_PERIOD_UNIT_S)
 
     def _on_analog_period(self, value: int) -> AbortCode | None:
         self._store.set("tpdo4_transmission_type", value)  # M12: 1803h/02 reads this byte
-        if self._analog_next is not None:  # M47: a write restarts the period
-            self._analog_next = self._now + value * ANALOG_PERIOD_UNIT_S
+        if self._analog.due is not None:  # M47: a write restarts the period
+            self._analog.start(self._now, value * ticks(ANALOG_PERIOD_UNIT_S))
         return None
 
     def _analog_frame(self) -> Frame:
@@ -309,9 +309,9 @@ class Pkp3500Twin(KeypadTwin):
     def _on_power_off(self) -> None:
         super()._on_power_off()
         self._counts = [0] * len(self._counts)  # M46: nothing connected
-        self._analog_next = None
+        self._analog.stop()
         for knob in self._encoders:
-            knob.timer_next = None
+            knob.timer.stop()
         self._store.set("led_on_rings", 0)
         self._store.set("led_blink_rings", 0)
 
@@ -321,7 +321,7 @@ class Pkp3500Twin(KeypadTwin):
             self._schedule_encoder(knob, self._store.get_int(f"tpdo{knob.number + 1}_event_timer"),
                                    now)
         # M47: the first 495h one period after entering operational
-        self._analog_next = now + self._analog_period() if self._sends_pdos() else None
+        self._analog.start(now, self._analog_period() if self._sends_pdos() else 0)
         return frames
 
     def _on_consumer_lost(self, now: float) -> None:
@@ -334,21 +334,17 @@ class Pkp3500Twin(KeypadTwin):
         if self._j1939:
             return frames
         for knob in self._encoders:
-            due = knob.timer_next
-            if due is not None and now >= due:
+            if knob.timer.fire(now):
                 frames.append(self._encoder_frame(knob))  # M38: also when nothing moved
-                knob.timer_next = next_due(due, knob.timer_period, now)
-        due = self._analog_next
-        if due is not None and now >= due:
+        if self._analog.fire(now):
             frames.append(self._analog_frame())
-            self._analog_next = next_due(due, self._analog_period(), now)
         return frames
 
     def _deadlines(self) -> Iterable[float | None]:
         if self._j1939:
             return super()._deadlines()
-        return (*super()._deadlines(), self._analog_next,
-                *(knob.timer_next for knob in self._encoders))
+        return (*super()._deadlines(), self._analog.due,
+                *(knob.timer.due for knob in self._encoders))
 
     def _make_demo(self, now: float) -> DemoMode:
         for knob in self._encoders:

@@ -1,0 +1,74 @@
+"""Exact schedules: every deadline a twin names is an origin plus whole ticks, computed one way.
+
+Why: deadlines built by adding float periods drift (0.1 added ten times is not 1.0), and a
+deadline computed again another way at its own time can come out a hair after the time it
+named, so ``advance()`` at that time would not consume it and a simulation would spin on it.
+Here a deadline is :func:`at` ``(origin, ticks)``: the origin plus a whole number of ticks of
+:data:`TICK_S`, rounded once. It is the one float ``next_deadline()`` names and ``advance()``
+compares with, and a consumed deadline is always followed by one strictly later.
+"""
+
+from __future__ import annotations
+
+import math
+
+TICKS_PER_S = 1000
+#: the base period: every period and step of the devices is a whole number of milliseconds
+TICK_S = 1 / TICKS_PER_S
+
+
+def ticks(seconds: float) -> int:
+    """A duration of the devices (a period, a show step) in whole ticks."""
+    return round(seconds * TICKS_PER_S)
+
+
+def at(origin: float, count: int) -> float:
+    """``origin`` + ``count`` ticks, rounded once; always after ``origin`` when ``count`` > 0."""
+    time = origin + count / TICKS_PER_S
+    if time <= origin and count > 0:  # a tick below the clock's resolution at ``origin``
+        return math.nextafter(origin, math.inf)
+    return time
+
+
+
+class Periodic:
+    """A periodic event due at ``origin + k x period`` (k = 1, 2, ...; whole ticks). After a
+    stall it starts again from the time it was late at: no drift, and no burst of catch-up."""
+
+    __slots__ = ("_count", "_origin", "_period", "due")
+
+    def __init__(self) -> None:
+        #: when the event is next due, or None while it does not run
+        self.due: float | None = None
+        self._origin = 0.0
+        self._period = 0
+        self._count = 0
+
+    def start(self, now: float, period: int) -> None:
+        """Run every ``period`` ticks from ``now`` (first at ``now`` + period); 0 stops it."""
+        if period <= 0:
+            self.stop()
+            return
+        self._origin, self._period, self._count = now, period, period
+        self.due = at(now, period)
+
+    def stop(self) -> None:
+        self.due = None
+
+    def fire(self, now: float) -> bool:
+        """True when the event is due by ``now``; it is then due next strictly after ``now``."""
+        due = self.due
+        if due is None or now < due:
+            return False
+        self._count += self._period
+        following = at(self._origin, self._count)
+        if following <= now:  # late: start again from now
+            self._origin, self._count = now, self._period
+            following = at(now, self._period)
+        self.due = following
+        return True
+
+
+def milliseconds(count: int) -> int:
+    """Ticks in ``count`` whole milliseconds (the unit of the CANopen period objects)."""
+    return count * TICKS_PER_S // 1000
