@@ -27,7 +27,7 @@ from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, compose_id
 from blinkcan.protocol.sdo import EXPEDITED_DOWNLOAD_COMMAND
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.registry import build_twin
-from blinkcan.twin.schedule import Periodic, at
+from blinkcan.twin.schedule import Ticker, at
 
 #: the stored settings that start, stop or time something (written most often)
 TIMING = ("producer_heartbeat_time", "tpdo1_event_timer", "tpdo2_event_timer",
@@ -197,8 +197,8 @@ def test_a_power_cycle_at_any_tenth_of_a_second_ends_its_show(
 def test_periodic_deadlines_are_whole_ticks_from_their_origin() -> None:
     """No float sums: the 1000th period of 0.1 s from 2.1 s is 2.1 + 100 s, not a drifted sum,
     and a deadline below the clock's resolution still moves time."""
-    timer = Periodic()
-    timer.start(2.1, 100)
+    timer = Ticker()
+    timer.run(2.1, 100)
     for _ in range(1000):
         assert timer.due is not None
         assert timer.fire(timer.due)

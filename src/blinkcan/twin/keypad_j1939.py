@@ -68,7 +68,7 @@ from blinkcan.twin.keypad_display import (
     fill,
     render_key,
 )
-from blinkcan.twin.schedule import Periodic, ticks
+from blinkcan.twin.schedule import Ticker, ticks
 
 _KEYS = FACE.keys  # the PKP-2600-SI's keys (its J1939 mode, pkp-2600-si-j1939.md)
 _KEY_BITS = (1 << _KEYS) - 1
@@ -105,9 +105,9 @@ class J1939Keypad:
         self._nibbles = ([0] * _KEYS, [0] * _KEYS)
         self._live = {"led_brightness": 0, "backlight_level": 0}
         self._claimer: AddressClaimer | None = None
-        self._heartbeat_timer = Periodic()  # §18
+        self._heartbeat_timer = Ticker()  # §18
         self._heartbeat_counter = 0
-        self._periodic_timer = Periodic()  # §17
+        self._periodic_timer = Ticker()  # §17
         self._show: ShowPlayer | None = None
         self._demo: DemoMode | None = None
         self._handlers: dict[int, Callable[[J1939Command, dict[str, int], float], list[Frame]]]
@@ -309,11 +309,11 @@ class J1939Keypad:
 
     def _schedule_heartbeat(self, now: float) -> None:
         on, period = self.settings["heartbeat"], self.settings["heartbeat_period"]
-        self._heartbeat_timer.start(now, period * _UNIT if on and self._powered else 0)
+        self._heartbeat_timer.run(now, period * _UNIT if on and self._powered else 0)
 
     def _schedule_periodic(self, now: float) -> None:
         on, period = self.settings["periodic_key_state"], self.settings["key_message_period"]
-        self._periodic_timer.start(now, period * _UNIT if on and self._powered else 0)
+        self._periodic_timer.run(now, period * _UNIT if on and self._powered else 0)
 
     def advance(self, now: float) -> list[Frame]:
         if not self._powered:

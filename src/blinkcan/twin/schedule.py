@@ -31,40 +31,54 @@ def at(origin: float, count: int) -> float:
 
 
 
-class Periodic:
+class Ticker:
     """A periodic event due at ``origin + k x period`` (k = 1, 2, ...; whole ticks). After a
     stall it starts again from the time it was late at: no drift, and no burst of catch-up."""
 
-    __slots__ = ("_count", "_origin", "_period", "due")
+    __slots__ = ("_count", "_origin", "_ticks", "due")
 
     def __init__(self) -> None:
         #: when the event is next due, or None while it does not run
         self.due: float | None = None
         self._origin = 0.0
-        self._period = 0
+        self._ticks = 0
         self._count = 0
 
-    def start(self, now: float, period: int) -> None:
+    def run(self, now: float, period: int) -> None:
         """Run every ``period`` ticks from ``now`` (first at ``now`` + period); 0 stops it."""
+        self._ticks = period
         if period <= 0:
-            self.stop()
+            self.due = None
             return
-        self._origin, self._period, self._count = now, period, period
+        self._origin, self._count = now, period
         self.due = at(now, period)
 
     def stop(self) -> None:
         self.due = None
+
+    @property
+    def running(self) -> bool:
+        return self.due is not None
+
+    def retime(self, period: int) -> None:
+        """A new period, counted from the time the event is (or was last) due."""
+        if self.due is not None:
+            self._origin, self._count = self.due, 0
+        self._ticks = period
 
     def fire(self, now: float) -> bool:
         """True when the event is due by ``now``; it is then due next strictly after ``now``."""
         due = self.due
         if due is None or now < due:
             return False
-        self._count += self._period
+        if self._ticks <= 0:
+            self.due = None
+            return True
+        self._count += self._ticks
         following = at(self._origin, self._count)
         if following <= now:  # late: start again from now
-            self._origin, self._count = now, self._period
-            following = at(now, self._period)
+            self._origin, self._count = now, self._ticks
+            following = at(now, self._ticks)
         self.due = following
         return True
 
