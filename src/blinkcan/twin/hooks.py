@@ -54,12 +54,11 @@ class Periodic(Ticker):
 
     def start(self, period: float, now: float, running: bool = True) -> None:
         """Run every ``period`` s from ``now`` (a period of 0, or ``running=False``, stops)."""
-        self.run(now, ticks(period) if running else 0)
-        self._ticks = ticks(period)
+        self.run(now, ticks(period), running)
 
     @property
     def period(self) -> float:
-        return self._ticks / TICKS_PER_S
+        return self.period_ticks / TICKS_PER_S
 
     @period.setter
     def period(self, seconds: float) -> None:

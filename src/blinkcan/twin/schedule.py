@@ -44,10 +44,11 @@ class Ticker:
         self._ticks = 0
         self._count = 0
 
-    def run(self, now: float, period: int) -> None:
-        """Run every ``period`` ticks from ``now`` (first at ``now`` + period); 0 stops it."""
+    def run(self, now: float, period: int, running: bool = True) -> None:
+        """Run every ``period`` ticks from ``now`` (first at ``now`` + period); a period of 0,
+        or ``running=False``, stops it (the period is kept)."""
         self._ticks = period
-        if period <= 0:
+        if period <= 0 or not running:
             self.due = None
             return
         self._origin, self._count = now, period
@@ -55,6 +56,10 @@ class Ticker:
 
     def stop(self) -> None:
         self.due = None
+
+    @property
+    def period_ticks(self) -> int:
+        return self._ticks
 
     @property
     def running(self) -> bool:
