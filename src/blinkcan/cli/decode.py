@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import json
 import sys
+from typing import TYPE_CHECKING
 
-import can
 import click
-from rich.console import Console
-from rich.progress import Progress, SpinnerColumn, TextColumn
 
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.decode import Decoder, Event, Kind
@@ -17,6 +15,9 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.logs import LogError, describe_frame, frame_kind, read_log
 from blinkcan.protocol.frame import Frame
+
+if TYPE_CHECKING:  # a candump log decodes without python-can (start-up: issue 22)
+    import can
 
 #: the devices assumed where no --device is given: each at its factory node id
 DEFAULT_DEVICES = ("keypad", "keybox")
@@ -84,6 +85,9 @@ def command(file: str, as_json: bool, devices: tuple[str, ...]) -> None:
     write = out.write
     progress = None
     if not as_json and sys.stderr.isatty():
+        from rich.console import Console  # noqa: PLC0415 (start-up: only on a terminal)
+        from rich.progress import Progress, SpinnerColumn, TextColumn  # noqa: PLC0415
+
         progress = Progress(SpinnerColumn(), TextColumn("{task.completed:,} frames"),
                             console=Console(stderr=True), transient=True)
     try:

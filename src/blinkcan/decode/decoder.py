@@ -14,6 +14,7 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
+from functools import lru_cache
 from typing import Any, NamedTuple
 
 import orjson
@@ -122,24 +123,20 @@ class Event(NamedTuple):
         }
 
 
-def _item_tables(bits: int) -> tuple[tuple[tuple[int, ...], ...], tuple[str, ...]]:
-    """For every mask below 2**bits: its item numbers (bit 0 = item 1) and their listing.
-    Key, LED and pin masks are 12-13 bits, so decoding a mask is one lookup."""
-    items: list[tuple[int, ...]] = [()]
-    for mask in range(1, 1 << bits):
-        items.append(((mask & -mask).bit_length(),) + items[mask & (mask - 1)])
-    return tuple(items), tuple(", ".join(map(str, i)) if i else "none" for i in items)
+#: masks whose item numbers, listing and JSON are kept (key, LED and pin masks are 12-13 bits,
+#: so a log's masks are found again; a bounded cache keeps memory flat on random ones)
+_MASKS_KEPT = 8192
 
 
-_ITEMS, _ITEM_LISTINGS = _item_tables(13)
-_ITEM_JSON = tuple(f"[{','.join(map(str, items))}]" for items in _ITEMS)
-_TABLED = len(_ITEMS)
+@lru_cache(maxsize=_MASKS_KEPT)
+def _items(mask: int) -> tuple[int, ...]:
+    return tuple(item_numbers(mask))
 
 
 def numbers(mask: int, offset: int = 1) -> list[int]:
     """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
-    if offset == 1 and 0 <= mask < _TABLED:
-        return list(_ITEMS[mask])
+    if offset == 1 and mask >= 0:
+        return list(_items(mask))
     return item_numbers(mask, offset)
 
 
@@ -147,14 +144,16 @@ def listing(items: list[int]) -> str:
     return ", ".join(map(str, items)) if items else "none"
 
 
+@lru_cache(maxsize=_MASKS_KEPT)
 def mask_listing(mask: int) -> str:
-    """``listing(numbers(mask))``, one lookup for the usual masks."""
-    return _ITEM_LISTINGS[mask] if 0 <= mask < _TABLED else listing(numbers(mask))
+    """``listing(numbers(mask))``, one lookup for a mask seen before."""
+    return listing(numbers(mask))
 
 
+@lru_cache(maxsize=_MASKS_KEPT)
 def _mask_json(mask: int) -> str:
-    """``numbers(mask)`` as compact JSON, one lookup for the usual masks."""
-    return _ITEM_JSON[mask] if 0 <= mask < _TABLED else _encode_text_list(numbers(mask))
+    """``numbers(mask)`` as compact JSON, one lookup for a mask seen before."""
+    return _encode_text_list(numbers(mask))
 
 
 def _encode_text_list(items: list[int]) -> str:

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import io
 from collections.abc import Iterator
-from typing import TextIO
-
-import can
-from can.io.canutils import CanutilsLogReader
+from typing import TYPE_CHECKING, TextIO
 
 from blinkcan.protocol.frame import Frame
+
+if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
+    import can
 
 _ERROR_FLAG = 0x20000000  # linux/can.h CAN_ERR_FLAG
 _DIRECTIONS = frozenset({"R", "T", "r", "t"})
@@ -31,6 +31,8 @@ _new_tuple = tuple.__new__  # Frame.trusted without the call: the ids and data a
 
 def _python_can(line: str) -> can.Message | None:
     """The message python-can reads from one line (None for a blank line)."""
+    from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
+
     reader = CanutilsLogReader(io.StringIO(line))
     message = next(iter(reader), None)
     return restore_error_details(message, line) if message is not None else None

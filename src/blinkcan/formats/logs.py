@@ -18,25 +18,32 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import BinaryIO
-
-import can
-from can.io.blf import BLFParseError
+from typing import TYPE_CHECKING, BinaryIO
 
 from blinkcan.formats.candump import read_candump, with_error_details
-from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import to_message
+
+if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads without it
+    import can
+
+    from blinkcan.formats.pcap import PcapWriter
 
 
 class LogError(ValueError):
     """A file that cannot be read or written as a CAN log."""
 
 
-#: errors python-can's readers raise on a file that is not what its name says
-_READ_ERRORS = (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError,
-                sqlite3.Error, EOFError, can.CanError, NotImplementedError, ImportError,
-                BLFParseError)
+
+
+def _read_errors() -> tuple[type[BaseException], ...]:
+    """The errors python-can's readers raise on a file that is not what its name says (an
+    ``except`` clause evaluates this only when an error came)."""
+    import can  # noqa: PLC0415
+    from can.io.blf import BLFParseError  # noqa: PLC0415
+
+    return (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError, sqlite3.Error,
+            EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError)
+
 #: kinds of frame a format's python-can writer drops (can/io/trc.py: TRCWriter)
 _CANNOT_CARRY = {".trc": frozenset({"remote", "error", "fd"})}
 
@@ -59,6 +66,10 @@ def _source(path: str | os.PathLike[str]) -> Path:
 
 def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
     """Every frame of a log file as python-can messages: data, remote, error, CAN FD."""
+    import can  # noqa: PLC0415
+
+    from blinkcan.formats.pcap import PcapError, is_pcap, read_pcap_messages  # noqa: PLC0415
+
     source = _source(path)
     if is_pcap(source):
         with source.open("rb") as stream:
@@ -69,7 +80,7 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
         return
     try:
         reader = can.LogReader(str(source))
-    except _READ_ERRORS as error:
+    except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
@@ -78,7 +89,7 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
                     yield from with_error_details(iter(reader), lines)
             else:
                 yield from reader
-        except _READ_ERRORS as error:
+        except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
 
@@ -90,7 +101,7 @@ def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.
         with source.open(encoding="utf-8") as stream:
             try:
                 yield from read_candump(stream)
-            except _READ_ERRORS as error:
+            except _read_errors() as error:
                 raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
         return
     trusted = Frame.trusted  # python-can (or our pcap reader) parsed and checked the frames
@@ -151,6 +162,10 @@ class FrameWriter:
         self.count = 0
         self.skipped: Counter[str] = Counter()
         self.skipped_names: list[str] = []
+        import can  # noqa: PLC0415
+
+        from blinkcan.formats.pcap import PcapWriter, is_pcap  # noqa: PLC0415
+
         try:
             os.chmod(partial, 0o644)  # mkstemp makes 0600; a capture is shared like any file
             if is_pcap(self.path):
@@ -168,6 +183,8 @@ class FrameWriter:
 
     def write(self, timestamp: float, frame: Frame) -> None:
         """Write one data frame."""
+        from blinkcan.runtime.canbus import to_message  # noqa: PLC0415 (decode starts lighter)
+
         self.write_message(to_message(frame, timestamp))
 
     def write_message(self, message: can.Message) -> None:
