@@ -8,8 +8,10 @@ import signal
 import threading
 import time
 
+import can
 import click
 
+from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
 from blinkcan.cli.targets import check_target, writing
 from blinkcan.formats.logs import FrameWriter, LogError, read_messages
@@ -50,27 +52,23 @@ def _raise_stop(signum: int, frame: object) -> None:
 @bus_options
 def record(target: str, duration: float | None, force: bool) -> None:
     """Record a live bus to a file: .pcap for Wireshark, or any python-can log format.
-    Frames are streamed to disk; Ctrl-C or SIGTERM stops and keeps everything so far."""
+    Frames are streamed to disk; Ctrl-C or SIGTERM stops and keeps everything so far. A bus
+    error (e.g. a datagram that is not a frame) is counted and the recording goes on; a bus
+    that keeps failing ends it, and what was recorded is kept."""
     check_target(target, force)
     bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
+    faults = BusFaults()
     previous = {}
     if threading.current_thread() is threading.main_thread():  # signals reach the main thread
         previous = {number: signal.signal(number, _raise_stop)
                     for number in (signal.SIGINT, signal.SIGTERM)}
     try:
-        with writing(target), FrameWriter(target, replace=force) as writer:
+        with writing(target), FrameWriter(target, replace=force, keep=True) as writer:
             click.echo(f"recording {describe_bus(bus_settings())} to {target}; Ctrl-C stops",
                        err=True)
-            flushed = time.monotonic()
             try:
-                while end is None or time.monotonic() < end:
-                    message = bus.recv(0.2)
-                    if message is not None:
-                        writer.write_message(message)
-                    if time.monotonic() - flushed > 1.0:  # at most a second lost on a crash
-                        writer.flush()
-                        flushed = time.monotonic()
+                _record(bus, writer, end, faults)
             except (KeyboardInterrupt, _StopError):
                 pass
             finally:
@@ -85,3 +83,23 @@ def record(target: str, duration: float | None, force: bool) -> None:
     click.echo(f"{writer.count} frames recorded", err=True)
     if (skipped := writer.skipped_text()) is not None:
         click.echo(skipped, err=True)
+    if (errors := faults.summary()) is not None:
+        click.echo(errors, err=True)
+    if faults.given_up():
+        raise click.ClickException(f"{faults.give_up_text()}; the {writer.count} frames "
+                                   f"recorded until then are in {target}")
+
+
+def _record(bus: can.BusABC, writer: FrameWriter, end: float | None,
+            faults: BusFaults) -> None:
+    """Write what the bus says until ``end`` (or for ever), or until it keeps failing."""
+    flushed = time.monotonic()
+    while end is None or time.monotonic() < end:
+        message = receive(bus, 0.2, faults, lambda text: click.echo(text, err=True))
+        if message is not None:
+            writer.write_message(message)
+        elif faults.given_up():
+            return
+        if time.monotonic() - flushed > 1.0:  # at most a second lost on a crash
+            writer.flush()
+            flushed = time.monotonic()

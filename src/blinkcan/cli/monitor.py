@@ -16,6 +16,7 @@ from rich.live import Live
 from rich.table import Table
 from rich.text import Text
 
+from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.decode import assumed_text, other_event, parse_devices
 from blinkcan.cli.render import keybox_panel, keypad_panel
@@ -75,7 +76,8 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
 @bus_options
 def command(devices: tuple[str, ...], log_file: str | None, speed: float,
             duration: float | None, rows: int) -> None:
-    """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops."""
+    """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops. A bus
+    error is counted and the watching goes on; a bus that keeps failing ends it."""
     known = parse_devices(devices)
     if not devices:
         click.echo(assumed_text(known), err=True)
@@ -95,14 +97,17 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
         return
     bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
+    faults = BusFaults()
     try:
         with Live(render(view, log), console=console, auto_refresh=False) as live:
             shown = time.monotonic()
             while end is None or time.monotonic() < end:
-                message = bus.recv(0.05)
+                message = receive(bus, 0.05, faults, live.console.print)
                 if message is not None:
                     frame = to_frame(message)
                     feed(message.timestamp, frame if frame is not None else message)
+                elif faults.given_up():
+                    break
                 if time.monotonic() - shown > 0.1:  # at most ten redraws a second
                     live.update(render(view, log), refresh=True)
                     shown = time.monotonic()
@@ -111,6 +116,10 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
         pass
     finally:
         bus.shutdown()
+    if (errors := faults.summary()) is not None:
+        click.echo(errors, err=True)
+    if faults.given_up():
+        raise click.ClickException(faults.give_up_text())
 
 
 def _replay(log_file: str, speed: float, duration: float | None,

@@ -144,12 +144,15 @@ class FrameWriter:
     exclusively under an unpredictable name, renamed over the target by :meth:`close`; an
     existing file is refused unless ``replace`` is set. ``count`` says how many frames were
     written, ``skipped`` what the format cannot carry (kind -> how many), ``skipped_names`` the
-    first few of them."""
+    first few of them. ``keep``: a failure keeps what was written under ``path`` (a recording:
+    nothing recorded is lost) instead of leaving the target as it was (a conversion)."""
 
     SKIPPED_NAMED = 5
 
-    def __init__(self, path: str | os.PathLike[str], replace: bool = False) -> None:
+    def __init__(self, path: str | os.PathLike[str], replace: bool = False,
+                 keep: bool = False) -> None:
         self.path = Path(path)
+        self.keep = keep
         if self.path.exists() and not replace:
             raise LogError(f"{self.path} exists; pass --force to replace it")
         handle, partial = tempfile.mkstemp(prefix=f".{self.path.name}.",
@@ -237,7 +240,7 @@ class FrameWriter:
 
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
                  trace: TracebackType | None) -> None:
-        if error is None:
+        if error is None or self.keep:
             self.close()
             return
         # the writing failed: leave the target as it was, and no partial file behind

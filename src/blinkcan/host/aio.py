@@ -5,6 +5,10 @@ driver's own opening and properties that may read the device (``await keypad.gen
 run in a worker thread: the event loop never blocks. Events reach the loop through
 ``call_soon_threadsafe``; iterators end when the driver closes. Callbacks given
 to ``on_key`` and the like still run on the bus thread, as with the blocking drivers.
+
+A cancelled call (``asyncio.wait_for``'s timeout) cancels that call only: the driver and its
+other calls go on. What the worker thread was sending still completes (as an SDO timeout's
+write may still have been applied); only the caller stops waiting for it.
 """
 
 from __future__ import annotations
@@ -93,7 +97,9 @@ class _AsyncDevice(Generic[D]):
     async def open(self) -> Any:
         if self._device is None:
             assert self._opening is not None
-            self._device = await self._opening
+            # shared by every call: a caller's cancellation (its timeout) cancels that call's
+            # wait only, never the opening the driver's other calls wait for
+            self._device = await asyncio.shield(self._opening)
         return self
 
     @property

@@ -11,8 +11,10 @@ itself on a ``SimulatedBus`` (``blinkcan.testing.Rig``). SDO replies take a fast
 handed to the waiting caller straight from the reader. An exception in a handler is logged
 with its traceback; the loop goes on.
 
-A bus that fails (unplugged adapter, shut down) is reported once, then read with a back-off
-instead of a busy loop; a shut-down bus stops the reader and fails waiting SDO calls at once.
+The bus is read the way every blinkcan reader reads (``runtime.canbus.BusReader``): a frame
+it cannot decode is counted and dropped, a failing bus (unplugged adapter) is reported once and
+read with a back-off instead of a busy loop, and a shut-down bus stops the reader and fails
+waiting SDO calls at once.
 Frames this program sent are never taken for received ones, also on python-can's
 ``udp_multicast``, which echoes them (``runtime.canbus.OwnFrames``).
 """
@@ -30,7 +32,7 @@ import can
 from blinkcan.host.sdo import SdoChannel, SdoClient
 from blinkcan.protocol.cob import SYNC
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import BusReader, OwnFrames, to_frame, to_message
+from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
 from blinkcan.runtime.scheduler import (
     RealTimeScheduler,
     Scheduler,
@@ -43,7 +45,6 @@ from blinkcan.runtime.simbus import SimulatedBus
 log = logging.getLogger(__name__)
 T = TypeVar("T")
 Handler = Callable[[Frame, float], None]
-_MAX_BACKOFF = 1.0
 
 __all__ = ["Handler", "HostBus", "Timer"]
 
@@ -54,9 +55,6 @@ class _Listener(can.Listener):
 
     def on_message_received(self, msg: can.Message) -> None:
         self.owner._from_reader(msg)
-
-    def on_error(self, exc: Exception) -> None:
-        self.owner._on_bus_error(exc)
 
 
 class HostBus:
@@ -92,10 +90,8 @@ class HostBus:
         self._started = False
         self._users = 0
         self._auto = False
-        self._errors = 0
-        #: the last bus failure (None while the bus works); ``closed`` once it was shut down
-        self.error: Exception | None = None
-        self.closed = False
+        #: what reading the bus met: frames it could not decode, failures, a shut-down
+        self.reading = ReadStats()
 
     # -- sharing ----------------------------------------------------------------------------
 
@@ -121,10 +117,9 @@ class HostBus:
         if isinstance(bus, SimulatedBus):
             found = bus.host
             return found if isinstance(found, HostBus) and found._started else None
-        for notifier in can.Notifier.find_instances(bus):
-            for listener in notifier.listeners:
-                if isinstance(listener, _Listener) and listener.owner._started:
-                    return listener.owner
+        for listener in BusReader.listeners_of(bus):
+            if isinstance(listener, _Listener) and listener.owner._started:
+                return listener.owner
         return None
 
     def release(self) -> None:
@@ -147,7 +142,8 @@ class HostBus:
             bus.host = self
             self._detach = bus.add_frame_listener(self._from_simulation)
             return self
-        self._reader = BusReader(bus, self._listener, self._given_notifier)
+        self._reader = BusReader(bus, self._listener, self._given_notifier,
+                                 stats=self.reading, on_closed=self._bus_closed)
         return self
 
     def stop(self) -> None:
@@ -180,6 +176,16 @@ class HostBus:
     def in_handler(self) -> bool:
         """True inside a handler or timer, where nothing may block."""
         return self.scheduler.in_loop
+
+    @property
+    def closed(self) -> bool:
+        """The bus was shut down: nothing is read from it any more."""
+        return self.reading.closed
+
+    @property
+    def error(self) -> Exception | None:
+        """The last read error while the bus fails (None while it reads)."""
+        return self.reading.error
 
     def clock(self) -> float:
         return self.scheduler.clock()
@@ -254,8 +260,6 @@ class HostBus:
         if frame is None:
             return
         now = self.scheduler.clock()
-        if self._errors:
-            self._recovered()
         if self._own.active and self._own.is_echo(frame, now):
             return
         fast = self._fast.get(frame.can_id)
@@ -276,34 +280,11 @@ class HostBus:
         for handler in list(handlers):
             guarded(handler, frame, now)
 
-    def _on_bus_error(self, error: Exception) -> None:
-        """On the reader thread: report once, then back off (a failing bus must not make the
-        reader spin); a shut-down bus stops the reader."""
-        self._errors += 1
-        self.error = error
-        if getattr(self.bus, "_is_shutdown", False):
-            if not self.closed:
-                self.closed = True
-                log.error("bus %s was shut down; blinkcan stops reading it",
-                          self.bus.channel_info)
-                for channel in self._sdo.values():
-                    channel._signal.set()  # waiting calls return now and see the timeout
-                threading.Thread(target=self._stop_reader, daemon=True).start()
-            time.sleep(0.1)
-            return
-        if self._errors == 1:
-            log.error("reading bus %s failed: %s (retrying with back-off, reported once)",
-                      self.bus.channel_info, error)
-        time.sleep(min(_MAX_BACKOFF, 0.01 * 2 ** min(self._errors, 8)))
-
-    def _recovered(self) -> None:
-        log.warning("bus %s reads again after %d errors", self.bus.channel_info, self._errors)
-        self._errors = 0
-        self.error = None
-
-    def _stop_reader(self) -> None:
-        if self._reader is not None:
-            self._reader.stop()
+    def _bus_closed(self) -> None:
+        """On the reader thread, once the bus was shut down: waiting SDO calls return now
+        (and fail: the bus is closed)."""
+        for channel in list(self._sdo.values()):
+            channel._signal.set()
 
     # -- services -----------------------------------------------------------------------------
 

@@ -3,12 +3,19 @@
 from __future__ import annotations
 
 import collections
+import logging
 import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import can
 
 from blinkcan.protocol.frame import Frame
+
+log = logging.getLogger(__name__)
+_MAX_BACKOFF = 1.0
 
 
 def to_message(frame: Frame, timestamp: float = 0.0) -> can.Message:
@@ -118,15 +125,86 @@ class OwnFrames:
                 pending[key] = count - 1
 
 
+@dataclass
+class ReadStats:
+    """What a :class:`BusReader` met on its bus (updated on the reader thread)."""
+
+    #: frames the bus received but could not decode (dropped; the first one is logged)
+    undecodable: int = 0
+    #: read errors in a row with no frame between: the bus is failing while this is > 0
+    failures: int = 0
+    #: the last read error of a failing bus (None while it reads)
+    error: Exception | None = None
+    #: the bus was shut down: nothing is read from it any more
+    closed: bool = False
+
+
+def is_undecodable(error: Exception) -> bool:
+    """Whether ``error`` says that one received frame could not be decoded while the bus
+    itself works: python-can raises ``CanOperationError`` *from* the decoder's exception
+    (``udp_multicast``: "could not unpack received message", from msgpack, on any datagram
+    that is not a python-can frame), whereas a failing bus raises from an ``OSError`` or with
+    no cause at all."""
+    cause = error.__cause__
+    return (isinstance(error, can.CanError) and cause is not None
+            and not isinstance(cause, OSError))
+
+
+class _Reading(can.Listener):
+    """The listener a :class:`BusReader` puts on the notifier: frames go straight to the
+    reader's listener (no extra call while the bus works), errors to the reader."""
+
+    def __init__(self, reader: BusReader) -> None:
+        self.reader = reader
+        self.listener = reader.listener
+        self.on_message_received = reader.listener.on_message_received  # type: ignore[method-assign]
+
+    def failing(self) -> None:
+        """The next frame ends the failure first."""
+        self.on_message_received = self._first_after_failure  # type: ignore[method-assign]
+
+    def on_message_received(self, msg: can.Message) -> None:
+        """Replaced per instance by :meth:`working` and :meth:`failing`."""
+        self.listener.on_message_received(msg)
+
+    def working(self) -> None:
+        self.on_message_received = self.listener.on_message_received  # type: ignore[method-assign]
+
+    def _first_after_failure(self, msg: can.Message) -> None:
+        self.reader._recovered()
+        self.listener.on_message_received(msg)
+
+    def on_error(self, exc: Exception) -> None:
+        self.reader._on_error(exc)
+
+
 class BusReader:
     """Reads ``bus`` for one listener: joins the notifier that already reads it (``notifier``,
     or the one python-can's ``Notifier.find_instances`` finds: a python-canopen ``Network``'s,
     the application's, another blinkcan part's), else starts one. Never two notifiers on one
-    bus (python-can refuses them)."""
+    bus (python-can refuses them).
+
+    One behaviour on bus errors for every reader in blinkcan (drivers and emulator alike),
+    counted in :attr:`stats`:
+
+    - a frame the bus cannot decode is dropped and counted; the first one is logged (the total
+      again when the reader stops). It never slows the reader: the bus works;
+    - a failing bus (read errors in a row, no frame between) is reported once and read with a
+      back-off (up to 1 s) instead of a busy loop; the next frame ends it (logged);
+    - a shut-down bus is reported once and stops the reader; ``on_closed()`` is called.
+    """
 
     def __init__(self, bus: can.BusABC, listener: can.Listener,
-                 notifier: can.Notifier | None = None) -> None:
+                 notifier: can.Notifier | None = None, *, stats: ReadStats | None = None,
+                 on_closed: Callable[[], object] | None = None) -> None:
+        self.bus = bus
+        #: the bus in log lines (python-can names some buses' channel "unknown")
+        self.name = (bus.channel_info if bus.channel_info != "unknown"
+                     else type(bus).__name__)
         self.listener = listener
+        self.stats = stats if stats is not None else ReadStats()
+        self._on_closed = on_closed
+        self._reading = _Reading(self)
         self._own: can.Notifier | None = None
         for _attempt in range(3):
             if notifier is None:
@@ -135,15 +213,21 @@ class BusReader:
             if notifier is not None:
                 break
             try:
-                self._own = can.Notifier(bus, [listener], timeout=0.1)
+                self._own = can.Notifier(bus, [self._reading], timeout=0.1)
                 break
             except ValueError:  # another thread put a notifier on the bus meanwhile: join it
                 continue
         self._joined = notifier
         if notifier is not None:
-            notifier.add_listener(listener)
+            notifier.add_listener(self._reading)
         elif self._own is None:
             raise RuntimeError(f"could not read {bus.channel_info}: its notifier kept changing")
+
+    @staticmethod
+    def listeners_of(bus: can.BusABC) -> list[can.Listener]:
+        """The listeners blinkcan's readers feed on ``bus``."""
+        return [listener.listener for notifier in can.Notifier.find_instances(bus)
+                for listener in notifier.listeners if isinstance(listener, _Reading)]
 
     def stop(self) -> None:
         """Stop reading: our own notifier stops (from any thread, its own included), a joined
@@ -155,5 +239,46 @@ class BusReader:
             else:
                 own.stop()
         joined, self._joined = self._joined, None
-        if joined is not None and self.listener in joined.listeners:
-            joined.remove_listener(self.listener)
+        if joined is not None and self._reading in joined.listeners:
+            joined.remove_listener(self._reading)
+        if (own is not None or joined is not None) and self.stats.undecodable > 1:
+            log.warning("bus %s: %d frames that could not be decoded were dropped",
+                        self.name, self.stats.undecodable)
+
+    # -- on the reader thread -----------------------------------------------------------------
+
+    def _on_error(self, error: Exception) -> None:
+        stats = self.stats
+        if getattr(self.bus, "_is_shutdown", False):
+            if not stats.closed:
+                stats.closed, stats.error = True, error
+                log.error("bus %s was shut down; blinkcan stops reading it",
+                          self.name)
+                if self._on_closed is not None:
+                    self._on_closed()
+                threading.Thread(target=self.stop, daemon=True).start()
+            time.sleep(0.1)  # until the notifier has stopped: no busy loop
+            return
+        if is_undecodable(error):
+            stats.undecodable += 1
+            if stats.undecodable == 1:
+                log.warning("bus %s received a frame it cannot decode (%s: %s); dropped, as "
+                            "every other one will be (counted, not logged)",
+                            self.name, error, error.__cause__)
+            if stats.failures:
+                self._recovered()  # the bus delivered something: it reads
+            return
+        stats.failures += 1
+        stats.error = error
+        if stats.failures == 1:
+            self._reading.failing()
+            log.error("reading bus %s failed: %s (retrying with back-off, reported once)",
+                      self.name, error)
+        time.sleep(min(_MAX_BACKOFF, 0.01 * 2 ** min(stats.failures, 8)))
+
+    def _recovered(self) -> None:
+        self._reading.working()
+        log.warning("bus %s reads again after %d errors", self.name,
+                    self.stats.failures)
+        self.stats.failures = 0
+        self.stats.error = None

@@ -15,6 +15,9 @@ Rules:
   request that reaches a twin still busy answering the previous one is dropped, as real keypads
   do (errata.md, field reports).
 - An exception in a twin is logged with its traceback and never stops the loop.
+- The bus is read as every blinkcan reader reads it (``runtime.canbus.BusReader``): a frame
+  it cannot decode is counted and dropped, a failing bus is read with a back-off, a shut-down
+  bus stops the reader; each is logged once.
 - Frames the emulator sent never come back to it as received ones, also on python-can's
   ``udp_multicast``, which echoes them (``runtime.canbus.OwnFrames``).
 """
@@ -34,7 +37,7 @@ from typing import Any, TypeVar
 import can
 
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import BusReader, OwnFrames, to_frame, to_message
+from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
 from blinkcan.runtime.scheduler import RealTimeScheduler, Scheduler, Timer
 from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.twin.base import CanopenTwin
@@ -51,6 +54,8 @@ class EmulatorStats:
     frames_received: int = 0
     send_errors: int = 0
     twin_errors: int = 0
+    #: what reading the bus met: frames it could not decode, failures, a shut-down
+    reading: ReadStats = field(default_factory=ReadStats)
     lateness: deque[float] = field(default_factory=lambda: deque(maxlen=200_000))
 
 
@@ -60,9 +65,6 @@ class _Listener(can.Listener):
 
     def on_message_received(self, msg: can.Message) -> None:
         self._emulator._from_reader(msg)
-
-    def on_error(self, exc: Exception) -> None:
-        log.error("bus read failed: %s", exc)
 
 
 class Emulator:
@@ -115,7 +117,8 @@ class Emulator:
         if isinstance(bus, SimulatedBus):
             self._detach = bus.add_frame_listener(self._from_simulation)
         else:
-            self._reader = BusReader(bus, self._listener, self._given_notifier)
+            self._reader = BusReader(bus, self._listener, self._given_notifier,
+                                     stats=self.stats.reading)
         self.run(self._power_on_all)
         return self
 
