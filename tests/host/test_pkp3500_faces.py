@@ -310,3 +310,40 @@ def test_monitor_draws_the_3_by_5_face_and_the_knobs_and_inputs(tmp_path: Path) 
     assert "[ 3 yellow" in result.output
     assert "encoder 1 state: ticks since the last report 1, tick counter 3" in result.output
     assert "analog inputs: in0 5 V, in1 2 V, in2 3 V, in3 1 V" in result.output
+
+
+def test_driver_takes_an_encoder_pdo_as_a_python_canopen_local_node_sends_it() -> None:
+    """A LocalNode configured from our EDS sends 295h with the 4 bytes 1A01h maps (M42); the
+    driver took only 8-byte frames (issue 17 item 10)."""
+    import io
+
+    import canopen
+
+    from blinkcan.runtime.simbus import SimulatedBus
+
+    sent: list[Frame] = []
+    with Rig() as rig:
+        keypad = Keypad(rig.bus, 0x15, model=MT, verify=False, start=False)
+        assert isinstance(keypad, Pkp3500Keypad)
+        events: list[EncoderEvent] = []
+        keypad.on_encoder(events.append)
+        network: Any = canopen.Network(SimulatedBus(rig.network, "local node"))
+        network.connect()
+        try:
+            eds: Any = io.StringIO(eds_text(describe_device(MT)))
+            eds.name = "pkp-3500-mt.eds"  # python-canopen tells the format by the name
+            node: Any = canopen.LocalNode(0x15, eds)
+            network.add_node(node)
+            node.tpdo.read(from_od=True)
+            encoder = node.tpdo[2]
+            record = "Digital input module, keys states"
+            encoder[f"{record}.Encoder 1 direction counter"].raw = 0x81  # 1 tick CCW (M37)
+            encoder[f"{record}.Encoder 1 tick counter"].raw = 0xFFFE
+            encoder[f"{record}.TOP position encoder 1"].raw = 0
+            encoder.transmit()
+            rig.settle()
+            sent = [timed.frame for timed in rig.frames if timed.frame.can_id == 0x295]
+        finally:
+            network.disconnect()
+    assert [len(frame.data) for frame in sent] == [4]
+    assert [(e.encoder, e.ticks, e.counter, e.top) for e in events] == [(1, -1, 0xFFFE, 0)]

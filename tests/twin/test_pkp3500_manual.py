@@ -592,7 +592,7 @@ def test_s32_consumer_heartbeat(started: Bench) -> None:
     ("40 02 1A 02", "43 02 1A 02 10 05 00 20"),
     ("40 02 1A 03", "43 02 1A 03 08 07 00 20"),
     ("40 01 10 00", "80 01 10 00 00 00 02 06"),  # §35: 1001h not implemented (M60)
-    ("40 03 1A 00", "80 03 1A 00 00 00 02 06"),  # M50: no 1A03h
+    ("40 03 1A 00", "4F 03 1A 00 00 00 00 00"),  # M50 as revised: 1A03h maps nothing
 ])
 def test_s34_to_s56_reads(bench: Bench, request_: str, reply: str) -> None:
     read(bench, f"{request_} 00 00 00 00", reply)

@@ -116,11 +116,12 @@ def _tpdo_parameter(index: int, cob_base: int, label: str, type_valid: object = 
 
 
 def _mapping(index: int, label: str, prefix: str, targets: tuple[int, ...]) -> ObjectDef:
-    """1600h-1603h, 1A00h-1A02h as printed (M42, M71), read-only."""
+    """1600h-1603h, 1A00h-1A02h as printed (M42, M71), read-only; no targets: an empty
+    mapping (sub 00h = 0, 1A03h)."""
     return record(index, prefix, label, tuple(
         u32(i, f"{prefix}_entry_{i}", f"PDO mapping entry {i}", Access.RO, target)
         for i, target in enumerate(targets, start=1)
-    ))
+    ), highest=len(targets))
 
 
 def _led_masks(index: int, prefix: str, label: str, what: str) -> ObjectDef:
@@ -202,6 +203,11 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
         _mapping(0x1A02, "TPDO 3 mapping parameter", "tpdo3_mapping", (  # MT §56, M42
             mapping_value(0x2000, 4, 8), mapping_value(0x2000, 5, 16),
             mapping_value(0x2000, 7, 8))),
+        # M50 as revised (issue 17): the manual has no 1A03h and no object holds the 495h
+        # values, but every CANopen master pairs 1803h with 1A03h (python-canopen's
+        # RemoteNode.tpdo.read() reads it and aborts on 0602 0000h): 1A03h/00 reads 0, an
+        # empty mapping; the 495h PDO is decoded from its layout below
+        _mapping(0x1A03, "TPDO 4 mapping parameter", "tpdo4_mapping", ()),
         record(0x2000, "digital_inputs", "Digital input module, keys states", (  # MT §19
             u16(1, "keys_pressed", "Keys pressed", Access.RO, 0, pdo_mappable=True),
             *_encoder_entries(),  # type: ignore[arg-type]
@@ -263,14 +269,16 @@ def _led_pdo(name: str, label: str, cob_base: int) -> PdoLayout:
 
 
 def _encoder_pdo(encoder: int, cob_base: int) -> PdoLayout:
-    """295h/395h (MT §12/§13, M33-M38): direction counter, tick counter LSB first, TOP."""
+    """295h/395h (MT §12/§13, M33-M38): direction counter, tick counter LSB first, TOP. The
+    device sends 8 bytes (M20); 1A01h/1A02h map bytes 0-3 (M42), so a frame of 4 bytes (what a
+    CANopen stack configured from the EDS sends) carries everything and is taken."""
     return PdoLayout(f"encoder_{encoder}", f"Encoder {encoder} state", cob_base, Direction.TX,
                      8, (
                          PdoSignal("direction", "Ticks since the last report", 0, 8,
                                    f"encoder_{encoder}_direction", sign_magnitude=True),
                          PdoSignal("ticks", "Tick counter", 8, 16, f"encoder_{encoder}_ticks"),
                          PdoSignal("top", "TOP position", 24, 8, f"encoder_{encoder}_top"),
-                     ))
+                     ), min_length=4)
 
 
 def _pdos() -> tuple[PdoLayout, ...]:

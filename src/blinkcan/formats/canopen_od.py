@@ -4,10 +4,12 @@ The interop tests load it into a ``RemoteNode``; the EDS writer exports it with 
 Only CiA 306 keys go in: no StorageLocation and no Unit (python-canopen's own keys, which
 CanFestival's objdictgen refuses), and every [DeviceInfo] key CiA 306 lists.
 
-A PDO communication record whose mapping record the device lacks (the PKP-3500-MT's 1803h has
-no 1A03h, MT M50) gets one stated with no mapped objects: EDS readers, python-canopen's
-``RemoteNode`` among them, pair every 14xxh/18xxh with its 16xxh/1Axxh and refuse the file
-otherwise. The device still aborts a read of it; [Comments] says so.
+EDS readers, python-canopen's ``RemoteNode`` among them, pair every 14xxh/18xxh with its
+16xxh/1Axxh, refuse a file without it, and read both from the device (``tpdo.read()``). So a
+model's table has the pair, empty where the PDO's values are in no object (the PKP-3500-MT's
+1A03h reads 0, MT M50 as revised); [Comments] says why. A communication record whose table
+lacks its mapping record still gets one stated empty here (a device that aborts a read of it
+breaks ``tpdo.read()``; [Comments] says so).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import canopen.objectdictionary as cod
 
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import DataType, NodeIdRelative, ObjectEntry, ObjectKind
+from blinkcan.devices.pdo import PdoLayout
 
 
 def _variable(entry: ObjectEntry, name: str, node_id: int, stated: int | None = None) -> Any:
@@ -53,6 +56,24 @@ def missing_mappings(description: DeviceDescription) -> list[int]:
     return [obj.index + 0x200 for obj in table.objects
             if (0x1400 <= obj.index <= 0x15FF or 0x1800 <= obj.index <= 0x19FF)
             and not table.has_index(obj.index + 0x200)]
+
+
+def empty_mappings(description: DeviceDescription) -> list[tuple[int, PdoLayout]]:
+    """Mapping records that map nothing (sub 00h = 0) although the device sends or takes their
+    PDO (the PKP-3500-MT's 1A03h: its analog values are in no object, MT M50), with the PDO."""
+    table = description.table
+    found = []
+    for layout in description.pdos:
+        for obj in table.objects:
+            cob = table.get(obj.index, 1)
+            if not (0x1400 <= obj.index <= 0x15FF or 0x1800 <= obj.index <= 0x19FF) \
+                    or cob is None or not isinstance(cob.default, NodeIdRelative) \
+                    or cob.default.offset != layout.cob_base:
+                continue
+            count = table.get(obj.index + 0x200, 0)
+            if count is not None and count.default == 0:
+                found.append((obj.index + 0x200, layout))
+    return found
 
 
 def _device_information(od: Any, description: DeviceDescription) -> None:

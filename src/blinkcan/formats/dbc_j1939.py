@@ -4,9 +4,20 @@ A J1939 DBC as Vector tools and cantools read it: ``ProtocolType "J1939"``, each
 ``VFrameFormat`` ``J1939PG`` (cantools writes it for ``protocol="j1939"``), 29-bit identifiers
 with the keypad's source address and the controller's. PGN EF00h carries a command byte (byte 2)
 that selects the layout, so both directions are multiplexed messages: one signal set per
-command, named ``<command>_<field>``. The LED acknowledge (§19) shares the keypad's identifier
-but has no command byte, so no DBC multiplexer can tell it apart: it is left out (the decoder
-names it).
+command, named ``<command>_<field>``.
+
+From the keypad, the LED acknowledge (§19, ``00 <state> <LED> <colour> <secondary> FF FF FF``)
+shares the identifier of the key messages (``04 1B <command> ...``) but has no ``04 1B`` header.
+Byte 0 tells the two apart (04h: a header, so a command byte follows; 00h: an acknowledge), so
+that message multiplexes twice (DBC extended multiplexing, ``SG_MUL_VAL_``): ``frame`` (byte 0)
+selects the acknowledge's signals or ``command`` (byte 2), which selects the message's. A tool
+without extended multiplexing still reads ``frame`` and tells them apart.
+
+What a DBC cannot express (said in the messages' comments and the README): a DBC message has one
+29-bit identifier, so frames with another priority, destination (6Eh moves the key messages'),
+sender (a command from another address than the controller's, or to the global address FFh,
+which the keypad also takes, J-2) or keypad address are not in it (export one per address); the
+software revision's 4 ASCII bytes are one integer (a DBC signal has no text type).
 """
 
 from __future__ import annotations
@@ -28,6 +39,7 @@ from blinkcan.devices.keypad_j1939 import (
     COMMANDS,
     DEFAULT_ADDRESS,
     DEFAULT_HOST_ADDRESS,
+    HEADER,
     HEARTBEAT,
     KEY_MESSAGE,
     NIBBLE_BLINK,
@@ -37,20 +49,25 @@ from blinkcan.devices.keypad_j1939 import (
     PRIORITY,
     SOFTWARE_REVISION_REPLY,
     LedState,
+    led_acknowledge,
 )
 from blinkcan.formats.atomic import write_atomically
 from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, NAME_FIELDS, PGN_ADDRESS_CLAIMED, compose_id
 
 _COMMAND_BYTE = 16  # bit position of byte 2
+#: byte 0 of a frame from the keypad: the 04h of the ``04 1B`` header (§4), or the 00h that
+#: starts an LED acknowledge (§19)
+_HEADER_FIRST, _ACKNOWLEDGE_FIRST = HEADER[0], led_acknowledge(0, 0, 0, 0)[0]
 _STATES = {int(state): state.name.lower() for state in LedState}  # §7a
 
 
 def _value(name: str, start: int, length: int, receivers: list[str], comment: str,
-           choices: dict[int, str] | None = None, multiplexer_id: int | None = None) -> Signal:
+           choices: dict[int, str] | None = None, multiplexer_id: int | None = None,
+           multiplexer: str = "command") -> Signal:
     return Signal(name, start, length, byte_order="little_endian", is_signed=False,
                   comment=comment, receivers=receivers,
                   multiplexer_ids=None if multiplexer_id is None else [multiplexer_id],
-                  multiplexer_signal=None if multiplexer_id is None else "command",
+                  multiplexer_signal=None if multiplexer_id is None else multiplexer,
                   conversion=cdb.conversion.NamedSignalConversion(
                       1, 0, OrderedDict(choices), is_float=False) if choices else None)
 
@@ -61,11 +78,37 @@ def _header(receivers: list[str]) -> Signal:
                   receivers=receivers, comment="04 1B (§4): 0x1B04", raw_initial=0x1B04)
 
 
-def _selector(codes: dict[int, str], receivers: list[str]) -> Signal:
+def _selector(codes: dict[int, str], receivers: list[str], within: str | None = None
+              ) -> Signal:
+    """Byte 2, the command; ``within``: itself multiplexed by byte 0 (``frame`` = 04h)."""
     return Signal("command", _COMMAND_BYTE, 8, byte_order="little_endian", is_signed=False,
                   is_multiplexer=True, receivers=receivers, comment="Command byte (§4)",
+                  multiplexer_ids=None if within is None else [_HEADER_FIRST],
+                  multiplexer_signal=within,
                   conversion=cdb.conversion.NamedSignalConversion(
                       1, 0, OrderedDict(codes), is_float=False))
+
+
+def _frame_kind(receivers: list[str]) -> Signal:
+    """Byte 0 of a frame from the keypad: 04h, the header of a message with a command byte;
+    00h, an LED acknowledge (§19), which has none."""
+    return Signal("frame", 0, 8, byte_order="little_endian", is_signed=False,
+                  is_multiplexer=True, receivers=receivers,
+                  comment="04h: 04 1B header, a command byte follows (§4); 00h: LED "
+                          "acknowledge (§19)",
+                  conversion=cdb.conversion.NamedSignalConversion(1, 0, OrderedDict({
+                      _HEADER_FIRST: "message", _ACKNOWLEDGE_FIRST: "led_acknowledge"}),
+                      is_float=False))
+
+
+def _acknowledge(receivers: list[str]) -> list[Signal]:
+    """§19: ``00 <state> <LED number> <primary colour> <secondary colour> FF FF FF``."""
+    fields = (("state", "LED state (§7a codes)", _STATES), ("led", "LED number", None),
+              ("colour", "Primary colour", COLOUR_CODES),
+              ("secondary", "Secondary colour", COLOUR_CODES))
+    return [_value(f"led_acknowledge_{name}", 8 * (offset + 1), 8, receivers,
+                   f"LED acknowledge (§19): {label}", choices, _ACKNOWLEDGE_FIRST, "frame")
+            for offset, (name, label, choices) in enumerate(fields)]
 
 
 def _commands(keypad: str, controller: str, address: int, host: int) -> Message:
@@ -80,16 +123,25 @@ def _commands(keypad: str, controller: str, address: int, host: int) -> Message:
                                   choices, command.code))
     return Message(compose_id(PGN_COMMAND, host, address, PRIORITY),
                    f"{keypad}_COMMAND", 8, signals, senders=[controller], protocol="j1939",
-                   is_extended_frame=True, comment="Commands to the keypad (§4)")
+                   is_extended_frame=True,
+                   comment=f"Commands to the keypad (§4) from address {host:02X}h; from "
+                           "another sender, or to the global address FFh, they have another "
+                           "identifier, not in this DBC")
 
 
 def _messages(keypad: str, controller: str, address: int) -> Message:
-    """From the keypad on PGN EF00h to all: key state, software revision, heartbeat."""
+    """From the keypad on PGN EF00h to all: key state, software revision, heartbeat, and the
+    LED acknowledge, told apart by byte 0 (see the module docstring)."""
     receivers = [controller]
     signals = [
-        _header(receivers),
+        _frame_kind(receivers),
+        Signal("header_1b", 8, 8, byte_order="little_endian", is_signed=False,
+               receivers=receivers, comment="1Bh, byte 1 of the 04 1B header (§4)",
+               multiplexer_ids=[_HEADER_FIRST], multiplexer_signal="frame",
+               raw_initial=HEADER[1]),
         _selector({KEY_MESSAGE: "key", SOFTWARE_REVISION_REPLY: "software_revision",
-                   HEARTBEAT: "heartbeat"}, receivers),
+                   HEARTBEAT: "heartbeat"}, receivers, within="frame"),
+        *_acknowledge(receivers),
         _value("key_number", 24, 8, receivers, "Key (§6)", None, KEY_MESSAGE),
         _value("key_state", 32, 8, receivers, "Key state (§6)", {0: "released", 1: "pressed"},
                KEY_MESSAGE),
@@ -106,7 +158,11 @@ def _messages(keypad: str, controller: str, address: int) -> Message:
     ]
     return Message(compose_id(PGN_COMMAND, address, GLOBAL_ADDRESS, PRIORITY),
                    f"{keypad}_MESSAGE", 8, signals, senders=[keypad], protocol="j1939",
-                   is_extended_frame=True, comment="Messages from the keypad (§6, §11, §18)")
+                   is_extended_frame=True,
+                   comment="Messages from the keypad (§6, §11, §18) and LED acknowledge (§19) "
+                           "to the global address; sent to another destination (6Eh) they "
+                           "have another identifier, not in this DBC. software_revision: 4 "
+                           "ASCII bytes read as one little-endian integer")
 
 
 def _leds(pgn: int, which: int, keypad: str, controller: str, address: int, host: int

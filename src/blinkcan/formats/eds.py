@@ -20,7 +20,7 @@ from canopen.objectdictionary import eds as canopen_eds
 
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.formats.atomic import write_atomically
-from blinkcan.formats.canopen_od import missing_mappings, object_dictionary
+from blinkcan.formats.canopen_od import empty_mappings, missing_mappings, object_dictionary
 from blinkcan.formats.shipped import shipped_eds
 
 _PDO_MAPPING = re.compile(r"^PDOMapping=0x([01])$", re.MULTILINE)
@@ -40,6 +40,12 @@ def _comments(description: DeviceDescription) -> str:
     for index in missing_mappings(description):
         lines.append(f"{index:04X} is not in the device (a read aborts); stated with no mapped"
                      f" objects because EDS readers expect one beside {index - 0x200:04X}.")
+    for index, layout in empty_mappings(description):
+        lines.append(f"{index:04X} maps no object (its sub0 reads 0 from the device too): its "
+                     f"{layout.cob_id(description.default_node_id):03X}h PDO ({layout.length} "
+                     f"bytes, {layout.label}) carries values no object of the dictionary holds; "
+                     "the mapping is there because CANopen masters read one beside "
+                     f"{index - 0x200:04X}. Decode the PDO with the DBC.")
     return "\n".join(lines)
 
 
