@@ -31,7 +31,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("blinkcan.cli.demo:command",
              "A controller on a keypad and a Keybox twin: key N toggles output N, shown live."),
     "decode": ("blinkcan.cli.decode:command", "Decode a log file (any python-can format, or "
-               ".pcap) into what happened."),
+               ".pcap) into what happened; with --parquet, any number of them into a dataset "
+               "for SQL (blinkcan query)."),
     "export": ("blinkcan.cli.export:command", "Write the EDS or DBC file of a device, from the "
                "same tables the twins run on."),
     "convert": ("blinkcan.cli.convert:convert", "Convert a CAN log to another format (by file "
@@ -47,6 +48,10 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "keybox": ("blinkcan.cli.control:keybox", "One-shot control of a Keybox."),
     "nmt": ("blinkcan.cli.nmt:command",
             "NMT commands (CiA 301) to a node, or to all of them with NODE = all."),
+    "query": ("blinkcan.cli.query:command", "Run SQL on the dataset `blinkcan decode --parquet "
+              "OUT` wrote: its rows are the table `events` (columns: time, source, channel, "
+              "can_id, extended, node, kind, key, pin, state, colour, value, text, data, model, "
+              "date)."),
 }
 
 
