@@ -52,3 +52,21 @@ def test_the_listing_says_what_each_subcommand_says_of_itself(name: str) -> None
     for limit in (30, 45, 74, 200):
         assert listed.get_short_help_str(limit) == command.get_short_help_str(limit)
     assert cli.get_command(click.Context(cli), name) is command
+
+
+@pytest.mark.parametrize("as_json", [False, True])
+def test_lines_decoded_before_a_broken_line_are_written(tmp_path: Path, as_json: bool) -> None:
+    """Lines are written in batches (issue 22): those decoded before an error still come out,
+    before the error's one line."""
+    from click.testing import CliRunner
+
+    log = tmp_path / "broken.log"
+    log.write_text("(1700000000.000000) can0 715#05\n(1700000000.000100) can0 70C#7F\n"
+                   "(1700000000.000200) can0 123#XYZW!\n")
+    result = CliRunner().invoke(cli, ["decode", *(["--json"] if as_json else []), str(log)])
+    assert result.exit_code == 1
+    assert result.stderr.splitlines()[-1].startswith("Error: ")
+    decoded = result.stdout.splitlines()
+    assert len(decoded) == 2
+    assert ("715" in decoded[0] and "70C" in decoded[1]) if not as_json else \
+        [json.loads(line)["id"] for line in decoded] == [0x715, 0x70C]

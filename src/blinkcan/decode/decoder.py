@@ -51,7 +51,7 @@ _JSON_CACHE_SIZE = 16_384
 #: a route's JSON stops being cached when, after this many misses, under 1 in 4 lookups hit
 _CACHE_TRIAL = 512
 #: 29-bit identifiers of other ECUs kept (then they start over): a J1939 bus has a few hundred
-_FOREIGN_KEPT = 1024
+_FOREIGN_KEPT = 512
 #: routes kept: every 11-bit identifier, and 29-bit ones the J1939 keypad may use up to this
 _ROUTES_KEPT = 2048 + 256
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
@@ -95,7 +95,8 @@ class Kind(str, Enum):
 _NO_FIELDS: dict[str, Any] = {}  # shared, never written
 #: what a frame that means nothing costs: its event's (text, node, device) and its JSON line
 #: before and after the data (Decoder._keep_raw)
-_Raw = tuple[tuple[str, "int | None", "str | None"], str, str]
+_Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str]
+_new_tuple = tuple.__new__
 
 
 class Event(NamedTuple):
@@ -215,8 +216,8 @@ class Decoder:
         #: 11-bit identifiers no device's frame uses (other ECUs): their event's (text, node,
         #: device) and their JSON line before and after the data; a lookup is all they cost
         self._raw_standard: dict[int, _Raw] = {}
-        #: 29-bit identifiers of PGNs the keypad never uses (other ECUs'), likewise
-        self._foreign: set[int] = set()
+        #: 29-bit identifiers of PGNs the keypad never uses (other ECUs'), with their text
+        self._foreign: dict[int, str] = {}
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
@@ -224,12 +225,14 @@ class Decoder:
     def decode(self, frame: Frame, time: float = 0.0) -> Event:
         """The event one frame makes (every frame makes one)."""
         if frame[2]:  # another ECU's frame is a lookup (a frame is a tuple underneath)
-            if frame[0] in self._foreign:
-                return Event(time, frame, Kind.FRAME, f"extended frame {frame[0]:08X}h")
+            text = self._foreign.get(frame[0])
+            if text is not None:  # the Event built as a tuple: its fields are all given
+                return _new_tuple(Event, (time, frame, Kind.FRAME, text, None, None,
+                                          _NO_FIELDS))
         else:
             raw = self._raw_standard.get(frame[0])
             if raw is not None:
-                return Event(time, frame, Kind.FRAME, *raw[0])
+                return _new_tuple(Event, (time, frame, Kind.FRAME, *raw[0]))
         route = self._routes.get((frame.can_id, frame.extended))
         if route is None:
             route = self._route(frame)
@@ -248,10 +251,10 @@ class Decoder:
         """
         can_id, data, extended = frame
         if extended:  # another ECU's frame: a lookup, and to_json's line written directly
-            if can_id in self._foreign:
+            text = self._foreign.get(can_id)
+            if text is not None:  # the text has no character JSON escapes
                 return (f'{{"time":{time!r},"id":{can_id},"extended":true,"data":"{data.hex()}",'
-                        f'"kind":"frame","node":null,"device":null,'
-                        f'"text":"extended frame {can_id:08X}h"}}')
+                        f'"kind":"frame","node":null,"device":null,"text":"{text}"}}')
             event = self.decode(frame, time)  # J1939: never cached (its meaning has state)
             return _encode(event.to_json())
         else:
@@ -350,7 +353,7 @@ class Decoder:
         line = _encode({**event.to_json(), "time": 0, "data": ""})
         head, _, tail = line.partition(',"data":""')
         self._raw_standard[event.frame.can_id] = (
-            (event.text, event.node_id, event.device),
+            (event.text, event.node_id, event.device, _NO_FIELDS),
             head[len('{"time":0'):] + ',"data":"', '"' + tail)
 
     def _forget_routes(self, node: int) -> None:
@@ -406,7 +409,7 @@ class Decoder:
             if not self.j1939.concerns(frame.can_id):  # never the keypad's: skip it by id
                 if len(self._foreign) >= _FOREIGN_KEPT:
                     self._foreign.clear()
-                self._foreign.add(frame.can_id)
+                self._foreign[frame.can_id] = event.text
             return event
         return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
                      "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})

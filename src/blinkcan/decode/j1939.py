@@ -106,11 +106,17 @@ KEYPAD_PGNS = frozenset({PGN_ADDRESS_CLAIMED, PGN_REQUEST, PGN_LEDS_COLOUR_1, PG
                          PGN_COMMAND})
 
 
+#: command meanings kept (then they start over): a few hundred kilobytes at most
+_COMMANDS_KEPT = 1024
+
+
 class J1939KeypadDecoder:
     """Decodes PKP-2600-SI J1939 frames; remembers which addresses are keypads."""
 
     def __init__(self, addresses: Iterable[int] = (DEFAULT_ADDRESS,)) -> None:
         self.addresses = set(addresses)
+        #: commands' meanings by (destination, bytes): their fields hold numbers only
+        self._commands: dict[tuple[int, bytes], J1939Meaning] = {}
 
     @staticmethod
     def concerns(can_id: int) -> bool:
@@ -194,6 +200,21 @@ class J1939KeypadDecoder:
     # -- to the keypad ------------------------------------------------------------------------
 
     def _command(self, destination: int, data: bytes) -> J1939Meaning:
+        """A command's meaning: the same bytes to the same address mean the same (commands
+        repeat: LED states sent again and again), so meanings are kept, up to a bound."""
+        key = (destination, data)
+        meaning = self._commands.get(key)
+        if meaning is None:
+            meaning = self._describe_command(destination, data)
+            if len(self._commands) >= _COMMANDS_KEPT:
+                self._commands.clear()
+            self._commands[key] = meaning
+        fields = meaning.fields
+        if fields["command"] == "source_address" and fields["address"] != 0xFF:
+            self.addresses.add(fields["address"])  # §16: the keypad answers there from now
+        return meaning
+
+    def _describe_command(self, destination: int, data: bytes) -> J1939Meaning:
         command = COMMANDS_BY_CODE.get(data[2]) if len(data) > 2 else None
         fields = command.decode(data) if command is not None else None
         if command is None or fields is None:
@@ -213,8 +234,6 @@ class J1939KeypadDecoder:
                 f"{command.label.lower()}: {values}"
             if command.persistence is Persistence.TEMPORARY:
                 text += " until power-off"
-        if command.name == "source_address" and fields["address"] != 0xFF:
-            self.addresses.add(fields["address"])
         return J1939Meaning(text, destination, True, {"command": command.name, **fields})
 
     def _multiple_leds(self, pgn: int, destination: int, data: bytes) -> J1939Meaning:
