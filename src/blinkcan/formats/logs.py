@@ -1,12 +1,15 @@
 """Frames from and to files: every log format python-can reads and writes (ASC, BLF, candump,
 TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type.
 
-Lossless: remote (RTR) and error frames are read and written like data frames. Where a target
-format cannot carry a kind of frame (python-can's TRC writer drops remote, error and CAN FD
-frames), :class:`FrameWriter` counts and names what it did not write instead of losing it
-silently. A conversion goes to a temporary file beside the target, created exclusively under
-an unpredictable name, renamed over the target when complete; a recording is written under its
-own name as it goes, valid up to its last flush (:class:`FrameWriter`).
+Lossless: remote (RTR), error and CAN FD frames are read and written like data frames, each
+whole (formats/log_writers.py mends python-can's writers where they change one; reading mends
+what its readers misread: :func:`_as_written`). Where a target format cannot carry a kind of
+frame (python-can's TRC writer drops remote, error and CAN FD frames) or a part of one (.csv:
+the channel, the CAN FD flags), :class:`FrameWriter` counts and names what it did not write
+(formats/carried.py) instead of losing it silently. A conversion goes to a temporary file
+beside the target, created exclusively under an unpredictable name, renamed over the target
+when complete; a recording is written under its own name as it goes, valid up to its last
+flush (:class:`FrameWriter`).
 """
 
 from __future__ import annotations
@@ -48,13 +51,11 @@ def _read_errors() -> tuple[type[BaseException], ...]:
             EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError)
 
 
-def _is_pcap(path: Path) -> bool:
-    """formats/pcap.py's ``is_pcap``, python-can loaded with it."""
+def is_pcap(path: Path) -> bool:
+    """formats/pcap.py's ``is_pcap`` (python-can loads with it: where a file needs it)."""
     from blinkcan.formats import pcap  # noqa: PLC0415
 
     return pcap.is_pcap(path)
-#: kinds of frame a format's python-can writer drops (can/io/trc.py: TRCWriter)
-_CANNOT_CARRY = {".trc": frozenset({"remote", "error", "fd"})}
 
 
 def frame_kind(message: can.Message) -> str:
@@ -80,26 +81,42 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
     from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
 
     source = _source(path)
-    if _is_pcap(source):
+    if is_pcap(source):
         with source.open("rb") as stream:
             try:
                 yield from read_pcap_messages(stream)
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
+    suffix = source.suffix.lower()
+    # an ASC file's times count from its start date: absolute, as every other format's
+    options = {"relative_timestamp": False} if suffix == ".asc" else {}
     try:
-        reader = can.LogReader(str(source))
+        reader = can.LogReader(str(source), **options)
     except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
-            if source.suffix.lower() == ".log":
+            if suffix == ".log":
                 with source.open(encoding="utf-8") as lines:
                     yield from with_error_details(iter(reader), lines)
             else:
-                yield from reader
+                for message in reader:
+                    yield _as_written(message, suffix)
         except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _as_written(message: can.Message, suffix: str) -> can.Message:
+    """The frame the file holds, where python-can's reader reads it otherwise."""
+    if len(message.data) > 8:  # .csv, .db: no FD flag, but only CAN FD carries over 8 bytes
+        message.is_fd = True
+    if message.is_fd and message.is_remote_frame:  # .asc: a 0-byte CAN FD frame reads as
+        message.is_remote_frame = False  # remote; CAN FD has no remote frames (ISO 11898-1)
+        message.dlc = 0
+    if suffix == ".trc" and isinstance(message.channel, int):  # TRC numbers buses from 1:
+        message.channel -= 1  # python-can's writer adds 1, its reader takes it as it is
+    return message
 
 
 def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.Message]]:
@@ -152,13 +169,13 @@ RECORDABLE = (".pcap", ".cap", ".log", ".asc", ".blf", ".csv", ".trc", ".db")
 
 
 def _writer_class(suffix: str) -> type[can.io.generic.MessageWriter]:
-    from can.io.logger import MESSAGE_WRITERS  # noqa: PLC0415
+    from blinkcan.formats.log_writers import WRITERS  # noqa: PLC0415
 
     try:
-        return MESSAGE_WRITERS[suffix]
+        return WRITERS[suffix]  # type: ignore[no-any-return]
     except KeyError:
         raise LogError(f"no write support for {suffix or 'a file without a suffix'} "
-                       f"(pcap, or {' '.join(sorted(MESSAGE_WRITERS))})") from None
+                       f"(pcap, or {' '.join(sorted(WRITERS))})") from None
 
 
 def _check_target(path: Path, replace: bool, live: bool) -> None:
@@ -169,7 +186,7 @@ def _check_target(path: Path, replace: bool, live: bool) -> None:
                "nothing" if suffix == ".mf4" else "not a capture format")
         raise LogError(f"cannot record to {path.name}: {why}; record to one of "
                        f"{' '.join(RECORDABLE)} and convert it")
-    if not _is_pcap(path):
+    if not is_pcap(path):
         _writer_class(suffix)
     if (path.is_symlink() or path.exists()) and not replace:
         raise LogError(f"{path} exists; pass --force to replace it")
@@ -199,13 +216,16 @@ class FrameWriter:
         self.live = live
         suffix = self.path.suffix.lower()
         _check_target(self.path, replace, live)
-        from blinkcan.runtime.canbus import to_message  # noqa: PLC0415 (decode starts lighter)
+        from blinkcan.formats.carried import CARRIES, Losses  # noqa: PLC0415
+        from blinkcan.runtime.canbus import to_message  # noqa: PLC0415
 
         self._to_message = to_message
         self._pcap: PcapWriter | None = None
         self._file: WholeRecords | None = None
         self._logger: can.io.generic.MessageWriter | None = None
-        self._cannot = _CANNOT_CARRY.get(suffix, frozenset())
+        carries = CARRIES.get(suffix)
+        self._cannot = carries.dropped if carries is not None else frozenset()
+        self.losses = Losses(suffix)
         self._unflushed = 0
         self.count = 0
         self.skipped: Counter[str] = Counter()
@@ -236,7 +256,7 @@ class FrameWriter:
 
     def _open(self, handle: int, suffix: str) -> None:
         """The format's writer on the open file ``handle``."""
-        if _is_pcap(self.path):
+        if is_pcap(self.path):
             from blinkcan.formats.pcap import PcapWriter  # noqa: PLC0415
 
             self._file = WholeRecords(handle, str(self.path))
@@ -273,6 +293,7 @@ class FrameWriter:
                 self.skipped_names.append(describe_frame(message))
             return
         self.count += 1
+        self.losses.count(message, describe_frame)
         if self._pcap is not None:
             self._pcap.write(message)
         else:
@@ -287,11 +308,11 @@ class FrameWriter:
         this keeps every frame written before it. BLF's frames wait in a container python-can
         compresses when full: a recording closes the container and rewrites the file's header
         (its start time and counts) at each flush."""
-        from can.io.blf import BLFWriter  # noqa: PLC0415
-
         self._unflushed = 0
         if self._file is None:
             return
+        from can.io.blf import BLFWriter  # noqa: PLC0415
+
         if self.live and isinstance(self._logger, BLFWriter):
             blf = self._logger
             blf._flush()  # python-can's BLFWriter.stop() does these two steps
@@ -312,6 +333,11 @@ class FrameWriter:
         return (f"{total} frame{'s' if total != 1 else ''} {self.path.suffix} cannot carry "
                 f"{'were' if total != 1 else 'was'} not written: {kinds} "
                 f"({', '.join(self.skipped_names)}{more})")
+
+    def lost_lines(self) -> list[str]:
+        """What the written frames lost, one line each ("3 frames lost their channel (can0,
+        can1): .csv has no channel"); empty when the format kept everything."""
+        return self.losses.lines()
 
     def _finish(self) -> None:
         if self._logger is not None:
