@@ -26,15 +26,10 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-
-import can
-from can.io.blf import BLFParseError, BLFWriter
-from can.io.generic import TextIOMessageReader
-from can.io.player import MESSAGE_READERS
+from typing import TYPE_CHECKING
 
 from blinkcan.formats.candump import candump_messages, read_candump
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
-from blinkcan.formats.carried import CARRIES, Losses
 from blinkcan.formats.log_source import (
     LineTooLongError,
     LogError,
@@ -44,18 +39,32 @@ from blinkcan.formats.log_source import (
     open_binary,
     open_text,
 )
-from blinkcan.formats.log_writers import WRITERS
-from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import to_message
+
+if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads without it
+    import can
+
+    from blinkcan.formats.pcap import PcapWriter
 
 __all__ = ["FrameWriter", "LogError", "describe_frame", "frame_kind", "read_frames", "read_log",
            "read_messages"]
 
-#: errors python-can's readers raise on a file that is not what its name says
-_READ_ERRORS = (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError,
-                sqlite3.Error, EOFError, can.CanError, NotImplementedError, ImportError,
-                BLFParseError)
+
+def _read_errors() -> tuple[type[BaseException], ...]:
+    """The errors python-can's readers raise on a file that is not what its name says (an
+    ``except`` clause evaluates this only when an error came)."""
+    import can  # noqa: PLC0415
+    from can.io.blf import BLFParseError  # noqa: PLC0415
+
+    return (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError, sqlite3.Error,
+            EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError)
+
+
+def is_pcap(path: Path) -> bool:
+    """formats/pcap.py's ``is_pcap`` (python-can loads with it: where a file needs it)."""
+    from blinkcan.formats import pcap  # noqa: PLC0415
+
+    return pcap.is_pcap(path)
 
 
 def frame_kind(message: can.Message) -> str:
@@ -74,6 +83,12 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
 
 
 def _messages(source: LogSource) -> Iterator[can.Message]:
+    import can  # noqa: PLC0415
+    from can.io.generic import TextIOMessageReader  # noqa: PLC0415
+    from can.io.player import MESSAGE_READERS  # noqa: PLC0415
+
+    from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
+
     if is_pcap(source.path):
         with open_binary(source) as stream:
             try:
@@ -85,22 +100,24 @@ def _messages(source: LogSource) -> Iterator[can.Message]:
     reader_type = MESSAGE_READERS.get(suffix)
     if source.stream or (reader_type is not None and issubclass(reader_type,
                                                                  TextIOMessageReader)):
-        yield from _text_messages(source)
+        yield from _text_messages(source, MESSAGE_READERS)
         return
     try:
         reader = can.LogReader(str(source.path))
-    except _READ_ERRORS as error:
+    except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
             for message in reader:
                 yield _as_written(message, suffix)
-        except _READ_ERRORS as error:
+        except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
 
-def _text_messages(source: LogSource) -> Iterator[can.Message]:
-    """A text log's messages from python-can's reader of its format, fed bounded lines."""
+def _text_messages(source: LogSource, readers: dict[str, type[can.io.generic.MessageReader]]
+                   ) -> Iterator[can.Message]:
+    """A text log's messages from python-can's reader of its format (``readers``: python-can's
+    by suffix), fed bounded lines."""
     suffix = source.suffix
     with open_text(source, "utf-8" if suffix == ".log" else None) as stream:
         try:
@@ -110,11 +127,11 @@ def _text_messages(source: LogSource) -> Iterator[can.Message]:
             # an ASC file's times count from its start date: absolute, as every other format's
             options = {"relative_timestamp": False} if suffix == ".asc" else {}
             lines = bounded_lines(stream, source.kind)
-            for message in MESSAGE_READERS[suffix](lines, **options):  # type: ignore[arg-type]
+            for message in readers[suffix](lines, **options):  # type: ignore[arg-type]
                 yield _as_written(message, suffix)
         except LineTooLongError as error:
             raise LogError(f"{source}: {error}") from None
-        except _READ_ERRORS as error:
+        except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
 
@@ -140,7 +157,7 @@ def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.
                 yield from read_candump(stream)
             except LineTooLongError as error:
                 raise LogError(f"{source}: {error}") from None
-            except _READ_ERRORS as error:
+            except _read_errors() as error:
                 raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
         return
     trusted = Frame.trusted  # python-can (or our pcap reader) parsed and checked the frames
@@ -182,6 +199,8 @@ RECORDABLE = (".pcap", ".cap", ".log", ".asc", ".blf", ".csv", ".trc", ".db")
 
 
 def _writer_class(suffix: str) -> type[can.io.generic.MessageWriter]:
+    from blinkcan.formats.log_writers import WRITERS  # noqa: PLC0415
+
     try:
         return WRITERS[suffix]  # type: ignore[no-any-return]
     except KeyError:
@@ -227,6 +246,10 @@ class FrameWriter:
         self.live = live
         suffix = self.path.suffix.lower()
         _check_target(self.path, replace, live)
+        from blinkcan.formats.carried import CARRIES, Losses  # noqa: PLC0415
+        from blinkcan.runtime.canbus import to_message  # noqa: PLC0415
+
+        self._to_message = to_message
         self._pcap: PcapWriter | None = None
         self._file: WholeRecords | None = None
         self._logger: can.io.generic.MessageWriter | None = None
@@ -264,6 +287,8 @@ class FrameWriter:
     def _open(self, handle: int, suffix: str) -> None:
         """The format's writer on the open file ``handle``."""
         if is_pcap(self.path):
+            from blinkcan.formats.pcap import PcapWriter  # noqa: PLC0415
+
             self._file = WholeRecords(handle, str(self.path))
             self._pcap = PcapWriter(self._file)  # type: ignore[arg-type]
         elif suffix in (".db", ".mf4"):  # python-can's writer (or asammdf) opens it by name
@@ -286,7 +311,7 @@ class FrameWriter:
 
     def write(self, timestamp: float, frame: Frame) -> None:
         """Write one data frame."""
-        self.write_message(to_message(frame, timestamp))
+        self.write_message(self._to_message(frame, timestamp))
 
     def write_message(self, message: can.Message) -> None:
         """Write any frame (data, remote, error, CAN FD), or count it as skipped where the
@@ -316,6 +341,8 @@ class FrameWriter:
         self._unflushed = 0
         if self._file is None:
             return
+        from can.io.blf import BLFWriter  # noqa: PLC0415
+
         if self.live and isinstance(self._logger, BLFWriter):
             blf = self._logger
             blf._flush()  # python-can's BLFWriter.stop() does these two steps
