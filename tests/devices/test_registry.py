@@ -12,6 +12,7 @@ from blinkcan.devices import registry
 from blinkcan.devices.keypad import PKP_2600_SI, describe_keypad
 from blinkcan.devices.registry import describe_device, identify, model, parse_spec
 from blinkcan.twin import KeyboxTwin, KeypadTwin
+from blinkcan.twin.pkp3500 import Pkp3500Twin
 from blinkcan.twin.registry import build_twin, twin_class
 
 
@@ -103,6 +104,8 @@ def test_keypad_twin_refuses_a_model_that_is_not_a_keypad() -> None:
         KeypadTwin(model="keybox")
     with pytest.raises(ValueError, match="unknown device"):
         KeypadTwin(model="toaster")
+    with pytest.raises(ValueError, match="pkp-2600-si runs on"):
+        Pkp3500Twin(model="pkp-2600-si")  # never half a twin
 
 
 def test_a_keypad_that_behaves_as_the_pkp_2600_si_needs_only_its_description(

@@ -71,7 +71,8 @@ class KeypadTwin(CanopenTwin):
             found = load_class(registered_model(model).twin, CanopenTwin)
             if not issubclass(found, KeypadTwin):
                 raise ValueError(f"{model!r} is not a keypad")
-            target = found
+            if issubclass(found, cls):  # else __init__ says this class does not run it
+                target = found
         return super().__new__(target)
 
     def __init__(
@@ -87,7 +88,9 @@ class KeypadTwin(CanopenTwin):
     ) -> None:
         # the registry describes the model (its first generation unless ``manual`` names one)
         found = registered_model(model or self.MODEL)
-        if load_class(found.twin, CanopenTwin) is not type(self):
+        runs_on = load_class(found.twin, CanopenTwin)
+        own = load_class(registered_model(self.MODEL).twin, CanopenTwin)
+        if not (isinstance(self, runs_on) and issubclass(runs_on, own)):  # a subclass may run it
             raise ValueError(f"{found.name} runs on {found.twin}, not {type(self).__name__}")
         if manual is not None and manual not in found.generations:
             raise ValueError(f"the {found.name} manual must be one of "
