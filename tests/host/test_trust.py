@@ -119,6 +119,7 @@ def test_a_watchdog_trip_restores_outputs_when_asked(sim: Rig) -> None:
     sim.sleep(0.4)  # the device has heard the host: it watches from the first heartbeat
     keybox.stop_host_heartbeat()
     _until(events, "watchdog")
+    keybox.watch_host(0.15)  # restored once the Keybox watches again (issue 17 item 9)
     sim.wait_until(lambda: {p for p, s in keybox.states().items() if s == "high"} == {3, 5})
     assert {p for p, s in keybox.actual.items() if s == "high"} == {3, 5}
 

@@ -179,3 +179,125 @@ def test_a_directory_or_a_missing_directory_is_refused_naming_it(tmp_path: Path)
     with pytest.raises(NvmError, match=r"directory .*nodir does not exist"):
         KeypadTwin(nvm=tmp_path / "nodir" / "x.json")
     assert not (tmp_path / "nodir").exists()
+
+
+# -- issue 18 item 4: a link is the file it names -------------------------------------------
+
+def _emulate_child(nvm: Path) -> subprocess.Popen[str]:
+    """``blinkcan emulate keybox --nvm NVM`` on a bus of its own (virtual: nothing crosses)."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "blinkcan", "emulate", "keybox", "-q", "--nvm", str(nvm),
+         "-i", "virtual", "-c", f"nvm-{os.getpid()}"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "COLUMNS": "300"})
+
+
+def _emulate_refused(nvm: Path) -> str:
+    """The one line a second ``blinkcan emulate --nvm NVM`` prints when it is refused."""
+    second = _emulate_child(nvm)
+    try:
+        output, _ = second.communicate(timeout=60)
+    finally:
+        if second.poll() is None:
+            second.kill()
+            second.communicate()
+    assert second.returncode == 1, output
+    return output
+
+
+@pytest.mark.parametrize("link", ["symbolic", "hard"])
+def test_a_second_emulator_on_a_link_to_a_file_in_use_is_refused(tmp_path: Path,
+                                                                  link: str) -> None:
+    real, alias = tmp_path / "real.json", tmp_path / "link.json"
+    first = _emulate_child(real)
+    try:
+        assert first.stdout is not None
+        assert "emulating" in first.stdout.readline()  # started: it holds real.json
+        if link == "symbolic":
+            alias.symlink_to(real.name)
+        else:
+            os.link(real, alias)
+        output = _emulate_refused(alias)
+    finally:
+        first.terminate()
+        first.communicate(timeout=30)
+    lines = output.strip().splitlines()
+    assert len(lines) == 1, output
+    assert lines[0].startswith("Error: "), output
+    assert str(alias) in output
+    if link == "symbolic":
+        assert f"is in use by another twin (process {first.pid})" in output
+    else:
+        assert "hard link" in output
+
+
+def test_a_twin_on_a_symlink_writes_through_to_its_target(tmp_path: Path) -> None:
+    real, alias = tmp_path / "real.json", tmp_path / "link.json"
+    alias.symlink_to(real.name)  # dangling until the first write: the target is created
+    first = KeyboxTwin(nvm=real)
+    with pytest.raises(NvmError, match=rf"{alias} .*is in use by another twin"):
+        KeyboxTwin(nvm=alias)
+    first.close()
+    bench = Bench(KeyboxTwin(nvm=alias))
+    bench.replay("on\n< 70C 00\n> 60C 2B 17 10 00 DE 00 00 00\n< 58C 60 17 10 00 00 00 00 00")
+    assert alias.is_symlink()
+    assert os.readlink(alias) == real.name
+    assert json.loads(real.read_text())["settings"]["producer_heartbeat_time"] == 0xDE
+    assert _stray_files(tmp_path, "real.json") == ["link.json"]
+    with pytest.raises(NvmError, match="is in use by another twin"):
+        KeyboxTwin(nvm=real)
+    bench.twin.close()
+    assert KeyboxTwin(nvm=real).objects["producer_heartbeat_time"] == 0xDE
+
+
+def test_a_symlinked_file_keeps_its_permissions(tmp_path: Path) -> None:
+    real, alias = tmp_path / "real.json", tmp_path / "link.json"
+    KeyboxTwin(nvm=real).close()
+    real.chmod(0o600)
+    alias.symlink_to(real)
+    bench = Bench(KeyboxTwin(nvm=alias))
+    bench.replay("on\n< 70C 00\n> 60C 2B 17 10 00 DE 00 00 00\n< 58C 60 17 10 00 00 00 00 00")
+    assert real.stat().st_mode & 0o777 == 0o600
+
+
+def test_a_hard_linked_file_is_refused_and_never_split(tmp_path: Path) -> None:
+    real, alias = tmp_path / "real.json", tmp_path / "link.json"
+    bench = Bench(KeyboxTwin(nvm=real))
+    bench.replay("on\n< 70C 00")
+    os.link(real, alias)  # linked while in use: the next write would split the two names
+    stored = real.read_text()
+    bench.replay("> 60C 2B 17 10 00 DE 00 00 00\n< 58C 80 17 10 00 00 00 06 06")
+    assert real.read_text() == stored
+    assert os.path.samefile(real, alias)
+    bench.twin.close()
+    for name in (real, alias):
+        with pytest.raises(NvmError, match=rf"{name} has 2 names \(hard links\)"):
+            KeyboxTwin(nvm=name)
+
+
+# -- issue 18 item 5: a lock file that cannot be written ----------------------------------
+
+def test_a_full_disk_at_open_is_an_nvm_error_naming_the_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = tmp_path / "keypad.json"
+    monkeypatch.setattr(os, "write", _disk_full)
+    with pytest.raises(NvmError, match=rf"{path}.*No space left on device"):
+        KeypadTwin(nvm=path)
+    monkeypatch.undo()
+    KeypadTwin(nvm=path).close()  # the failed opener let go of the lock
+
+
+def test_a_file_size_limit_at_open_is_one_line_naming_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "keybox.json"
+    limited = ("import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, (0, 0)); "
+               "from blinkcan.cli.main import main; sys.argv[0] = 'blinkcan'; main()")
+    result = subprocess.run(
+        [sys.executable, "-c", limited, "emulate", "keybox", "--nvm", str(path),
+         "-i", "virtual", "-c", f"nvm-{os.getpid()}"],
+        capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 1, result
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(f"Error: cannot use NVM file {path}"), lines
+    assert "File too large" in lines[0]

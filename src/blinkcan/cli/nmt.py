@@ -3,7 +3,10 @@ network management commands, to one node or to all (NODE ``all`` or 0).
 
 NMT has no acknowledge; after sending, the command listens for ``--listen`` seconds and prints
 the boot-ups and heartbeats it hears from the node(s), which say what the node did (a node with
-its heartbeat off stays silent, except for the boot-up after a reset).
+its heartbeat off stays silent, except for the boot-up after a reset). Only what a node says
+after the command counts: what the bus received before it is dropped unread, and a frame
+stamped before the command was sent is no answer to it (a heartbeat sent a few ms earlier
+would otherwise report the state the command changed).
 """
 
 from __future__ import annotations
@@ -17,7 +20,11 @@ from blinkcan.cli.bus_options import bus_options, cli_bus, parse_node_id
 from blinkcan.protocol.cob import HEARTBEAT, split_cob_id
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
 from blinkcan.runtime import to_frame, to_message
+from blinkcan.runtime.canbus import is_undecodable
 from blinkcan.twin.base import NMT_STATE_NAMES
+
+#: seconds apart beyond which a frame's timestamp is taken to come from another clock
+_SAME_CLOCK = 3600.0
 
 COMMANDS = {
     "start": (NmtCommand.START, "start"),
@@ -51,21 +58,57 @@ def _nmt_command(name: str, code: NmtCommand, words: str) -> None:
         target = parse_target(node)
         bus = cli_bus()
         try:
-            bus.send(to_message(nmt_frame(code, target)))
+            _drain(bus)
+            sent_at = time.time()
+            bus.send(to_message(nmt_frame(code, target), sent_at))
             who = "every node" if target == 0 else f"node {target:02X}h"
             click.echo(f"sent NMT {words} to {who}")
-            _report(bus, target, listen)
+            _report(bus, target, listen, sent_at)
         finally:
             bus.shutdown()
 
 
-def _report(bus: can.BusABC, target: int, listen: float) -> None:
-    """Print each node's first boot-up or heartbeat heard within ``listen`` seconds."""
+def _drain(bus: can.BusABC, limit: int = 10_000) -> None:
+    """Drop what the bus received before the command (at most ``limit`` frames)."""
+    for _ in range(limit):
+        try:
+            if bus.recv(0) is None:
+                return
+        except can.CanError as error:
+            if not is_undecodable(error):
+                raise
+
+
+def _receive(bus: can.BusABC, timeout: float) -> can.Message | None:
+    """The next frame, or None; a frame the bus cannot decode is none of the nodes' answers."""
+    try:
+        return bus.recv(timeout)
+    except can.CanError as error:
+        if is_undecodable(error):
+            return None
+        raise
+
+
+def _said_after(message: can.Message, sent_at: float) -> bool:
+    """Whether ``message`` was stamped after ``sent_at`` (``time.time()``). Buses stamp frames
+    with the wall clock (python-can's socketcan, virtual, udp_multicast); an adapter that
+    counts from its own start cannot be compared, and the drain before the command orders
+    its frames instead."""
+    if abs(message.timestamp - sent_at) > _SAME_CLOCK:
+        return True
+    return message.timestamp >= sent_at
+
+
+def _report(bus: can.BusABC, target: int, listen: float, sent_at: float) -> None:
+    """Print each node's first boot-up or heartbeat heard within ``listen`` seconds after the
+    command went out at ``sent_at``."""
     heard: dict[int, str] = {}
     end = time.monotonic() + listen
     while (remaining := end - time.monotonic()) > 0:
-        message = bus.recv(min(remaining, 0.1))
-        frame = to_frame(message) if message is not None else None
+        message = _receive(bus, min(remaining, 0.1))
+        if message is None or not _said_after(message, sent_at):
+            continue
+        frame = to_frame(message)
         if frame is None or len(frame.data) != 1 or frame.extended:
             continue
         function, node = split_cob_id(frame.can_id)

@@ -453,7 +453,15 @@ class Device:
         if self._producer is not None:
             self._producer.cancel()
         frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
-        self._producer = self.host.call_every(period, lambda: self.host.send(frame))
+        self._producer = self.host.call_every(period, lambda: self._send_host_heartbeat(frame))
+
+    def _send_host_heartbeat(self, frame: Frame) -> None:
+        self.host.send(frame)
+        self._host_heartbeat_sent()
+
+    def _host_heartbeat_sent(self) -> None:
+        """On the bus thread, after each host heartbeat: the device's consumer, if it watches
+        this host, is armed from now on (KBX §28: monitoring starts at a heartbeat)."""
 
     def stop_host_heartbeat(self) -> None:
         """Stop the host heartbeat (as a crashed application would): the device reacts."""

@@ -78,7 +78,10 @@ class Keybox(Device):
     FAULT mask (None: the fault PDO only). ``start``: send NMT start now, after every boot-up
     and after a watchdog trip (the outputs stay OFF). ``restore_outputs``: after a reboot or a
     watchdog trip, switch back on the pins in :attr:`commanded` at that moment (off by
-    default: a power module should not re-energise loads unasked). ``verify``: confirm that
+    default: a power module should not re-energise loads unasked); when the Keybox watches
+    this host's heartbeat (:meth:`watch_host`), only once it watches again: after the next
+    host heartbeat this driver sends (none while :meth:`stop_host_heartbeat` holds it), as
+    the Keybox re-arms its watchdog only on a heartbeat (KBX §28). ``verify``: confirm that
     a Keybox answers at ``node_id`` first (False only for a device that cannot answer SDO).
     """
 
@@ -97,6 +100,10 @@ class Keybox(Device):
         self._actual = dict.fromkeys(FACE.pin_numbers, "off")
         self._in_pwm: frozenset[int] = frozenset()
         self._poller: Timer | None = None
+        #: the Keybox was told to watch this host's heartbeat (1016h, :meth:`watch_host`)
+        self._watches_host = False
+        #: a restore waits for the next host heartbeat (the Keybox's watchdog re-arms on it)
+        self._restore_when_watched = False
         fault_pdo = self.description.pdo("faults")
         self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
         self._confirm_or_close(verify)
@@ -313,10 +320,25 @@ class Keybox(Device):
         self._outputs_went_off()  # KBX §28 note 2
         self._recover()
 
+    def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
+        super().set_consumer_heartbeat(node_id, period)
+        self._watches_host = node_id == self.host_node_id and period > 0
+
     def _recover(self) -> None:
         if self.auto_start:
             self.start()
-        if self.restore_outputs:
+        if not self.restore_outputs:
+            return
+        if self._watches_host:
+            # KBX §28: after a trip or a reboot the Keybox watches again from the first
+            # heartbeat it hears; outputs switched on before that would stay on unwatched
+            self._restore_when_watched = True
+            return
+        self.host.spawn(self._restore, ("restore outputs", self.node_id))
+
+    def _host_heartbeat_sent(self) -> None:
+        if self._restore_when_watched:
+            self._restore_when_watched = False
             self.host.spawn(self._restore, ("restore outputs", self.node_id))
 
     def _restore(self) -> None:
