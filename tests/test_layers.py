@@ -1,10 +1,11 @@
 """The layer contract of DESIGN.md, checked on the source: which layer may import which.
 
-``cli -> web -> testing -> host · twin · decode · formats -> devices · runtime -> protocol``,
-plus the explicit rules: ``protocol/``, ``devices/`` and ``twin/`` import none of ``can``,
-``threading``, ``asyncio``, ``time``; ``host/``, ``decode/`` and ``formats/`` never import
-``twin/``; the pure core imports without python-can. Every import counts, also the ones inside a
-function. A new subpackage must be placed in ``ALLOWED`` before it can land.
+``cli -> web · fleet -> testing -> host · twin · decode · formats -> devices · runtime ->
+protocol``, plus the explicit rules: ``protocol/``, ``devices/`` and ``twin/`` import none of
+``can``, ``threading``, ``asyncio``, ``time``; ``host/``, ``decode/``, ``formats/`` and
+``fleet/`` never import ``twin/``; the pure core imports without python-can. Every import
+counts, also the ones inside a function. A new subpackage must be placed in ``ALLOWED`` before
+it can land.
 """
 
 from __future__ import annotations
@@ -32,9 +33,12 @@ ALLOWED: dict[str, frozenset[str]] = {
     "host": _BELOW_DRIVERS | {"host"},
     "decode": frozenset({"protocol", "devices", "decode"}),
     "formats": _BELOW_DRIVERS | {"formats"},
+    # fleet/ decodes logs into a dataset: the decoder, the log formats, the descriptions
+    "fleet": _BELOW_DRIVERS | {"decode", "formats", "fleet"},
     "testing": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing"},
     "web": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing", "web"},
-    "cli": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing", "web", "cli"},
+    "cli": _BELOW_DRIVERS | {"twin", "host", "decode", "formats", "testing", "web", "fleet",
+                             "cli"},
     "__main__": frozenset({"cli"}),
     "__init__": frozenset({"protocol", "host"}),  # lazily, on first use (PEP 562)
 }

@@ -1,5 +1,7 @@
 """A recorder keeps everything it recorded whatever ends it: a bus error is counted and the
-recording goes on, a bus that keeps failing ends it with the file kept (issue 18 item 1)."""
+recording goes on, a bus that keeps failing ends it with the file kept (issue 18 item 1); the
+capture is under its own name as it is written, so a killed recorder leaves it there, valid up
+to its last flush (item 2)."""
 
 from __future__ import annotations
 
@@ -159,3 +161,72 @@ def test_a_datagram_that_is_not_a_frame_does_not_end_a_real_recording(tmp_path: 
     assert errors.count("bus error: could not unpack received message") == 1, errors
     assert "1 bus error while reading" in errors
     assert _numbers(target) == list(range(105))
+
+
+@pytest.mark.multiprocess
+def test_a_killed_recorder_leaves_its_capture_under_its_own_name(tmp_path: Path) -> None:
+    """SIGKILL (as the OOM killer sends) during ``record``: each file is under the name asked
+    for, nothing hidden beside it, and holds every frame sent before the recorder's last flush
+    (at least every second)."""
+    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    port = random.randint(40000, 60000)
+    config: dict[str, Any] = {"port": port, "hop_limit": 0}
+    try:
+        host = can.Bus(interface="udp_multicast", channel=channel, receive_own_messages=False,
+                       **config)
+    except (OSError, ImportError, can.CanError) as error:
+        pytest.skip(f"udp_multicast unavailable here ({error})")
+    # one of each way a format is written: binary stream, text (.asc: without its footer),
+    # BLF's compressed containers and header, python-can's SQLite writer thread
+    targets = [tmp_path / f"killed{suffix}" for suffix in (".pcap", ".log", ".asc", ".blf",
+                                                            ".db")]
+    children = [subprocess.Popen(
+        [sys.executable, "-m", "blinkcan", "record", str(target), "-i", "udp_multicast",
+         "-c", channel], stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1", "CAN_CONFIG": json.dumps(config)})
+        for target in targets]
+    try:
+        for child in children:  # each has joined the group when it says so
+            assert child.stderr is not None
+            assert "recording" in child.stderr.readline()
+        for number in range(50):
+            host.send(_frame(number))
+        time.sleep(2.5)  # past a flush, and python-can's SQLite writer's commit
+        for child in children:
+            child.kill()
+            child.wait(timeout=10)
+    finally:
+        for child in children:
+            if child.poll() is None:
+                child.kill()
+            if child.stderr is not None:
+                child.stderr.close()
+        host.shutdown()
+    assert all(child.returncode == -signal.SIGKILL for child in children)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(t.name for t in targets)
+    for target in targets:
+        assert _numbers(target) == list(range(50)), target.name
+
+
+def test_a_recording_never_follows_a_symlink_planted_at_its_name(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    victim = tmp_path / "victim"
+    target = tmp_path / "x.pcap"
+    target.symlink_to(victim)  # dangling: the recording would create the victim through it
+    monkeypatch.setattr(convert, "cli_bus", lambda: ScriptedBus([_frame(0)]))
+    refused = CliRunner().invoke(cli, ["record", str(target)])
+    assert refused.exit_code == 1
+    assert "exists; pass --force" in refused.output
+    assert not victim.exists()
+    forced = CliRunner().invoke(cli, ["record", str(target), "--force"])
+    assert forced.exit_code == 0, forced.output
+    assert not victim.exists()
+    assert not target.is_symlink()
+    assert _numbers(target) == [0]
+
+
+def test_a_recording_that_cannot_survive_a_kill_is_refused(tmp_path: Path) -> None:
+    result = CliRunner().invoke(cli, ["record", str(tmp_path / "x.mf4")])
+    assert result.exit_code == 1
+    assert "cannot record to x.mf4: .mf4 is written only when it is closed" in result.output
+    assert list(tmp_path.iterdir()) == []

@@ -37,6 +37,13 @@ def test_verify_false_drives_a_device_that_cannot_answer_sdo(rig: Rig) -> None:
     assert [f.can_id for f in rig.sniffed()] == [0x000, 0x222, 0x322]  # start, LED PDOs
 
 
+def test_the_generation_property_never_reads_the_device(rig: Rig) -> None:
+    keypad = Keypad(rig.host, node_id=0x22, verify=False, start=False)
+    rig.sniffed()
+    assert keypad.generation is None  # unknown: no SDO read (issue 19)
+    assert rig.sniffed() == []
+
+
 def test_the_right_device_is_accepted(rig: Rig) -> None:
     assert Keypad(rig.host).identity().model_id == "PKP2600SI"
     assert Keybox(rig.host).identity().model_id == "Keybox3"

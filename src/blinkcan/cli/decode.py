@@ -68,15 +68,37 @@ def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:
 
 
 @click.command("decode")
-@click.argument("file", type=click.Path(dir_okay=False))
+@click.argument("files", metavar="FILE...", nargs=-1, required=True, type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line.")
 @click.option("--device", "devices", multiple=True, metavar="NODE=MODEL",
               help="Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=keypad@1.1."
                    " Others are learned from identity traffic.")
-def command(file: str, as_json: bool, devices: tuple[str, ...]) -> None:
-    """Decode a log file (any python-can format, or .pcap) into what happened. Without
+@click.option("--parquet", "parquet", metavar="OUT", default=None,
+              help="Decode the logs (files or folders) into the Parquet dataset OUT (a folder "
+                   "or an fsspec URL): a row per event, by model and date. Needs "
+                   "blinkcan[fleet].")
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
+              help="With --parquet: files decoded at once, on local processes.")
+@click.option("--force", is_flag=True,
+              help="With --parquet: decode again files already decoded by this version.")
+def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
+            parquet: str | None, jobs: int, force: bool) -> None:
+    """Decode a log file (any python-can format, or .pcap) into what happened; with
+    --parquet, any number of them into a dataset for SQL (blinkcan query). Without
     --device the keypad is assumed at 15h and the Keybox at 0Ch."""
     known = parse_devices(devices)
+    if parquet is not None:
+        from blinkcan.cli.parquet import decode_to_parquet  # noqa: PLC0415 (pyarrow: only here)
+
+        if as_json:
+            raise click.UsageError("--json and --parquet are two outputs: choose one")
+        models = {node: spec.partition("=")[2] for spec in devices
+                  for node in [parse_int(spec.partition("=")[0])]}
+        decode_to_parquet(files, parquet, jobs, force, models)
+        return
+    if len(files) != 1 or jobs != 1 or force:
+        raise click.UsageError("several files, -j and --force go with --parquet OUT")
+    file = files[0]
     if not devices:
         click.echo(assumed_text(known), err=True)
     decoder = Decoder(known)

@@ -23,6 +23,7 @@ from blinkcan.cli import (
     export,
     monitor,
     nmt,
+    query,
     scan,
 )
 from blinkcan.cli.bus_options import bus_options, spread_bus_kwargs
@@ -100,6 +101,7 @@ cli.add_command(monitor.command)
 cli.add_command(control.keypad)
 cli.add_command(control.keybox)
 cli.add_command(nmt.command)
+cli.add_command(query.command)
 
 
 def main() -> None:

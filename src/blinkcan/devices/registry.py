@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from functools import cache
 from importlib import import_module
+from typing import TypeVar
 
 from blinkcan.devices.model import DeviceDescription, Model
 
@@ -23,9 +24,29 @@ BUILTIN_MODELS: tuple[str, ...] = (
 )
 
 
-def _load(reference: str) -> Model:
+T = TypeVar("T")
+
+
+def load(reference: str) -> object:
+    """The object a ``"module:attribute"`` reference names, imported on first use: the one
+    loader of the registry (models, their twin and driver classes), as python-can's interface
+    registry. A reference is data, so the registry imports no layer above ``devices/``."""
     module, _, attribute = reference.partition(":")
-    model = getattr(import_module(module), attribute)
+    if not module or not attribute:
+        raise ValueError(f"{reference!r} is no \"module:attribute\" reference")
+    return getattr(import_module(module), attribute)
+
+
+def load_class(reference: str, base: type[T]) -> type[T]:
+    """The class a ``"module:Class"`` reference names; TypeError unless it is a ``base``."""
+    found = load(reference)
+    if not (isinstance(found, type) and issubclass(found, base)):
+        raise TypeError(f"{reference} is not a {base.__name__} class")
+    return found
+
+
+def _load(reference: str) -> Model:
+    model = load(reference)
     if not isinstance(model, Model):
         raise TypeError(f"{reference} is a {type(model).__name__}, not a blinkcan Model")
     return model

@@ -4,12 +4,14 @@ TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link
 Lossless: remote (RTR) and error frames are read and written like data frames. Where a target
 format cannot carry a kind of frame (python-can's TRC writer drops remote, error and CAN FD
 frames), :class:`FrameWriter` counts and names what it did not write instead of losing it
-silently. Writing goes to a temporary file beside the target, created exclusively under an
-unpredictable name, renamed over the target when complete; pcap is streamed to it frame by frame.
+silently. A conversion goes to a temporary file beside the target, created exclusively under
+an unpredictable name, renamed over the target when complete; a recording is written under its
+own name as it goes, valid up to its last flush (:class:`FrameWriter`).
 """
 
 from __future__ import annotations
 
+import io
 import os
 import sqlite3
 import struct
@@ -18,12 +20,13 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import BinaryIO
 
 import can
-from can.io.blf import BLFParseError
+from can.io.blf import BLFParseError, BLFWriter
+from can.io.logger import MESSAGE_WRITERS
 
 from blinkcan.formats.candump import read_candump, with_error_details
+from blinkcan.formats.capture_file import WholeRecords, create_exclusively
 from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_message
@@ -126,48 +129,111 @@ def describe_frame(message: can.Message) -> str:
     return f"{'CAN FD' if kind == 'fd' else kind} frame {ident}"
 
 
+#: formats a recording may be written in: each is valid up to its last flush when the recorder
+#: is killed (MF4 is written only when it is closed, so a killed recorder would leave nothing)
+RECORDABLE = (".pcap", ".cap", ".log", ".asc", ".blf", ".csv", ".trc", ".db")
+
+
+def _writer_class(suffix: str) -> type[can.io.generic.MessageWriter]:
+    try:
+        return MESSAGE_WRITERS[suffix]
+    except KeyError:
+        raise LogError(f"no write support for {suffix or 'a file without a suffix'} "
+                       f"(pcap, or {' '.join(sorted(MESSAGE_WRITERS))})") from None
+
+
+def _check_target(path: Path, replace: bool, live: bool) -> None:
+    """Refuse what cannot be written before anything is created."""
+    suffix = path.suffix.lower()
+    if live and suffix not in RECORDABLE:
+        why = (".mf4 is written only when it is closed, so a killed recorder would leave "
+               "nothing" if suffix == ".mf4" else "not a capture format")
+        raise LogError(f"cannot record to {path.name}: {why}; record to one of "
+                       f"{' '.join(RECORDABLE)} and convert it")
+    if not is_pcap(path):
+        _writer_class(suffix)
+    if (path.is_symlink() or path.exists()) and not replace:
+        raise LogError(f"{path} exists; pass --force to replace it")
+
+
 class FrameWriter:
     """Write frames to ``path`` in the format its name says (.pcap, or python-can's formats).
 
-    Atomic: frames go to a temporary file of the same suffix beside the target, created
-    exclusively under an unpredictable name, renamed over the target by :meth:`close`; an
-    existing file is refused unless ``replace`` is set. ``count`` says how many frames were
-    written, ``skipped`` what the format cannot carry (kind -> how many), ``skipped_names`` the
-    first few of them. ``keep``: a failure keeps what was written under ``path`` (a recording:
-    nothing recorded is lost) instead of leaving the target as it was (a conversion)."""
+    A conversion (the default) is atomic: frames go to a temporary file of the same suffix
+    beside the target, created exclusively under an unpredictable name, renamed over the target
+    by :meth:`close`; a failure leaves the target as it was. A recording (``live``) is written
+    under its own name from the start, as ``tcpdump -w`` does, handed to the disk in whole
+    frames at each :meth:`flush` (and at least every :attr:`FLUSH_EVERY` frames), so a killed
+    recorder leaves a file valid up to its last flush; whatever ends it keeps what it wrote.
+    Either way an existing file (a symlink included, never followed) is refused unless
+    ``replace`` is set. ``count`` says how many frames were written, ``skipped`` what the format
+    cannot carry (kind -> how many), ``skipped_names`` the first few of them."""
 
     SKIPPED_NAMED = 5
+    FLUSH_EVERY = 1000
+    #: a recording's SQLite rows are committed by python-can's writer thread at least this often
+    SQLITE_COMMIT_SECONDS = 1.0
 
     def __init__(self, path: str | os.PathLike[str], replace: bool = False,
-                 keep: bool = False) -> None:
+                 live: bool = False) -> None:
         self.path = Path(path)
-        self.keep = keep
-        if self.path.exists() and not replace:
-            raise LogError(f"{self.path} exists; pass --force to replace it")
-        handle, partial = tempfile.mkstemp(prefix=f".{self.path.name}.",
-                                           suffix=self.path.suffix, dir=self.path.parent or ".")
-        self._partial = Path(partial)
+        self.live = live
+        suffix = self.path.suffix.lower()
+        _check_target(self.path, replace, live)
         self._pcap: PcapWriter | None = None
-        self._stream: BinaryIO | None = None
-        self._logger: can.Listener | None = None
-        self._cannot = _CANNOT_CARRY.get(self.path.suffix.lower(), frozenset())
+        self._file: WholeRecords | None = None
+        self._logger: can.io.generic.MessageWriter | None = None
+        self._cannot = _CANNOT_CARRY.get(suffix, frozenset())
+        self._unflushed = 0
         self.count = 0
         self.skipped: Counter[str] = Counter()
         self.skipped_names: list[str] = []
-        try:
+        if live:
+            try:
+                handle = create_exclusively(self.path, replace)
+            except FileExistsError:
+                raise LogError(f"{self.path} exists; pass --force to replace it") from None
+            self._written = self.path
+        else:
+            handle, partial = tempfile.mkstemp(prefix=f".{self.path.name}.",
+                                               suffix=self.path.suffix,
+                                               dir=self.path.parent or ".")
+            self._written = Path(partial)
             os.chmod(partial, 0o644)  # mkstemp makes 0600; a capture is shared like any file
-            if is_pcap(self.path):
-                self._stream = os.fdopen(handle, "wb")
-                self._pcap = PcapWriter(self._stream)
-            else:
-                os.close(handle)
-                self._logger = can.Logger(str(self._partial))
+        try:
+            self._open(handle, suffix)
+            if live:
+                self.flush()  # the header: a recorder killed before its first frame leaves a
+                # valid, empty capture
         except (ValueError, NotImplementedError, ImportError) as error:
-            self._partial.unlink(missing_ok=True)
+            self._abandon()
             raise LogError(f"{self.path}: {_reason(error)}") from None
         except BaseException:
-            self._partial.unlink(missing_ok=True)
+            self._abandon()
             raise
+
+    def _open(self, handle: int, suffix: str) -> None:
+        """The format's writer on the open file ``handle``."""
+        if is_pcap(self.path):
+            self._file = WholeRecords(handle, str(self.path))
+            self._pcap = PcapWriter(self._file)  # type: ignore[arg-type]
+        elif suffix in (".db", ".mf4"):  # python-can's writer (or asammdf) opens it by name
+            os.close(handle)
+            self._logger = _writer_class(suffix)(self._written)
+            if self.live:  # python-can's SQLite writer commits in its own thread
+                self._logger.MAX_TIME_BETWEEN_WRITES = (  # type: ignore[attr-defined]
+                    self.SQLITE_COMMIT_SECONDS)
+        else:
+            self._file = WholeRecords(handle, str(self.path))
+            stream = self._file if suffix == ".blf" else io.TextIOWrapper(
+                self._file, encoding="utf-8", write_through=True)
+            self._logger = _writer_class(suffix)(stream)  # type: ignore[arg-type]
+
+    def _abandon(self) -> None:
+        """The writer could not be set up: close the file and remove it (nothing was in it)."""
+        if self._file is not None:
+            self._file.close()
+        self._written.unlink(missing_ok=True)
 
     def write(self, timestamp: float, frame: Frame) -> None:
         """Write one data frame."""
@@ -188,11 +254,26 @@ class FrameWriter:
         else:
             assert self._logger is not None
             self._logger.on_message_received(message)
+        self._unflushed += 1
+        if self._unflushed >= self.FLUSH_EVERY:
+            self.flush()
 
     def flush(self) -> None:
-        """Push what was written so far to the file (a recording survives a crash)."""
-        if self._stream is not None:
-            self._stream.flush()
+        """Hand what was written so far to the file in whole frames: a recording killed after
+        this keeps every frame written before it. BLF's frames wait in a container python-can
+        compresses when full: a recording closes the container and rewrites the file's header
+        (its start time and counts) at each flush."""
+        self._unflushed = 0
+        if self._file is None:
+            return
+        if self.live and isinstance(self._logger, BLFWriter):
+            blf = self._logger
+            blf._flush()  # python-can's BLFWriter.stop() does these two steps
+            end = self._file.tell()
+            self._file.seek(0)
+            blf._write_header(end)
+            self._file.seek(end)
+        self._file.flush()
 
     def skipped_text(self) -> str | None:
         """"2 frames .trc cannot carry were not written: 1 remote, 1 error (remote frame
@@ -207,27 +288,26 @@ class FrameWriter:
                 f"({', '.join(self.skipped_names)}{more})")
 
     def _finish(self) -> None:
-        if self._stream is not None:
-            self._stream.flush()
-            os.fsync(self._stream.fileno())
-            self._stream.close()
-        elif self._logger is not None:
-            self._logger.stop()
+        if self._logger is not None:
+            self._logger.stop()  # closes the text wrapper and so the file
+        if self._file is not None:
+            self._file.close()
 
     def close(self) -> None:
         self._finish()
-        os.replace(self._partial, self.path)
+        if not self.live:
+            os.replace(self._written, self.path)
 
     def __enter__(self) -> FrameWriter:
         return self
 
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
                  trace: TracebackType | None) -> None:
-        if error is None or self.keep:
+        if error is None or self.live:  # a recording keeps what it wrote, whatever ended it
             self.close()
             return
-        # the writing failed: leave the target as it was, and no partial file behind
+        # the conversion failed: leave the target as it was, and no partial file behind
         try:
             self._finish()
         finally:
-            self._partial.unlink(missing_ok=True)
+            self._written.unlink(missing_ok=True)

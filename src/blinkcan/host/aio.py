@@ -1,7 +1,7 @@
 """The asyncio face of the drivers: the same names, as coroutines and async iterators.
 
 ``AsyncKeypad(bus, ...)`` takes the arguments of :class:`Keypad`. Blocking calls (SDO), the
-driver's own opening and properties that may read the device (``await keypad.generation``)
+driver's own opening and its properties (``await keypad.generation``)
 run in a worker thread: the event loop never blocks. Events reach the loop through
 ``call_soon_threadsafe``; iterators end when the driver closes. Callbacks given
 to ``on_key`` and the like still run on the bus thread, as with the blocking drivers.

@@ -167,11 +167,12 @@ class Keypad(Device):
     # -- firmware generation --------------------------------------------------------------------
 
     @property
-    def generation(self) -> str:
+    def generation(self) -> str | None:
         """"1.1" or "1.5": given, or found when the driver confirmed the device (the LED
-        objects and the backlight PDO differ). With ``verify=False`` and no generation given,
-        the first use reads the device (see :meth:`detect_generation`)."""
-        return self.detect_generation()
+        objects and the backlight PDO differ). None while unknown (``verify=False`` and no
+        generation given): this property never reads the device; :meth:`detect_generation`
+        does."""
+        return self._generation
 
     def detect_generation(self) -> str:
         """Find the generation by probing 1016h, which only generation 2 has
@@ -392,7 +393,7 @@ class Keypad(Device):
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
         # a rev 1.1-style frame would undo a colour set before; send the colour along.
-        colour = (self._backlight_colour or 0) if self.generation == "1.5" else 0
+        colour = (self._backlight_colour or 0) if self.detect_generation() == "1.5" else 0
         return self._pdo_frame("backlight_brightness", {"level": level, "colour": colour})
 
     def set_default_backlight_colour(self, colour: str) -> None:

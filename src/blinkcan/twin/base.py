@@ -5,8 +5,11 @@ Rule: a twin is a pure state machine. Frames and time (``now``, seconds, monoton
 arguments; the frames the device would send come back as return values. Nothing here sleeps,
 reads a clock or touches a bus. A twin that is powered off, or not addressed, returns ``[]``.
 
-Device twins subclass :class:`CanopenTwin` and add their application behaviour through the
-``_on_*`` hooks; they never reimplement NMT, SDO or heartbeat.
+A model's behaviour plugs in through public hooks registered with the twin (``on_write``,
+``on_rpdo``, ``on_boot``, ``add_timer``, ...; the shapes are in :mod:`blinkcan.twin.hooks`): each
+gets what it acts on and ``now`` and returns the frames the device sends (or an abort code). It
+never reimplements NMT, SDO or heartbeat, and never reads this class's private state. The node id
+in use is held once; the SDO reply COB-ID, the heartbeat frames and the routes follow it.
 
 Non-volatile memory: a stored setting is written to the NVM before the twin acknowledges it.
 When the NVM cannot take it (a file that cannot be written), the SDO write aborts with
@@ -23,7 +26,7 @@ it last stored, and every stored write aborts 0606 0000h until a reset finds the
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from enum import Enum
 from typing import Any
 
@@ -45,6 +48,20 @@ from blinkcan.protocol.nmt import (
 )
 from blinkcan.protocol.sdo_server import SdoServer
 from blinkcan.twin.dictionary import ObjectStore
+from blinkcan.twin.hooks import (
+    Action,
+    BootHook,
+    DeadlineSource,
+    ExtraSettings,
+    FrameHook,
+    Periodic,
+    RpdoHook,
+    SnapshotHook,
+    StateHook,
+    Watcher,
+    WriteHook,
+    next_due,
+)
 from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm, NvmError
 
 _Route = Callable[[Frame, float], list[Frame]]
@@ -66,13 +83,6 @@ def open_nvm(nvm: str | os.PathLike[str] | Nvm | None, description: DeviceDescri
     return nvm
 
 
-def next_due(due: float, period: float, now: float) -> float:
-    """The next time of a periodic event that was due at ``due``: no drift, and no burst of
-    catch-up frames after a stall."""
-    due += period
-    return due if due > now else now + period
-
-
 class ConsumerState(Enum):
     """Heartbeat consumer (KBX §28, PKP rev 1.5 §26): monitoring starts at the first heartbeat."""
 
@@ -90,12 +100,15 @@ class CanopenTwin:
 
     def __init__(self, description: DeviceDescription, node_id: int,
                  nvm: str | os.PathLike[str] | Nvm | None = None,
-                 settings: Mapping[str, Value] | None = None) -> None:
+                 settings: Mapping[str, Value] | None = None,
+                 extra_settings: ExtraSettings | None = None) -> None:
         check_node_id(node_id)
         self.description = description
         self.factory_node_id = node_id
         self._store = ObjectStore(description.table, node_id)
         configured = self._checked_settings(settings or {})
+        #: settings kept in the NVM beside the objects' (saved along with every write)
+        self._extra_settings = extra_settings
         self._nvm = open_nvm(nvm, description)  # a file in use by another twin fails here
         try:
             stored = self._nvm.load()  # a corrupt or foreign file fails here, before anything runs
@@ -112,16 +125,29 @@ class CanopenTwin:
         self._sdo = SdoServer(self._store)
         self._powered = False
         self._nmt = NmtState.BOOT_UP
-        self._node_id = self._store.get_int("node_id")
         self._bitrate_code = self._store.get_int("baud_rate")
-        self._sdo_tx = SDO_TX + self._node_id
+        # registered behaviour (see blinkcan.twin.hooks)
+        self._rpdo_hooks: dict[str, RpdoHook] = {}
+        self._frame_hooks: dict[int, FrameHook] = {}
+        self._boot_hooks: list[BootHook] = []
+        self._power_off_hooks: list[Callable[[], None]] = []
+        self._state_hooks: list[StateHook] = []
+        self._consumer_lost_hooks: list[Callable[[float], None]] = []
+        self._advance_hooks: list[Action] = []
+        self._timers: list[Periodic] = []
+        self._deadline_sources: list[DeadlineSource] = []
+        self._snapshot_hooks: list[SnapshotHook] = []
+        self._extended_hook: FrameHook | None = None
+        self._reply_filter: Callable[[bytes], bytes] | None = None
+        self._watcher: Watcher | None = None
         self._routes: dict[int, _Route] = {}
         self._outbox: list[Frame] = []
-        self._after_reply: list[Callable[[float], list[Frame]]] = []
+        self._after_reply: list[Action] = []
         self._now = 0.0
         self._boot_time = 0.0
         self._heartbeat_next: float | None = None
         self._heartbeat_period = 0.0
+        self._use_node_id(self._store.get_int("node_id"))
         self._store.set_hook("producer_heartbeat_time", self._on_heartbeat_time)
         self._consumer = ConsumerState.OFF
         self._consumer_deadline: float | None = None
@@ -154,8 +180,24 @@ class CanopenTwin:
         self._pdo_allowed = state in PDO_ALLOWED
 
     @property
+    def pdo_allowed(self) -> bool:
+        """Whether the NMT state lets PDOs through (operational, CiA 301 table 84)."""
+        return self._pdo_allowed
+
+    @property
     def powered(self) -> bool:
         return self._powered
+
+    @property
+    def boot_time(self) -> float:
+        """When the device last booted (power-on or reset)."""
+        return self._boot_time
+
+    @property
+    def last_time(self) -> float:
+        """The time of the last input (frame, advance, physical action): what snapshot()
+        describes."""
+        return self._now
 
     @property
     def listening(self) -> Mapping[int, object]:
@@ -193,14 +235,15 @@ class CanopenTwin:
         self._consumer = ConsumerState.OFF
         self._consumer_deadline = None
         self._sdo.reset()
-        self._on_power_off()
+        self._lose_live_state()
 
     def receive(self, frame: Frame, now: float) -> list[Frame]:
         """The frames the device sends in reaction to ``frame`` (often none)."""
         if not self._powered:
             return []
         if frame.extended:
-            return self._on_extended(frame, now)
+            hook = self._extended_hook
+            return [] if hook is None else hook(frame, now)
         route = self._routes.get(frame.can_id)
         if route is None:
             return []
@@ -220,19 +263,33 @@ class CanopenTwin:
         deadline = self._consumer_deadline
         if deadline is not None and now >= deadline:
             frames += self._heartbeat_lost(now)
-        frames += self._on_advance(now)
+        for hook in self._advance_hooks:
+            frames += hook(now)
+        for timer in self._timers:  # Periodic.advance, inlined: the emulator calls this often
+            due = timer.due
+            if due is not None and now >= due:
+                frames += timer.produce(now)
+                timer.due = next_due(due, timer.period, now)
         return frames
 
     def next_deadline(self) -> float | None:
         """When :meth:`advance` next has work, or None."""
+        # the emulator asks after every call: no lists on the way
         if not self._powered:
             return None
-        deadlines = [d for d in self._deadlines() if d is not None]
-        if self._heartbeat_next is not None:
-            deadlines.append(self._heartbeat_next)
-        if self._consumer_deadline is not None:
-            deadlines.append(self._consumer_deadline)
-        return min(deadlines) if deadlines else None
+        best = self._heartbeat_next
+        deadline = self._consumer_deadline
+        if deadline is not None and (best is None or deadline < best):
+            best = deadline
+        for timer in self._timers:
+            deadline = timer.due
+            if deadline is not None and (best is None or deadline < best):
+                best = deadline
+        for source in self._deadline_sources:
+            for deadline in source(self._now):
+                if deadline is not None and (best is None or deadline < best):
+                    best = deadline
+        return best
 
     def is_sdo_request(self, frame: Frame) -> bool:
         """Whether ``frame`` is an SDO request to this device (the emulator's busy rule)."""
@@ -240,6 +297,9 @@ class CanopenTwin:
 
     def snapshot(self) -> dict[str, Any]:
         """JSON-serialisable state for tests, the CLI and the front panel."""
+        extra: dict[str, Any] = {}
+        for hook in self._snapshot_hooks:
+            extra.update(hook(self._now))
         return {
             "model": self.description.model,
             "kind": self.description.kind,
@@ -253,10 +313,158 @@ class CanopenTwin:
             "settings": self._store.stored_values(),
             **({"nvm_error": self._nvm_fault} if self._nvm_fault else {}),
             **self._consumer_snapshot(),
-            **self._snapshot(),
+            **extra,
         }
 
+    # -- registering a model's behaviour (blinkcan.twin.hooks) ----------------------------------
+
+    def on_write(self, name: str, hook: WriteHook, keeps_value: bool = True,
+                 check: Callable[[Any], AbortCode | None] | None = None) -> None:
+        """Run ``hook(value, now)`` on every write of object ``name`` (SDO or RPDO), before the
+        value is stored: it returns the frames to send after the reply, an abort code to refuse
+        the value, or None. With ``keeps_value=False`` the value is a command, not the entry's
+        new value (the hook updates the objects itself). ``check`` refuses a value before
+        anything happens, the NVM write included."""
+
+        def store_hook(value: Any) -> AbortCode | None:
+            result = hook(value, self._now)
+            if result is None:
+                return None
+            if result.__class__ is list:
+                self._outbox += result
+                return None
+            return result  # type: ignore[return-value]
+
+        self._store.set_hook(name, store_hook, keeps_value, check)
+
+    def on_rpdo(self, name: str, hook: RpdoHook) -> None:
+        """Run ``hook(data, now)`` for RPDO ``name`` (a layout of the description) instead of
+        writing its signals into the objects; only while PDOs are allowed and the frame is long
+        enough (errata P14)."""
+        self._rpdo_hooks[name] = hook
+
+    def on_frame(self, can_id: int, hook: FrameHook) -> None:
+        """Act on ``can_id`` too (e.g. SYNC), from the next boot on, while CANopen runs."""
+        self._frame_hooks[can_id] = hook
+
+    def on_extended(self, hook: FrameHook) -> None:
+        """Run ``hook(frame, now)`` for every 29-bit frame while powered (another protocol)."""
+        self._extended_hook = hook
+
+    def on_boot(self, hook: BootHook) -> None:
+        """Run ``hook(now, application)`` at every boot, before the startup state is entered."""
+        self._boot_hooks.append(hook)
+
+    def on_power_off(self, hook: Callable[[], None]) -> None:
+        """Run ``hook()`` when live state is lost (power off, reset node)."""
+        self._power_off_hooks.append(hook)
+
+    def on_state_change(self, hook: StateHook) -> None:
+        """Run ``hook(previous, state, now)`` when the NMT state changes."""
+        self._state_hooks.append(hook)
+
+    def on_consumer_lost(self, hook: Callable[[float], None]) -> None:
+        """Run ``hook(now)`` when the watched heartbeat is lost: what the device switches off."""
+        self._consumer_lost_hooks.append(hook)
+
+    def on_advance(self, hook: Action) -> None:
+        """Run ``hook(now)`` at every :meth:`advance`, after the heartbeat, before the timers."""
+        self._advance_hooks.append(hook)
+
+    def add_timer(self, produce: Action) -> Periodic:
+        """A periodic producer of ``produce(now)``; start and stop it with the returned
+        :class:`~blinkcan.twin.hooks.Periodic`. Every timer stops when the device loses power."""
+        timer = Periodic(produce)
+        self._timers.append(timer)
+        return timer
+
+    def add_deadlines(self, source: DeadlineSource) -> None:
+        """Times besides the timers' at which :meth:`advance` has work (a show's next step)."""
+        self._deadline_sources.append(source)
+
+    def on_snapshot(self, hook: SnapshotHook) -> None:
+        """Entries ``hook(now)`` adds to :meth:`snapshot`."""
+        self._snapshot_hooks.append(hook)
+
+    def filter_sdo_replies(self, rewrite: Callable[[bytes], bytes]) -> None:
+        """Pass every SDO reply through ``rewrite`` (a firmware's own abort codes)."""
+        self._reply_filter = rewrite
+
+    def watch_frames(self, watcher: Watcher | None) -> None:
+        """Show ``watcher(frame, now)`` every routed frame before it is acted on, until
+        ``watch_frames(None)`` or the loss of live state (DEMO mode is left by another
+        command, PKP §24)."""
+        self._watcher = watcher
+        self._routes = self._build_routes()
+
+    # -- what a behaviour may do ----------------------------------------------------------------
+
+    def note_time(self, now: float) -> None:
+        """A physical input (a key, a knob) happened at ``now``."""
+        self._now = now
+
+    def after_reply(self, action: Action) -> None:
+        """Run ``action(now)`` once the present SDO reply is sent (a reboot the reply must
+        precede, errata P10)."""
+        self._after_reply.append(action)
+
+    def use_node_id(self, node_id: int) -> None:
+        """Use ``node_id`` from now on (errata G1): the SDO reply COB-ID, the heartbeat frames
+        and the routes follow it."""
+        self._use_node_id(check_node_id(node_id))
+        self._routes = self._build_routes()
+
+    def reset_node(self, now: float) -> list[Frame]:
+        """Reset node: live state lost, boot as at power-on (CiA 301)."""
+        self._lose_live_state()
+        return self._boot(now, application=True)
+
+    def silence(self) -> None:
+        """CANopen says nothing until the next boot (the device speaks another protocol, J-1):
+        no routes, no heartbeat, no timers, NMT initialising."""
+        self._routes = {}
+        self._nmt = NmtState.BOOT_UP
+        self._heartbeat_next = None
+        for timer in self._timers:
+            timer.stop()
+
+    def stored_settings(self) -> dict[str, Value]:
+        """The settings in the NVM now (what the next boot uses), extras included."""
+        return self._stored_settings() or {}
+
+    def save_settings(self, extras: Mapping[str, Value] | None = None) -> AbortCode | None:
+        """Store the objects' settings (with ``extras`` instead of the registered extra
+        settings, if given); 0606 0000h if the NVM cannot take them."""
+        settings = self._store.stored_values()
+        if extras is None:
+            return self._save_settings(settings)
+        return self._write_nvm({**settings, **extras})
+
+    def restore_factory_settings(self) -> AbortCode | None:
+        """Stored settings back to factory values; they take effect at the next reset, and
+        reads return them already (errata: "a read returns the stored value"). Nothing
+        changes if the NVM cannot take them."""
+        factory = self._factory_settings()
+        refusal = self._save_settings(factory)
+        if refusal is None:
+            for name, value in factory.items():
+                self._store.set(name, value)
+        return refusal
+
     # -- boot and NMT -----------------------------------------------------------------------
+
+    def _use_node_id(self, node_id: int) -> None:
+        """The one place the node id in use is set; what derives from it follows."""
+        self._node_id = node_id
+        self._sdo_tx = SDO_TX + node_id
+        self._heartbeat_frames = {state: heartbeat_frame(node_id, state) for state in NmtState}
+
+    def _lose_live_state(self) -> None:
+        self._watcher = None
+        for timer in self._timers:
+            timer.stop()
+        for hook in self._power_off_hooks:
+            hook()
 
     def _checked_settings(self, settings: Mapping[str, Value]) -> dict[str, Value]:
         """Stored settings a twin is built with (as if configured earlier), by object name;
@@ -283,7 +491,12 @@ class CanopenTwin:
         }
 
     def _save_settings(self, settings: dict[str, Value]) -> AbortCode | None:
-        """Write ``settings`` to the NVM; 0606 0000h if it cannot (see the module docstring)."""
+        """Write ``settings`` (and the extra settings) to the NVM; 0606 0000h if it cannot
+        (see the module docstring)."""
+        extras = self._extra_settings
+        return self._write_nvm(settings if extras is None else {**settings, **extras()})
+
+    def _write_nvm(self, settings: dict[str, Value]) -> AbortCode | None:
         if self._nvm_fault is not None:
             return AbortCode.HARDWARE_ERROR
         try:
@@ -291,9 +504,6 @@ class CanopenTwin:
         except (NvmError, OSError):
             return AbortCode.HARDWARE_ERROR
         return None
-
-    def _persist(self) -> AbortCode | None:
-        return self._save_settings(self._store.stored_values())
 
     def _stored_settings(self) -> dict[str, Value] | None:
         """The stored settings to boot with: the NVM's; if it cannot be read now, the ones
@@ -306,27 +516,13 @@ class CanopenTwin:
         self._nvm_fault = None
         return stored
 
-    def _restore_factory_settings(self) -> AbortCode | None:
-        """Stored settings back to factory values; they take effect at the next reset, and
-        reads return them already (errata: "a read returns the stored value"). Nothing
-        changes if the NVM cannot take them."""
-        factory = self._factory_settings()
-        refusal = self._save_settings(factory)
-        if refusal is None:
-            for name, value in factory.items():
-                self._store.set(name, value)
-        return refusal
-
     def _boot(self, now: float, application: bool) -> list[Frame]:
         """Power-on or reset: CiA 301 initialisation, then the boot-up frame and pre-operational."""
         if application:  # reset node / power-on: node id, bit rate and live values re-applied
             self._store.load(self.factory_node_id, self._stored_settings())
-            self._node_id = self._store.get_int("node_id")
+            self._use_node_id(self._store.get_int("node_id"))
             self._bitrate_code = self._store.get_int("baud_rate")
         self._sdo.reset()
-        self._sdo_tx = SDO_TX + self._node_id
-        self._heartbeat_frames = {state: heartbeat_frame(self._node_id, state)
-                                  for state in NmtState}
         self._routes = self._build_routes()
         self._nmt = NmtState.PRE_OPERATIONAL
         self._boot_time = now
@@ -337,7 +533,8 @@ class CanopenTwin:
         # PKP §25: "the boot-up message is regarded as first heartbeat message"
         self._schedule_heartbeat(self._store.get_int("producer_heartbeat_time"), now)
         self._start_consumer()
-        frames += self._on_boot(now, application)
+        for hook in self._boot_hooks:
+            frames += hook(now, application)
         if self._store.get_int("active_on_startup"):  # PKP §21, KBX §26
             frames += self._enter(NmtState.OPERATIONAL, now)
         return frames
@@ -350,7 +547,12 @@ class CanopenTwin:
             period, node, _ = split_consumer_entry(self._store.get_int("consumer_heartbeat_time"))
             if period:
                 routes[HEARTBEAT + node] = self._on_heartbeat
-        return routes
+        routes.update(self._frame_hooks)
+        watcher = self._watcher
+        if watcher is None:
+            return routes
+        # only while a watcher is set do the routes carry it, so normal traffic pays nothing
+        return {can_id: _watched(watcher, route) for can_id, route in routes.items()}
 
     def _on_nmt(self, frame: Frame, now: float) -> list[Frame]:
         request = parse_nmt(frame, self.description.nmt_aliases)
@@ -358,8 +560,7 @@ class CanopenTwin:
             return []
         next_state, action = TRANSITIONS[self._nmt, request.command]
         if action is NmtAction.RESET_NODE:
-            self._on_power_off()
-            return self._boot(now, application=True)
+            return self.reset_node(now)
         if action is NmtAction.RESET_COMMUNICATION:
             return self._boot(now, application=False)
         return self._enter(next_state, now)
@@ -368,7 +569,10 @@ class CanopenTwin:
         previous, self._nmt = self._nmt, state
         if previous is state:
             return []
-        return self._on_state_change(previous, state, now)
+        frames: list[Frame] = []
+        for hook in self._state_hooks:
+            frames += hook(previous, state, now)
+        return frames
 
     # -- SDO ----------------------------------------------------------------------------------
 
@@ -378,6 +582,8 @@ class CanopenTwin:
         reply = self._sdo.on_request(frame.data)
         if reply is None:
             return []
+        if self._reply_filter is not None:
+            reply = self._reply_filter(reply)
         frames = [_new_tuple(Frame, (self._sdo_tx, reply, False))]  # Frame.trusted, inlined
         if self._outbox:
             frames += self._outbox
@@ -432,7 +638,8 @@ class CanopenTwin:
         # even if the producer comes back
         self._consumer = ConsumerState.LOST
         self._consumer_deadline = None
-        self._on_consumer_lost(now)
+        for hook in self._consumer_lost_hooks:
+            hook(now)
         return self._enter(NmtState.PRE_OPERATIONAL, now)
 
     def _consumer_snapshot(self) -> dict[str, Any]:
@@ -445,22 +652,28 @@ class CanopenTwin:
     def _on_restore(self, value: int) -> AbortCode | None:
         if value != RESTORE_SIGNATURE:  # errata: a wrong signature aborts 0800 0020h
             return AbortCode.CANNOT_TRANSFER
-        return self._restore_factory_settings()  # applied at the next reset (errata K18, G5)
-
-    def _on_consumer_lost(self, now: float) -> None:
-        """What the device switches off when the watched heartbeat is lost."""
+        return self.restore_factory_settings()  # applied at the next reset (errata K18, G5)
 
     # -- PDO ----------------------------------------------------------------------------------
 
     def _rpdo_route(self, layout: PdoLayout) -> _Route:
+        hook = self._rpdo_hooks.get(layout.name)
+        if hook is not None:
+            def hooked(frame: Frame, now: float) -> list[Frame]:
+                if not self._pdo_allowed or len(frame.data) < layout.min_length:
+                    return []
+                return hook(frame.data, now)
+
+            return hooked
+
         def route(frame: Frame, now: float) -> list[Frame]:
             if not self._pdo_allowed or len(frame.data) < layout.min_length:
                 return []
-            return self._on_rpdo(layout, layout.decode(frame.data), now)
+            return self._write_rpdo(layout, layout.decode(frame.data))
 
         return route
 
-    def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
+    def _write_rpdo(self, layout: PdoLayout, signals: dict[str, int]) -> list[Frame]:
         """Write an RPDO's signals into the dictionary as SDO writes would, hooks included.
         A frame with any value out of range is ignored whole (errata P15)."""
         table = self.description.table
@@ -473,25 +686,10 @@ class CanopenTwin:
         frames, self._outbox = self._outbox, []
         return frames
 
-    # -- hooks for device twins -----------------------------------------------------------------
 
-    def _on_boot(self, now: float, application: bool) -> list[Frame]:
-        return []
+def _watched(watcher: Watcher, route: _Route) -> _Route:
+    def watch_then_route(frame: Frame, now: float) -> list[Frame]:
+        watcher(frame, now)
+        return route(frame, now)
 
-    def _on_power_off(self) -> None:
-        """Live application state is lost (power off or reset node)."""
-
-    def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
-        return []
-
-    def _on_advance(self, now: float) -> list[Frame]:
-        return []
-
-    def _deadlines(self) -> Iterable[float | None]:
-        return ()
-
-    def _on_extended(self, frame: Frame, now: float) -> list[Frame]:
-        return []
-
-    def _snapshot(self) -> dict[str, Any]:
-        return {}
+    return watch_then_route

@@ -11,7 +11,7 @@ Where the manual is silent about outputs, the twin is fail-safe (blinkcan decisi
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from blinkcan.devices.keybox import (
@@ -31,7 +31,7 @@ from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState
-from blinkcan.twin.base import CanopenTwin, next_due
+from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
 from blinkcan.twin.nvm import Nvm
 
@@ -67,17 +67,20 @@ class KeyboxTwin(CanopenTwin):
         self._shown_states: list[PinState | None] = [None] * FACE.pins
         self._inputs_changed = True
         self._fault_pdo: PdoLayout = description.pdo("faults")
-        self._fault_cob_id = self._fault_pdo.cob_id(node_id)
-        self._fault_next: float | None = None
-        self._fault_period = 0.0
         self._fault_frame_cache: Frame | None = None
-        store = self._store
+        self._faults = self.add_timer(self._periodic_faults)
         for pin in FACE.pin_numbers:
-            store.set_hook(f"pin_{pin}_state", self._pin_hook(pin), keeps_value=False)
-        store.set_hook("output_off_mask", self._on_off_mask, keeps_value=False)
-        store.set_hook("output_high_mask", self._on_high_mask, keeps_value=False)
-        store.set_hook("pwm", self._on_pwm, keeps_value=False)
-        store.set_hook("fault_period", self._on_fault_period)
+            self.on_write(f"pin_{pin}_state", self._pin_hook(pin), keeps_value=False)
+        self.on_write("output_off_mask", self._on_off_mask, keeps_value=False)
+        self.on_write("output_high_mask", self._on_high_mask, keeps_value=False)
+        self.on_write("pwm", self._on_pwm, keeps_value=False)
+        self.on_write("fault_period", self._on_fault_period)
+        self.on_rpdo("outputs", self._on_outputs_pdo)
+        self.on_boot(self._on_boot)
+        self.on_power_off(self.outputs.power_on)
+        self.on_state_change(self._on_state_change)
+        self.on_consumer_lost(self._on_consumer_lost)
+        self.on_snapshot(self._snapshot)
 
     # -- fault injection and physical side ----------------------------------------------------
 
@@ -102,51 +105,48 @@ class KeyboxTwin(CanopenTwin):
     def _physical(self, action: Any, pin: int, now: float) -> list[Frame]:
         faults = action(pin)
         self._inputs_changed = True  # a fuse changes what the pin reads
-        if not self._powered:
+        if not self.powered:
             return []
-        self._now = now
+        self.note_time(now)
         return self._after_outputs_change(faults or [])
 
     # -- output commands (SDO hooks and RPDO) ----------------------------------------------------
 
-    def _pin_hook(self, pin: int) -> Any:
-        def on_write(value: int) -> AbortCode | None:
-            self._outbox += self._after_outputs_change(self.outputs.command(pin, value))
-            return None
+    def _pin_hook(self, pin: int) -> Callable[[int, float], list[Frame]]:
+        def on_write(value: int, now: float) -> list[Frame]:
+            return self._after_outputs_change(self.outputs.command(pin, value))
 
         return on_write
 
-    def _on_off_mask(self, value: int) -> AbortCode | None:
-        self._outbox += self._after_outputs_change(self.outputs.command_masks(value, 0))
-        return None
+    def _on_off_mask(self, value: int, now: float) -> list[Frame]:
+        return self._after_outputs_change(self.outputs.command_masks(value, 0))
 
-    def _on_high_mask(self, value: int) -> AbortCode | None:
-        self._outbox += self._after_outputs_change(self.outputs.command_masks(0, value))
-        return None
+    def _on_high_mask(self, value: int, now: float) -> list[Frame]:
+        return self._after_outputs_change(self.outputs.command_masks(0, value))
 
-    def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
+    def _on_outputs_pdo(self, data: bytes, now: float) -> list[Frame]:
         # KBX §17: one frame carries both masks; OFF wins (errata K12), so both go at once
+        signals = self.description.pdo("outputs").decode(data)
         return self._after_outputs_change(
             self.outputs.command_masks(signals["off"], signals["high"]))
 
-    def _on_pwm(self, value: int) -> AbortCode | None:
+    def _on_pwm(self, value: int, now: float) -> list[Frame] | AbortCode:
         mask, level = split_pwm_register(value)
         if mask & ~PWM_MASK or level > PWM_LEVEL_MAX:  # errata K16
             return AbortCode.INVALID_VALUE
-        self._outbox += self._after_outputs_change(self.outputs.set_pwm(mask, level))
-        return None
+        return self._after_outputs_change(self.outputs.set_pwm(mask, level))
 
     def _after_outputs_change(self, new_faults: list[int]) -> list[Frame]:
         """Update the objects that read the outputs; report new faults at once (KBX §18)."""
         self._refresh()
-        if new_faults and self._pdo_allowed:
+        if new_faults and self.pdo_allowed:
             return [self._fault_frame()]
         return []
 
     def _refresh(self) -> None:
         """Bring the objects that read the outputs (2001h, 2003h, 2008h, 2009h) up to date;
         only what changed is written."""
-        outputs, store = self.outputs, self._store
+        outputs, store = self.outputs, self.objects
         states = outputs.state
         if states != self._shown_states:
             for i, state in enumerate(states):
@@ -168,9 +168,10 @@ class KeyboxTwin(CanopenTwin):
     def _fault_frame(self) -> Frame:
         """The fault PDO for the present FAULT mask; cached, the periodic message repeats it."""
         frame = self._fault_frame_cache
-        if frame is None or frame.can_id != self._fault_cob_id:
-            faults = self._store.get_int("output_fault_mask")
-            frame = Frame(self._fault_cob_id, self._fault_pdo.encode({"faults": faults}))
+        cob_id = self._fault_pdo.cob_id(self.node_id)
+        if frame is None or frame.can_id != cob_id:
+            faults = self.objects.get_int("output_fault_mask")
+            frame = Frame(cob_id, self._fault_pdo.encode({"faults": faults}))
             self._fault_frame_cache = frame
         return frame
 
@@ -180,57 +181,32 @@ class KeyboxTwin(CanopenTwin):
         self.outputs.all_off()  # KBX §28 note 2: all outputs off
         self._refresh()
 
-    def _on_fault_period(self, value: int) -> AbortCode | None:
-        self._schedule_faults(value, self._now)
-        return None
+    def _on_fault_period(self, value: int, now: float) -> None:
+        self._schedule_faults(value, now)
 
     def _schedule_faults(self, units: int, now: float) -> None:
-        self._fault_period = units * FAULT_PERIOD_UNIT_S
-        operational = self._nmt is NmtState.OPERATIONAL
-        self._fault_next = now + self._fault_period if operational and units else None
+        operational = self.nmt_state is NmtState.OPERATIONAL
+        self._faults.start(units * FAULT_PERIOD_UNIT_S, now, operational)
+
+    def _periodic_faults(self, now: float) -> list[Frame]:
+        return [self._fault_frame()]  # KBX §25 periodic fault message
 
     # -- CanopenTwin hooks ------------------------------------------------------------------
 
     def _on_boot(self, now: float, application: bool) -> list[Frame]:
-        self._fault_cob_id = self._fault_pdo.cob_id(self._node_id)
         self.outputs.power_on()  # fail-safe: every reset starts with outputs OFF
         self._refresh()
-        self._fault_next = None
+        self._faults.stop()
         return []
-
-    def _on_power_off(self) -> None:
-        self.outputs.power_on()
-        self._fault_next = None
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
         if state is NmtState.STOPPED:
             self.outputs.all_off()  # fail-safe (module docstring)
             self._refresh()
-        self._schedule_faults(self._store.get_int("fault_period"), now)
+        self._schedule_faults(self.objects.get_int("fault_period"), now)
         return []
 
-    def _on_advance(self, now: float) -> list[Frame]:
-        frames: list[Frame] = []
-        due = self._fault_next
-        if due is not None and now >= due:
-            frames.append(self._fault_frame())  # KBX §25 periodic fault message
-            self._fault_next = next_due(due, self._fault_period, now)
-        return frames
-
-    def _deadlines(self) -> Iterable[float | None]:
-        return (self._fault_next,)
-
-    def next_deadline(self) -> float | None:
-        # the emulator asks after every call; two timers plus the heartbeat, without lists
-        if not self._powered:
-            return None
-        best = self._heartbeat_next
-        for deadline in (self._consumer_deadline, self._fault_next):
-            if deadline is not None and (best is None or deadline < best):
-                best = deadline
-        return best
-
-    def _snapshot(self) -> dict[str, Any]:
+    def _snapshot(self, now: float) -> dict[str, Any]:
         outputs = self.outputs
         inputs = outputs.input_levels()
         pins = []
@@ -246,5 +222,5 @@ class KeyboxTwin(CanopenTwin):
             })
         return {
             "pins": pins,
-            "fault_period_ms": self._store.get_int("fault_period") * 10,
+            "fault_period_ms": self.objects.get_int("fault_period") * 10,
         }

@@ -27,14 +27,14 @@ from blinkcan.devices.keypad import (
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME, NVM_PREFIX, STORED_SETTINGS
 from blinkcan.devices.model import DeviceDescription, Quirks
 from blinkcan.devices.objects import Value
-from blinkcan.devices.pdo import PdoLayout
-from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import NMT, SDO_TX, SYNC, check_range
+from blinkcan.devices.registry import load_class
+from blinkcan.devices.registry import model as registered_model
+from blinkcan.protocol.cob import NMT, SYNC, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import J1939Name
-from blinkcan.protocol.nmt import NmtState, heartbeat_frame, parse_nmt
-from blinkcan.twin.base import CanopenTwin, next_due
+from blinkcan.protocol.nmt import NmtState, parse_nmt
+from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keypad_display import (
     BLINK_PERIOD_S,
     SHOW_NAMES,
@@ -58,16 +58,23 @@ class KeypadTwin(CanopenTwin):
     (or None for memory). ``manual`` selects the firmware generation ("1.1" or "1.5").
     ``protocol`` ("canopen" or "j1939") is the factory protocol, used while the NVM holds
     none (a stored protocol wins, as a stored node id does); ``name`` is the J1939 NAME it
-    claims its address with (J-5).
+    claims its address with (J-5). ``model`` names another registered keypad, whose twin
+    class (a subclass) is built instead.
     """
 
-    def __new__(cls, *args: Any, model: str = MODEL, **kwargs: Any) -> KeypadTwin:
+    #: the model this class runs, and how it describes a generation (a subclass sets both)
+    MODEL: str = MODEL
+    DEFAULT_MANUAL: str = "1.1"
+
+    @staticmethod
+    def describe(manual: str, quirks: Quirks, node_id: int) -> DeviceDescription:
+        return describe_keypad(manual, quirks, node_id)
+
+    def __new__(cls, *args: Any, model: str | None = None, **kwargs: Any) -> KeypadTwin:
         """``KeypadTwin(model="pkp-3500-mt")`` builds the twin class the registry names."""
         target: type[KeypadTwin] = cls
-        if model != MODEL:
-            from blinkcan.twin.registry import twin_class  # noqa: PLC0415 (it imports us)
-
-            found = twin_class(model)
+        if model is not None and model != cls.MODEL:
+            found = load_class(registered_model(model.partition("@")[0]).twin, CanopenTwin)
             if not issubclass(found, KeypadTwin):
                 raise ValueError(f"{model!r} is not a keypad")
             target = found
@@ -78,21 +85,15 @@ class KeypadTwin(CanopenTwin):
         node_id: int = 0x15,
         quirks: Quirks = "firmware",
         nvm: str | os.PathLike[str] | Nvm | None = None,
-        manual: str = "1.1",
+        manual: str | None = None,
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
         settings: Mapping[str, Value] | None = None,
-        model: str = MODEL,
+        model: str | None = None,
     ) -> None:
-        if model != MODEL:
-            raise ValueError(f"the PKP-2600-SI twin runs model {MODEL!r}, not {model!r}")
-        self._init_keypad(describe_keypad(manual, quirks, node_id), node_id, nvm, protocol, name,
-                          settings)
-
-    def _init_keypad(self, description: DeviceDescription, node_id: int,
-                     nvm: str | os.PathLike[str] | Nvm | None, protocol: str = "canopen",
-                     name: J1939Name | bytes = DEFAULT_NAME,
-                     settings: Mapping[str, Value] | None = None) -> None:
+        if model is not None and model != self.MODEL:
+            raise ValueError(f"the {self.MODEL} twin runs model {self.MODEL!r}, not {model!r}")
+        description = self.describe(manual or self.DEFAULT_MANUAL, quirks, node_id)
         if protocol not in PROTOCOLS:
             raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, not {protocol!r}")
         if nvm is None:
@@ -106,41 +107,63 @@ class KeypadTwin(CanopenTwin):
             raise ValueError(f"the {description.model} has no documented J1939 mode")
         self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939, speaks)
         fresh = nvm.load() is None  # a corrupt or foreign file fails here
-        super().__init__(description, node_id, nvm, settings)
-        self._j1939_keypad.settings.update(self._stored_j1939_settings(self._nvm.load() or {}))
+        super().__init__(description, node_id, nvm, settings, self._j1939_settings_to_store)
+        self._j1939_keypad.settings.update(self._stored_j1939_settings(self.stored_settings()))
+        store = self.objects
         if protocol == "j1939" and fresh:
-            self._store.set("can_protocol", PROTOCOL_J1939)
-            self._persist()
+            store.set("can_protocol", PROTOCOL_J1939)
+            self.save_settings()
         self._face = description.face
         self._key_pdo = description.pdo("key_state")
-        self._key_cob_id = self._key_pdo.cob_id(node_id)
         self._keys = 0
-        self._periodic_next: float | None = None
-        self._periodic_period = 0.0
         self._show: ShowPlayer | None = None
         self._show_mode = 0
         self._demo: DemoMode | None = None
+        self._make_demo: Callable[[float], DemoMode] = DemoMode
         self._j1939 = False
         self._generation2 = "sync" in description.features  # G1-G3 (rev 1.5, PKP-3500-MT)
         #: the LED picture (PKP §11 word: red 0-11, green 12-23, blue 24-35), on and blink
         self._words = {"led_on": 0, "led_blink": 0}
         self._held: dict[str, int] = {}  # RPDO words waiting for the next SYNC (errata G3)
         self._syncs = 0
-        self._last_rpdo_length = 8
         self._led_views = {f"{prefix}_{f.suffix}": (prefix, f.shift, (1 << f.width) - 1)
                            for prefix in self._words for f in description.led_fields}
         #: bits per colour of the LED word, and the bits that are LEDs (MT M27: not the holes)
         self._led_width = description.pdo("led_on").signal("red").length
         self._led_mask = fill(sum(1 << (k - 1) for k in self._face.led_keys), 7, self._led_width)
         self._shows = startup_shows(self._face.led_keys, self._led_width)
-        store = self._store
-        store.set_hook("tpdo1_event_timer", self._on_event_timer)
-        store.set_hook("can_protocol", self._on_can_protocol)
+        self._periodic = self.add_timer(self._periodic_key_state)
+        self._register_hooks()
+
+    def _register_hooks(self) -> None:
+        self.on_write("tpdo1_event_timer", self._on_event_timer)
+        self.on_write("can_protocol", self._on_can_protocol)
         for view in self._led_views:
-            store.set_hook(view, self._led_view_hook(view), keeps_value=False)
+            self.on_write(view, self._led_view_hook(view), keeps_value=False)
+        for prefix in self._words:
+            self.on_rpdo(prefix, self._led_rpdo(prefix))
         if self._generation2:
-            store.set_hook("node_id", self._on_node_id)
-            store.set_hook("tpdo1_transmission_type", self._on_tpdo_type)
+            self.on_write("node_id", self._on_node_id)
+            self.on_write("tpdo1_transmission_type", self._on_tpdo_type)
+            self.on_rpdo("backlight_brightness", self._on_backlight_pdo)
+            self.on_frame(SYNC, self._on_sync)  # rev 1.5 §10
+        self.on_extended(self._on_extended)
+        self.on_boot(self._on_boot)
+        self.on_power_off(self._on_power_off)
+        self.on_state_change(self._on_state_change)
+        self.on_consumer_lost(self._on_consumer_lost)
+        self.on_advance(self._on_advance)
+        self.add_deadlines(self._deadlines)
+        self.on_snapshot(self._snapshot)
+
+    @property
+    def demo(self) -> DemoMode | None:
+        """DEMO mode's state while it runs (PKP §24), else None."""
+        return self._demo
+
+    def set_demo_mode(self, make_demo: Callable[[float], DemoMode]) -> None:
+        """How this model's DEMO mode starts (``make_demo(now)``; PKP §24 by default)."""
+        self._make_demo = make_demo
 
     # -- physical side ------------------------------------------------------------------------
 
@@ -160,101 +183,97 @@ class KeypadTwin(CanopenTwin):
         return frozenset(item_numbers(self._keys))
 
     def _set_key(self, key: int, down: bool, now: float) -> list[Frame]:
-        if not self._powered:
+        if not self.powered:
             return []
-        self._now = now
+        self.note_time(now)
         bit = 1 << (key - 1)
         keys = self._keys | bit if down else self._keys & ~bit
         if keys == self._keys:
             return []
         self._keys = keys
-        self._store.set("keys_pressed", keys)
+        self.objects.set("keys_pressed", keys)
         if self._j1939:
             return self._j1939_keypad.key_changed(key, down, keys, now)
         if down and self._demo is not None:
             self._demo.press(key, now)
         # PKP §10: sent on every change while operational (event-driven FEh); in SYNC mode
         # only at the SYNCs (rev 1.5 §44a, errata G3)
-        if self._nmt is not NmtState.OPERATIONAL or self._tpdo_synchronous():
+        if self.nmt_state is not NmtState.OPERATIONAL or self._tpdo_synchronous():
             return []
         return [self._key_state_frame(now)]
 
     def _key_state_frame(self, now: float) -> Frame:
         # errata P8: byte 4 advances every 100 ms from power-on and wraps
-        tick = int((now - self._boot_time) / TICK_PERIOD_S) & 0xFF
-        return Frame(self._key_cob_id, self._key_pdo.encode({"keys": self._keys, "tick": tick}))
+        tick = int((now - self.boot_time) / TICK_PERIOD_S) & 0xFF
+        return Frame(self._key_pdo.cob_id(self.node_id),
+                     self._key_pdo.encode({"keys": self._keys, "tick": tick}))
 
     # -- the LED picture and its object views -------------------------------------------------
 
-    def _led_view_hook(self, name: str) -> Any:
+    def _led_view_hook(self, name: str) -> Callable[[int, float], None]:
         prefix, shift, mask = self._led_views[name]
 
-        def on_write(value: int) -> AbortCode | None:
+        def on_write(value: int, now: float) -> None:
             word = self._words[prefix]
             value &= self._led_mask >> shift  # MT M27: bits that are no LED read back 0
             self._words[prefix] = (word & ~(mask << shift)) | (value << shift)
             self._refresh_led_views(prefix)
-            return None
 
         return on_write
 
     def _refresh_led_views(self, only: str | None = None) -> None:
         """Bring 2001h/2002h (or only the object ``only`` names) up to date with the words."""
+        store = self.objects
         for name, (prefix, shift, mask) in self._led_views.items():
             if only is None or prefix == only:
-                self._store.set(name, (self._words[prefix] >> shift) & mask)
+                store.set(name, (self._words[prefix] >> shift) & mask)
 
-    def _on_rpdo(self, layout: PdoLayout, signals: dict[str, int], now: float) -> list[Frame]:
-        if layout.name in self._words:  # PKP §11/§12: the whole picture in one frame
+    def _led_rpdo(self, prefix: str) -> Callable[[bytes, float], list[Frame]]:
+        layout = self.description.pdo(prefix)
+
+        def on_rpdo(data: bytes, now: float) -> list[Frame]:
+            # PKP §11/§12: the whole picture in one frame
+            signals = layout.decode(data)
             word = sum(signals[s.name] << s.start for s in layout.signals) & self._led_mask
-            if self._rpdo_synchronous(layout.name):
-                self._held[layout.name] = word  # applied at the next SYNC (rev 1.5 §36/§37)
+            if self._rpdo_synchronous(prefix):
+                self._held[prefix] = word  # applied at the next SYNC (rev 1.5 §36/§37)
             else:
-                self._words[layout.name] = word
-                self._refresh_led_views(layout.name)
+                self._words[prefix] = word
+                self._refresh_led_views(prefix)
             return []
-        if layout.name == "backlight_brightness" and self._generation2:
-            return self._on_backlight_pdo(signals, layout.min_length)
-        return super()._on_rpdo(layout, signals, now)
 
-    def _on_backlight_pdo(self, signals: dict[str, int], length: int) -> list[Frame]:
+        return on_rpdo
+
+    def _on_backlight_pdo(self, data: bytes, now: float) -> list[Frame]:
         # rev 1.5 §15, errata G2: byte 1 is the colour; 00h or out of range = the default
         # colour; a level over 3Fh ignores the whole frame; DLC 1 changes only the level
+        signals = self.description.pdo("backlight_brightness").decode(data)
         level = signals["level"]
         if level > LEVEL_MAX:
             return []
-        self._store.set("backlight_brightness", level)
-        if self._last_rpdo_length > 1:
+        store = self.objects
+        store.set("backlight_brightness", level)
+        if len(data) > 1:
             colour = signals["colour"]
             if not 1 <= colour <= 9:
-                colour = self._store.get_int("default_backlight_colour")
-            self._store.set("backlight_colour", colour)
+                colour = store.get_int("default_backlight_colour")
+            store.set("backlight_colour", colour)
         return []
-
-    def _rpdo_route(self, layout: PdoLayout) -> Callable[[Frame, float], list[Frame]]:
-        route: Callable[[Frame, float], list[Frame]] = super()._rpdo_route(layout)
-
-        def remember_length(frame: Frame, now: float) -> list[Frame]:
-            self._last_rpdo_length = len(frame.data)
-            return route(frame, now)
-
-        return remember_length if layout.name == "backlight_brightness" else route
 
     # -- generation 2: SYNC, node id at once, consumer heartbeat ------------------------------
 
     def _rpdo_synchronous(self, name: str) -> bool:
         entry = {"led_on": "rpdo1_transmission_type", "led_blink": "rpdo2_transmission_type"}
-        return self._generation2 and self._store.get_int(entry[name]) <= 0xF0
+        return self._generation2 and self.objects.get_int(entry[name]) <= 0xF0
 
     def _tpdo_synchronous(self) -> bool:
-        return self._generation2 and self._store.get_int("tpdo1_transmission_type") <= 0xF0
+        return self._generation2 and self.objects.get_int("tpdo1_transmission_type") <= 0xF0
 
-    def _on_tpdo_type(self, value: int) -> AbortCode | None:
+    def _on_tpdo_type(self, value: int, now: float) -> None:
         self._syncs = 0  # errata G3: every n-th SYNC counted from the first after the write
-        return None
 
     def _on_sync(self, frame: Frame, now: float) -> list[Frame]:
-        if self._nmt is not NmtState.OPERATIONAL:
+        if self.nmt_state is not NmtState.OPERATIONAL:
             return []
         for name, word in self._held.items():  # the last RPDO before this SYNC wins
             self._words[name] = word
@@ -264,107 +283,78 @@ class KeypadTwin(CanopenTwin):
         if not self._tpdo_synchronous():
             return []
         self._syncs += 1
-        if self._syncs % self._store.get_int("tpdo1_transmission_type"):
+        if self._syncs % self.objects.get_int("tpdo1_transmission_type"):
             return []
         return [self._key_state_frame(now)]  # sampled at this SYNC (rev 1.5 §44a)
 
-    def _on_node_id(self, value: int) -> AbortCode | None:
+    def _on_node_id(self, value: int, now: float) -> None:
         # errata G1 (rev 1.5 §23): the new id is in use at once; the acknowledge comes from it
-        self._store.set("node_id", value)
-        self._node_id = value
-        self._sdo_tx = SDO_TX + value
-        self._key_cob_id = self._key_pdo.cob_id(value)
-        self._heartbeat_frames = {state: heartbeat_frame(value, state) for state in NmtState}
-        self._routes = self._build_routes()
-        return None
+        self.objects.set("node_id", value)
+        self.use_node_id(value)
 
     def _on_consumer_lost(self, now: float) -> None:
         # rev 1.5 §26 note 2: all LEDs (indicators and backlight) off
         self._words = {"led_on": 0, "led_blink": 0}
         self._held = {}
         self._refresh_led_views()
-        self._store.set("backlight_brightness", 0)
+        self.objects.set("backlight_brightness", 0)
 
     # -- CANopen hooks ------------------------------------------------------------------------
 
-    def _build_routes(self) -> dict[int, Any]:
-        if self._j1939:
-            return {}
-        routes = super()._build_routes()
-        if self._generation2:
-            routes[SYNC] = self._on_sync  # rev 1.5 §10
-        if self._demo is None:
-            return routes
-        # PKP §24: "another command message" leaves DEMO mode. Only while DEMO mode is on do
-        # the routes carry this check, so normal traffic pays nothing for it.
-        return {can_id: self._leaving_demo(route) for can_id, route in routes.items()}
-
-    def _leaving_demo(self, route: Callable[[Frame, float], list[Frame]]
-                      ) -> Callable[[Frame, float], list[Frame]]:
-        def leave_then_route(frame: Frame, now: float) -> list[Frame]:
-            if frame.can_id == NMT:
-                request = parse_nmt(frame, self.description.nmt_aliases)
-                if request is None or request.node_id not in (0, self._node_id):
-                    return route(frame, now)
-            self._demo = None
-            self._routes = self._build_routes()
-            return route(frame, now)
-
-        return leave_then_route
+    def _leave_demo(self, frame: Frame, now: float) -> None:
+        # PKP §24: "another command message" leaves DEMO mode. Only while DEMO mode is on is
+        # this watcher set, so normal traffic pays nothing for it.
+        if frame.can_id == NMT:
+            request = parse_nmt(frame, self.description.nmt_aliases)
+            if request is None or request.node_id not in (0, self.node_id):
+                return
+        self._demo = None
+        self.watch_frames(None)
 
     def _on_boot(self, now: float, application: bool) -> list[Frame]:
-        self._key_cob_id = self._key_pdo.cob_id(self._node_id)
-        self._periodic_next = None
+        self._periodic.stop()
         if application:
             self._show = None
-            self._show_mode = self._store.get_int("startup_led_show")
+            self._show_mode = self.objects.get_int("startup_led_show")
             steps = self._shows.get(self._show_mode)
             if steps is not None and not self._j1939:
                 self._show = ShowPlayer(steps, now)
             # DEMO mode starts at power-on (PKP §24: "disconnect and reconnect")
-            self._demo = self._make_demo(now) if self._store.get_int("demo_mode") else None
+            demo = self.objects.get_int("demo_mode") and not self._j1939
+            self._demo = self._make_demo(now) if demo else None
             if self._demo is not None:
-                self._routes = self._build_routes()
+                self.watch_frames(self._leave_demo)
         return []
-
-    def _make_demo(self, now: float) -> DemoMode:
-        """DEMO mode of this model (PKP §24 and appendix)."""
-        return DemoMode(now)
 
     def _on_power_off(self) -> None:
         self._words = {"led_on": 0, "led_blink": 0}
         self._held = {}
         self._syncs = 0
         self._keys = 0
-        self._store.set("keys_pressed", 0)
+        self.objects.set("keys_pressed", 0)
         self._show = None
-        self._demo = None
-        self._periodic_next = None
+        self._demo = None  # and its watcher, with the live state
         self._j1939_keypad.power_off()
 
     def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
-        self._schedule_periodic(self._store.get_int("tpdo1_event_timer"), now)
+        self._schedule_periodic(self.objects.get_int("tpdo1_event_timer"), now)
         return []
 
-    def _on_event_timer(self, value: int) -> AbortCode | None:
-        self._schedule_periodic(value, self._now)
-        return None
+    def _on_event_timer(self, value: int, now: float) -> None:
+        self._schedule_periodic(value, now)
 
     def _schedule_periodic(self, period_ms: int, now: float) -> None:
         # the event timer runs in event-driven mode only (rev 1.5 silent; blinkcan decision)
-        operational = self._nmt is NmtState.OPERATIONAL and not self._tpdo_synchronous()
-        self._periodic_period = period_ms / 1000
-        self._periodic_next = now + self._periodic_period if operational and period_ms else None
+        operational = self.nmt_state is NmtState.OPERATIONAL and not self._tpdo_synchronous()
+        self._periodic.start(period_ms / 1000, now, operational)
 
-    def _on_can_protocol(self, value: int) -> AbortCode | None:
+    def _periodic_key_state(self, now: float) -> list[Frame]:
+        return [self._key_state_frame(now)]  # PKP §41b periodic state transmission
+
+    def _on_can_protocol(self, value: int, now: float) -> None:
         if value == PROTOCOL_J1939:
             # Acknowledge first (errata P10), then reboot into J1939, silent on CANopen.
-            self._after_reply.append(self._switch_to_j1939)
-        return None
-
-    def _switch_to_j1939(self, now: float) -> list[Frame]:
-        self._on_power_off()
-        return self._boot(now, application=True)  # J-1: restarts in J1939 mode
+            self.after_reply(self.reset_node)  # J-1: restarts in J1939 mode
 
     def _on_extended(self, frame: Frame, now: float) -> list[Frame]:
         if not self._j1939:
@@ -375,44 +365,48 @@ class KeypadTwin(CanopenTwin):
         # §27, J-1, errata "Protocol switch": back to CANopen with CANopen factory defaults;
         # the J1939 settings stay stored
         self._j1939 = False
-        self._restore_factory_settings()
-        self._store.set("can_protocol", PROTOCOL_CANOPEN)
-        self._persist()
-        self._on_power_off()
-        return self._boot(now, application=True)
+        self.restore_factory_settings()
+        self.objects.set("can_protocol", PROTOCOL_CANOPEN)
+        self.save_settings()
+        return self.reset_node(now)
 
-    def _boot(self, now: float, application: bool) -> list[Frame]:
-        if application:
-            stored = self._stored_settings() or {}
-            self._j1939 = stored.get("can_protocol", PROTOCOL_CANOPEN) == PROTOCOL_J1939
-        if self._j1939:  # J1939 mode: CANopen silent, the J1939 keypad speaks
-            stored = self._stored_settings() or {}
-            super()._boot(now, application)
-            self._routes = {}
-            self._nmt = NmtState.BOOT_UP
-            self._heartbeat_next = None
-            self._show = self._demo = self._periodic_next = None
-            self._j1939_keypad.settings.update(self._stored_j1939_settings(stored))
-            return self._j1939_keypad.power_on(now, self._keys)
-        return super()._boot(now, application)
+    def power_on(self, now: float) -> list[Frame]:
+        if self.powered:
+            return []
+        self._choose_protocol()
+        return self._in_protocol(super().power_on(now), now)
+
+    def reset_node(self, now: float) -> list[Frame]:
+        self._choose_protocol()
+        return self._in_protocol(super().reset_node(now), now)
+
+    def _choose_protocol(self) -> None:
+        """At power-on and reset node the stored protocol is the one in use (J-1)."""
+        stored = self.stored_settings().get("can_protocol", PROTOCOL_CANOPEN)
+        self._j1939 = stored == PROTOCOL_J1939
+
+    def _in_protocol(self, canopen_boot: list[Frame], now: float) -> list[Frame]:
+        if not self._j1939:
+            return canopen_boot
+        # J1939 mode: CANopen silent, the J1939 keypad speaks
+        self.silence()
+        self._show = None
+        stored = self.stored_settings()
+        self._j1939_keypad.settings.update(self._stored_j1939_settings(stored))
+        return self._j1939_keypad.power_on(now, self._keys)
 
     @staticmethod
-    def _stored_j1939_settings(stored: dict[str, Any]) -> dict[str, int]:
+    def _stored_j1939_settings(stored: Mapping[str, Any]) -> dict[str, int]:
         prefix = len(NVM_PREFIX)
         return {key[prefix:]: value for key, value in stored.items()
                 if key.startswith(NVM_PREFIX) and key[prefix:] in STORED_SETTINGS}
 
-    def _save_settings(self, settings: dict[str, Value]) -> AbortCode | None:
-        return self._save_with_j1939(settings, self._j1939_keypad.settings)
-
-    def _save_with_j1939(self, settings: dict[str, Value], j1939: dict[str, int]
-                         ) -> AbortCode | None:
+    def _j1939_settings_to_store(self) -> dict[str, Value]:
         """The CANopen and the J1939 settings share the NVM: each write keeps the other's."""
-        return super()._save_settings(
-            {**settings, **{NVM_PREFIX + key: value for key, value in j1939.items()}})
+        return {NVM_PREFIX + key: value for key, value in self._j1939_keypad.settings.items()}
 
     def _save_j1939(self, j1939: dict[str, int]) -> bool:
-        return self._save_with_j1939(self._store.stored_values(), j1939) is None
+        return self.save_settings({NVM_PREFIX + key: value for key, value in j1939.items()}) is None
 
     @property
     def bitrate(self) -> int:
@@ -424,8 +418,8 @@ class KeypadTwin(CanopenTwin):
     @property
     def protocol(self) -> str:
         """The protocol in use; while unpowered, the one it will start in (stored)."""
-        if not self._powered:
-            stored = self._store.get_int("can_protocol")
+        if not self.powered:
+            stored = self.objects.get_int("can_protocol")
             return "j1939" if stored == PROTOCOL_J1939 else "canopen"
         return "j1939" if self._j1939 else "canopen"
 
@@ -437,21 +431,14 @@ class KeypadTwin(CanopenTwin):
     def _on_advance(self, now: float) -> list[Frame]:
         if self._j1939:
             return self._j1939_keypad.advance(now)
-        frames: list[Frame] = []
-        due = self._periodic_next
-        if due is not None and now >= due:
-            frames.append(self._key_state_frame(now))  # PKP §41b periodic state transmission
-            self._periodic_next = next_due(due, self._periodic_period, now)
         if self._show is not None and self._show.finished(now):
             self._show = None
-        return frames
+        return []
 
-    def _deadlines(self) -> Iterable[float | None]:
+    def _deadlines(self, now: float) -> Iterable[float | None]:
         if self._j1939:
             return self._j1939_keypad.deadlines()
-        now = self._now
         return (
-            self._periodic_next,
             self._show.next_change(now) if self._show is not None else None,
             self._demo.next_change(now) if self._demo is not None else None,
         )
@@ -460,7 +447,7 @@ class KeypadTwin(CanopenTwin):
 
     def displayed_leds(self, now: float | None = None) -> tuple[int, int]:
         """(on word, blink word) the keys show: the startup show, DEMO mode, or the objects."""
-        now = self._now if now is None else now
+        now = self.last_time if now is None else now
         if self._j1939:
             return self._j1939_keypad.displayed_leds(now)
         return displayed_words(self._show, self._demo, self._words["led_on"],
@@ -471,14 +458,15 @@ class KeypadTwin(CanopenTwin):
             colour = self._demo.backlight_colour
             level = self._demo.level if colour is not None else 0
             return {"colour": colour.label if colour else "off", "level": level}
-        colour_code = self._store.get_int("backlight_colour")
+        colour_code = self.objects.get_int("backlight_colour")
         return {"colour": BacklightColour(colour_code).label,
-                "level": self._store.get_int("backlight_brightness")}
+                "level": self.objects.get_int("backlight_brightness")}
 
-    def _snapshot(self) -> dict[str, Any]:
+    def _snapshot(self, now: float) -> dict[str, Any]:
         if self._j1939 and self._j1939_keypad.speaks:
             return {**self._j1939_keypad.snapshot(), "blink_period_s": BLINK_PERIOD_S}
-        if not self._powered:
+        powered = self.powered
+        if not powered:
             on = blink = 0
         else:
             on, blink = self.displayed_leds()
@@ -487,21 +475,22 @@ class KeypadTwin(CanopenTwin):
              **render_key(on, blink, key, self._led_width)}
             for key in self._face.key_numbers
         ]
-        indicator = self._store.get_int("indicator_brightness")
+        store = self.objects
+        indicator = store.get_int("indicator_brightness")
         if self._demo is not None:
             indicator = self._demo.level
         show = None
-        if self._show is not None and not self._show.finished(self._now):
-            show = {"mode": SHOW_NAMES[self._show_mode], "step": self._show.step_index(self._now)}
+        if self._show is not None and not self._show.finished(now):
+            show = {"mode": SHOW_NAMES[self._show_mode], "step": self._show.step_index(now)}
         return {
             "protocol": "j1939" if self._j1939 else "canopen",
             "keys": keys,
             "indicator_brightness": indicator,
-            "backlight": self._backlight() if self._powered else {"colour": "off", "level": 0},
+            "backlight": self._backlight() if powered else {"colour": "off", "level": 0},
             "blink_period_s": BLINK_PERIOD_S,
             "startup_show": show,
             "demo": self._demo.describe() if self._demo is not None else None,
-            "periodic_key_state_ms": self._store.get_int("tpdo1_event_timer"),
+            "periodic_key_state_ms": store.get_int("tpdo1_event_timer"),
             "leds": dict(self._words),
             # what the host last commanded, apart from what a show or DEMO mode displays
             "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key,

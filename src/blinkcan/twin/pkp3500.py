@@ -19,13 +19,13 @@ at once, consumer heartbeat, restore, the J1939 switch) runs here on this model'
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel
 from blinkcan.devices.keypad import LEVEL_MAX
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME
-from blinkcan.devices.model import Quirks
+from blinkcan.devices.model import DeviceDescription, Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pkp3500 import (
     ANALOG_BYTE_MAX,
@@ -42,7 +42,7 @@ from blinkcan.protocol.cob import check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState
-from blinkcan.twin.base import next_due
+from blinkcan.twin.hooks import Periodic
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
 from blinkcan.twin.nvm import Nvm
@@ -63,12 +63,11 @@ def direction_byte(net: int) -> int:
 class _Encoder:
     """One knob's live state: tick counter, net movement since its last PDO, its timer."""
 
-    def __init__(self, number: int) -> None:
+    def __init__(self, number: int, timer: Periodic) -> None:
         self.number = number
         self.counter = 0
         self.net = 0
-        self.timer_next: float | None = None
-        self.timer_period = 0.0
+        self.timer = timer
         self.bar = 0  # DEMO mode: ring LEDs lit as a bar graph (M81)
 
 
@@ -117,39 +116,57 @@ class Pkp3500Twin(KeypadTwin):
     """A PKP-3500-MT that behaves on the bus as its manual and the decisions describe.
 
     Built as ``KeypadTwin(node_id=0x15, model="pkp-3500-mt")`` or directly. Fault injection
-    beyond keys: :meth:`turn`, :meth:`set_analog`, :meth:`set_digital_input`.
+    beyond keys: :meth:`turn`, :meth:`set_analog`, :meth:`set_digital_input`. What it does
+    beyond the PKP-2600-SI is registered as hooks (encoders, analog inputs, backlight, M15).
     """
+
+    MODEL = MODEL
+    DEFAULT_MANUAL = GENERATION
+
+    @staticmethod
+    def describe(manual: str, quirks: Quirks, node_id: int) -> DeviceDescription:
+        return describe_pkp3500(manual, quirks, node_id)
 
     def __init__(
         self,
         node_id: int = 0x15,
         quirks: Quirks = "firmware",
         nvm: str | os.PathLike[str] | Nvm | None = None,
-        manual: str = GENERATION,
+        manual: str | None = None,
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
         settings: Mapping[str, Value] | None = None,
-        model: str = MODEL,
+        model: str | None = None,
     ) -> None:
-        if model != MODEL:
-            raise ValueError(f"the PKP-3500-MT twin runs model {MODEL!r}, not {model!r}")
-        description = describe_pkp3500(manual, quirks, node_id)
+        super().__init__(node_id, quirks, nvm, manual, protocol, name, settings, model)
+        description = self.description
         face = description.face
-        self._encoders = [_Encoder(e.number) for e in face.encoders]
+        self._encoders = [_Encoder(e.number, self.add_timer(self._encoder_timer(e.number)))
+                          for e in face.encoders]
         self._encoder_layouts = [description.pdo(e.pdo) for e in face.encoders]
         self._analog_layout = description.pdo("analog_inputs")
         self._counts = [0] * face.analog_inputs  # 10 mV units (M44)
-        self._analog_next: float | None = None
+        self._analog = self.add_timer(self._analog_frames)
         self._temporary_colour: int | None = None  # M51: set by 515h or 2003h/03 since power-on
-        self._init_keypad(description, node_id, nvm, protocol, name, settings)
-        store = self._store
+        led_width = description.pdo("led_on").signal("red").length
+        led_keys = sum(1 << (k - 1) for k in face.led_keys)
+        self.set_demo_mode(lambda now: self._encoder_demo(now, led_keys, led_width))
+        store = self.objects
         for encoder in self._encoders:
             n = encoder.number
             store.set_reader(f"encoder_{n}_ticks", self._counter_reader(encoder))
-            store.set_hook(f"encoder_{n}_top", self._top_hook(encoder))
-            store.set_hook(f"tpdo{n + 1}_event_timer", self._encoder_timer_hook(encoder))
-        store.set_hook("analog_period", self._on_analog_period)
-        store.set_hook("backlight_colour", self._on_backlight_colour)
+            self.on_write(f"encoder_{n}_top", self._top_hook(encoder))
+            self.on_write(f"tpdo{n + 1}_event_timer", self._encoder_timer_hook(encoder))
+        self.on_write("analog_period", self._on_analog_period)
+        self.on_write("backlight_colour", self._on_backlight_colour)
+        self.on_rpdo("backlight_brightness", self._temporary_backlight_pdo)
+        if description.quirks == "firmware":
+            self.filter_sdo_replies(_firmware_abort_code)
+        self.on_boot(self._boot_knobs)
+        self.on_power_off(self._knobs_power_off)
+        self.on_state_change(self._schedule_inputs)
+        self.on_consumer_lost(self._rings_off)
+        self.on_snapshot(self._knobs_snapshot)
 
     # -- physical side ------------------------------------------------------------------------
 
@@ -159,9 +176,9 @@ class Pkp3500Twin(KeypadTwin):
         knob = self._encoders[check_range("encoder", encoder, 1, len(self._encoders)) - 1]
         if isinstance(ticks, bool) or not isinstance(ticks, int):
             raise TypeError(f"ticks must be an int, not {type(ticks).__name__}")
-        if not self._powered or not ticks:
+        if not self.powered or not ticks:
             return []
-        self._now = now
+        self.note_time(now)
         step = 1 if ticks > 0 else -1
         frames = []
         for _ in range(abs(ticks)):
@@ -177,7 +194,7 @@ class Pkp3500Twin(KeypadTwin):
         if isinstance(volts, bool) or not isinstance(volts, (int, float)) \
                 or not 0 <= volts < float("inf"):  # NaN fails the comparison
             raise ValueError(f"volts must be a number >= 0, not {volts!r}")
-        self._now = now
+        self.note_time(now)
         self._counts[input] = min(ANALOG_COUNTS, round(volts * 100))  # 10 mV per count (M44)
         self._refresh_inputs()
         return []
@@ -188,16 +205,17 @@ class Pkp3500Twin(KeypadTwin):
 
     def _refresh_inputs(self) -> None:
         digital = 0
+        store = self.objects
         for n, count in enumerate(self._counts):
             # M45: 2005h = round(count * 255 / 500); M46: a 1 from 2.5 V
-            self._store.set(f"analog_input_{n}", min(ANALOG_BYTE_MAX, round(count * 255 / 500)))
+            store.set(f"analog_input_{n}", min(ANALOG_BYTE_MAX, round(count * 255 / 500)))
             digital |= (count >= DIGITAL_THRESHOLD_COUNTS) << n
-        self._store.set("digital_inputs", digital)
+        store.set("digital_inputs", digital)
 
     # -- encoders -------------------------------------------------------------------------------
 
     def _top(self, knob: _Encoder) -> int:
-        return self._store.get_int(f"encoder_{knob.number}_top")
+        return self.objects.get_int(f"encoder_{knob.number}_top")
 
     def _tick(self, knob: _Encoder, step: int) -> None:
         top = self._top(knob)
@@ -206,8 +224,8 @@ class Pkp3500Twin(KeypadTwin):
         else:  # M34: TOP 00h wraps both ways
             knob.counter = (knob.counter + step) % _TICK_RANGE
         knob.net += step  # M37: ticks count even when clamped
-        self._store.set(f"encoder_{knob.number}_direction", direction_byte(knob.net))
-        if self._demo is not None:
+        self.objects.set(f"encoder_{knob.number}_direction", direction_byte(knob.net))
+        if self.demo is not None:
             self._demo_tick(knob, step)
 
     def _encoder_frame(self, knob: _Encoder) -> Frame:
@@ -215,154 +233,122 @@ class Pkp3500Twin(KeypadTwin):
         data = layout.encode({"direction": direction_byte(knob.net), "ticks": knob.counter,
                               "top": self._top(knob)})
         knob.net = 0  # M37: reset when the PDO is sent
-        self._store.set(f"encoder_{knob.number}_direction", 0)
-        return Frame(layout.cob_id(self._node_id), data)
+        self.objects.set(f"encoder_{knob.number}_direction", 0)
+        return Frame(layout.cob_id(self.node_id), data)
 
-    def _counter_reader(self, knob: _Encoder) -> Any:
+    def _encoder_timer(self, number: int) -> Callable[[float], list[Frame]]:
+        def produce(now: float) -> list[Frame]:
+            return [self._encoder_frame(self._encoders[number - 1])]  # M38: also when still
+
+        return produce
+
+    def _counter_reader(self, knob: _Encoder) -> Callable[[], bytes]:
         def read() -> bytes:
             return knob.counter.to_bytes(2, "little")  # M40: a read gives the live counter
 
         return read
 
-    def _top_hook(self, knob: _Encoder) -> Any:
-        def on_write(value: int) -> AbortCode | None:
+    def _top_hook(self, knob: _Encoder) -> Callable[[int, float], None]:
+        def on_write(value: int, now: float) -> None:
             if value and knob.counter > value:  # M39: a lower TOP clamps at once, no PDO
                 knob.counter = value
-            return None
 
         return on_write
 
-    def _encoder_timer_hook(self, knob: _Encoder) -> Any:
-        def on_write(value: int) -> AbortCode | None:
-            self._schedule_encoder(knob, value, self._now)
-            return None
+    def _encoder_timer_hook(self, knob: _Encoder) -> Callable[[int, float], None]:
+        def on_write(value: int, now: float) -> None:
+            self._schedule_encoder(knob, value, now)
 
         return on_write
 
     def _schedule_encoder(self, knob: _Encoder, period_ms: int, now: float) -> None:
-        knob.timer_period = period_ms / 1000
-        running = self._sends_pdos() and period_ms
-        knob.timer_next = now + knob.timer_period if running else None
+        knob.timer.start(period_ms / 1000, now, self._sends_pdos())
 
     def _sends_pdos(self) -> bool:
-        return self._nmt is NmtState.OPERATIONAL and not self._j1939
+        return self.nmt_state is NmtState.OPERATIONAL and self.protocol == "canopen"
 
     # -- analog inputs --------------------------------------------------------------------------
 
     def _analog_period(self) -> float:
-        return self._store.get_int("analog_period") * ANALOG_PERIOD_UNIT_S
+        return self.objects.get_int("analog_period") * ANALOG_PERIOD_UNIT_S
 
-    def _on_analog_period(self, value: int) -> AbortCode | None:
-        self._store.set("tpdo4_transmission_type", value)  # M12: 1803h/02 reads this byte
-        if self._analog_next is not None:  # M47: a write restarts the period
-            self._analog_next = self._now + value * ANALOG_PERIOD_UNIT_S
-        return None
+    def _on_analog_period(self, value: int, now: float) -> None:
+        self.objects.set("tpdo4_transmission_type", value)  # M12: 1803h/02 reads this byte
+        if self._analog.running:  # M47: a write restarts the period
+            self._analog.start(value * ANALOG_PERIOD_UNIT_S, now)
 
-    def _analog_frame(self) -> Frame:
+    def _analog_frames(self, now: float) -> list[Frame]:
         layout = self._analog_layout
         data = layout.encode({f"in{n}": count for n, count in enumerate(self._counts)})
-        return Frame(layout.cob_id(self._node_id), data)
+        self._analog.period = self._analog_period()  # M47: the period 2006h holds now
+        return [Frame(layout.cob_id(self.node_id), data)]
 
     # -- backlight (M51-M53) --------------------------------------------------------------------
 
-    def _on_backlight_colour(self, value: int) -> AbortCode | None:
+    def _on_backlight_colour(self, value: int, now: float) -> None:
         self._temporary_colour = value  # M53: 2003h/03 is a temporary colour
-        return None
 
-    def _on_backlight_pdo(self, signals: dict[str, int], length: int) -> list[Frame]:
+    def _temporary_backlight_pdo(self, data: bytes, now: float) -> list[Frame]:
         # MT §18 note 1 (M52): a level over 3Fh ignores the whole frame; DLC 1: level only
         # (M54); note 2 (M51): a colour out of 01h-09h keeps the colour in use
+        signals = self.description.pdo("backlight_brightness").decode(data)
         level = signals["level"]
         if level > LEVEL_MAX:
             return []
-        self._store.set("backlight_brightness", level)
+        store = self.objects
+        store.set("backlight_brightness", level)
         colour = signals["colour"]
-        if self._last_rpdo_length > 1 and 1 <= colour <= 9:
+        if len(data) > 1 and 1 <= colour <= 9:
             self._temporary_colour = colour
-            self._store.set("backlight_colour", colour)
+            store.set("backlight_colour", colour)
         return []
 
     # -- CANopen hooks --------------------------------------------------------------------------
 
-    def _on_sdo(self, frame: Frame, now: float) -> list[Frame]:
-        frames = super()._on_sdo(frame, now)
-        if frames and self.description.quirks == "firmware":
-            reply = frames[0].data
-            if reply[0] == 0x80 and reply[4:8] == _CIA_UNKNOWN_COMMAND:  # M15 (Q)
-                frames[0] = Frame(frames[0].can_id, reply[:4] + _FIRMWARE_UNKNOWN_COMMAND)
-        return frames
-
-    def _on_boot(self, now: float, application: bool) -> list[Frame]:
-        frames = super()._on_boot(now, application)
+    def _boot_knobs(self, now: float, application: bool) -> list[Frame]:
+        store = self.objects
         if application:
             for knob in self._encoders:  # M40: from the startup value, at most TOP
-                startup = self._store.get_int(f"encoder_{knob.number}_ticks")
+                startup = store.get_int(f"encoder_{knob.number}_ticks")
                 top = self._top(knob)
                 knob.counter = min(startup, top) if top else startup
                 knob.net = 0
-                self._store.set(f"encoder_{knob.number}_direction", 0)
+                store.set(f"encoder_{knob.number}_direction", 0)
             self._temporary_colour = None
             self._refresh_inputs()
-        self._store.set("tpdo4_transmission_type", self._store.get_int("analog_period"))
-        return frames
+        store.set("tpdo4_transmission_type", store.get_int("analog_period"))
+        return []
 
-    def _on_power_off(self) -> None:
-        super()._on_power_off()
+    def _knobs_power_off(self) -> None:
         self._counts = [0] * len(self._counts)  # M46: nothing connected
-        self._analog_next = None
-        for knob in self._encoders:
-            knob.timer_next = None
-        self._store.set("led_on_rings", 0)
-        self._store.set("led_blink_rings", 0)
+        self.objects.set("led_on_rings", 0)
+        self.objects.set("led_blink_rings", 0)
 
-    def _on_state_change(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
-        frames = super()._on_state_change(previous, state, now)
+    def _schedule_inputs(self, previous: NmtState, state: NmtState, now: float) -> list[Frame]:
         for knob in self._encoders:
-            self._schedule_encoder(knob, self._store.get_int(f"tpdo{knob.number + 1}_event_timer"),
-                                   now)
+            self._schedule_encoder(
+                knob, self.objects.get_int(f"tpdo{knob.number + 1}_event_timer"), now)
         # M47: the first 495h one period after entering operational
-        self._analog_next = now + self._analog_period() if self._sends_pdos() else None
-        return frames
+        self._analog.start(self._analog_period(), now, self._sends_pdos())
+        return []
 
-    def _on_consumer_lost(self, now: float) -> None:
-        super()._on_consumer_lost(now)  # key-LEDs, blink and backlight off
-        self._store.set("led_on_rings", 0)  # M65: the ring LEDs too
-        self._store.set("led_blink_rings", 0)
+    def _rings_off(self, now: float) -> None:
+        # after the key-LEDs, blink and backlight (the keypad's hook)
+        self.objects.set("led_on_rings", 0)  # M65: the ring LEDs too
+        self.objects.set("led_blink_rings", 0)
 
-    def _on_advance(self, now: float) -> list[Frame]:
-        frames = super()._on_advance(now)
-        if self._j1939:
-            return frames
-        for knob in self._encoders:
-            due = knob.timer_next
-            if due is not None and now >= due:
-                frames.append(self._encoder_frame(knob))  # M38: also when nothing moved
-                knob.timer_next = next_due(due, knob.timer_period, now)
-        due = self._analog_next
-        if due is not None and now >= due:
-            frames.append(self._analog_frame())
-            self._analog_next = next_due(due, self._analog_period(), now)
-        return frames
-
-    def _deadlines(self) -> Iterable[float | None]:
-        if self._j1939:
-            return super()._deadlines()
-        return (*super()._deadlines(), self._analog_next,
-                *(knob.timer_next for knob in self._encoders))
-
-    def _make_demo(self, now: float) -> DemoMode:
+    def _encoder_demo(self, now: float, led_keys: int, led_width: int) -> DemoMode:
         for knob in self._encoders:
             knob.bar = 1  # M76: LEDs 1 and 17 lit
-        keys = sum(1 << (k - 1) for k in self._face.led_keys)
-        return EncoderDemo(now, keys, self._led_width)
+        return EncoderDemo(now, led_keys, led_width)
 
     # -- what the keypad shows ------------------------------------------------------------------
 
     def rings(self) -> tuple[int, int]:
         """(on, blink) of the 32 ring LEDs (bit n-1 = LED n, M26): the objects or DEMO mode."""
-        if self._demo is not None:
+        if self.demo is not None:
             return self._demo_rings(), 0
-        return self._store.get_int("led_on_rings"), self._store.get_int("led_blink_rings")
+        return self.objects.get_int("led_on_rings"), self.objects.get_int("led_blink_rings")
 
     def _demo_rings(self) -> int:
         # M76: LEDs 1 and 17 at start; M81: each ring a bar graph from its first LED
@@ -377,9 +363,9 @@ class Pkp3500Twin(KeypadTwin):
         size = len(self.description.face.encoders[knob.number - 1].ring_leds)
         knob.bar = min(size, max(0, knob.bar + step))
 
-    def _snapshot(self) -> dict[str, Any]:
-        snapshot = super()._snapshot()
-        on, blink = self.rings() if self._powered and not self._j1939 else (0, 0)
+    def _knobs_snapshot(self, now: float) -> dict[str, Any]:
+        showing = self.powered and self.protocol == "canopen"
+        on, blink = self.rings() if showing else (0, 0)
         encoders = []
         for knob, encoder in zip(self._encoders, self.description.face.encoders, strict=True):
             encoders.append({
@@ -390,13 +376,21 @@ class Pkp3500Twin(KeypadTwin):
                 "ring": [{"led": led, "on": bool(on >> (led - 1) & 1),
                           "blink": bool(blink >> (led - 1) & 1)} for led in encoder.ring_leds],
             })
-        snapshot["encoders"] = encoders
-        snapshot["analog_inputs"] = [
-            {"input": n, "volts": count / 100, "count": count,
-             "digital": count >= DIGITAL_THRESHOLD_COUNTS}
-            for n, count in enumerate(self._counts)]
-        snapshot["analog_period_ms"] = self._store.get_int("analog_period") * 10
-        return snapshot
+        return {
+            "encoders": encoders,
+            "analog_inputs": [
+                {"input": n, "volts": count / 100, "count": count,
+                 "digital": count >= DIGITAL_THRESHOLD_COUNTS}
+                for n, count in enumerate(self._counts)],
+            "analog_period_ms": self.objects.get_int("analog_period") * 10,
+        }
+
+
+def _firmware_abort_code(reply: bytes) -> bytes:
+    """M15 (Q): the firmware's abort code for an unknown command specifier."""
+    if reply[0] == 0x80 and reply[4:8] == _CIA_UNKNOWN_COMMAND:
+        return reply[:4] + _FIRMWARE_UNKNOWN_COMMAND
+    return reply
 
 
 __all__ = ["EncoderDemo", "Pkp3500Twin", "direction_byte"]

@@ -4,21 +4,16 @@ a model; this imports it on first use and builds twins from specs such as ``"key
 from __future__ import annotations
 
 import os
-from importlib import import_module
 from typing import Any
 
 from blinkcan.devices.model import Model
-from blinkcan.devices.registry import model, parse_spec
+from blinkcan.devices.registry import load_class, model, parse_spec
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.nvm import Nvm
 
 
 def _twin_class(found: Model) -> type[CanopenTwin]:
-    module, _, name = found.twin.partition(":")
-    cls = getattr(import_module(module), name)
-    if not (isinstance(cls, type) and issubclass(cls, CanopenTwin)):
-        raise TypeError(f"{found.name}: {found.twin} is not a CanopenTwin class")
-    return cls
+    return load_class(found.twin, CanopenTwin)
 
 
 def twin_class(name: str) -> type[CanopenTwin]:

@@ -1,0 +1,70 @@
+"""``blinkcan decode LOG... --parquet OUT [-j N] [--force]``: logs into the fleet dataset,
+with a progress bar (files, frames, rate). Needs the [fleet] extra; imported only then."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import click
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from blinkcan import fleet
+
+
+def check_extra() -> None:
+    """One line naming the install command when the [fleet] extra is missing."""
+    absent = fleet.missing()
+    if absent:
+        raise click.ClickException(f"--parquet needs {', '.join(absent)}: {fleet.EXTRA}")
+
+
+def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
+                      devices: dict[int, str]) -> None:
+    check_extra()
+    from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
+    from blinkcan.fleet.task import FileResult  # noqa: PLC0415
+
+    total = len(log_files(files))
+    console = Console(stderr=True)
+    progress = Progress(TextColumn("{task.completed:,.0f}/{task.total:,.0f} files"),
+                        BarColumn(), TextColumn("{task.fields[frames]:,} frames"),
+                        TextColumn("{task.fields[rate]:,.0f} frames/s"), TimeElapsedColumn(),
+                        console=console, transient=True, disable=not sys.stderr.isatty())
+    task = progress.add_task("decode", total=total, frames=0, rate=0.0)
+    start = time.monotonic()
+    frames = 0
+    counts = {"decoded": 0, "skipped": 0, "failed": 0}
+
+    def show() -> None:
+        rate = frames / max(time.monotonic() - start, 1e-9)
+        progress.update(task, frames=frames, rate=rate)
+
+    def on_frames(count: int) -> None:  # one process: live counts
+        nonlocal frames
+        frames += count
+        show()
+
+    def on_result(result: FileResult) -> None:
+        nonlocal frames
+        counts[result.status] += 1
+        if result.status == "failed":
+            progress.console.print(f"cannot decode {result.source}: {result.error}",
+                                   markup=False, highlight=False, soft_wrap=True)
+        elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
+            frames += result.frames
+        progress.advance(task)
+        show()
+
+    with progress:
+        decode_files(files, out, jobs=jobs, force=force, devices=devices,
+                     on_result=on_result, on_frames=on_frames if jobs == 1 else None)
+    elapsed = time.monotonic() - start
+    skipped = f", {counts['skipped']} already decoded (--force decodes again)" \
+        if counts["skipped"] else ""
+    click.echo(f"{counts['decoded']} files decoded to {out} ({frames:,} frames in "
+               f"{elapsed:.1f} s){skipped}", err=True)
+    if counts["failed"]:
+        raise click.ClickException(f"{counts['failed']} of {total} files could not be decoded "
+                                   "(named above); the others are in the dataset")

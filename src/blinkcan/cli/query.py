@@ -1,0 +1,73 @@
+"""``blinkcan query OUT "SELECT ... FROM events ..."``: SQL on the fleet dataset with DuckDB
+(embedded, no server), printed as a table, CSV or JSON lines. Needs the [fleet] extra."""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import json
+import sys
+from typing import Any
+
+import click
+from rich.console import Console
+from rich.table import Table
+
+from blinkcan import fleet
+
+#: rows printed as a table at most (CSV and JSON print all)
+TABLE_ROWS = 1000
+
+
+def _json_value(value: Any) -> Any:
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value).hex()
+    if isinstance(value, (datetime.datetime, datetime.date, datetime.time)):
+        return value.isoformat()
+    if isinstance(value, datetime.timedelta):
+        return value.total_seconds()
+    return value if isinstance(value, (int, float, str, bool, type(None), list, dict)) \
+        else str(value)
+
+
+@click.command("query")
+@click.argument("dataset", metavar="OUT", type=click.Path())
+@click.argument("sql")
+@click.option("--csv", "as_csv", is_flag=True, help="CSV with a header line.")
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per row.")
+def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
+    """Run SQL on the dataset `blinkcan decode --parquet OUT` wrote: its rows are the table
+    `events` (columns: time, source, channel, can_id, extended, node, kind, key, pin, state,
+    colour, value, text, data, model, date)."""
+    if as_csv and as_json:
+        raise click.UsageError("--csv and --json are two outputs: choose one")
+    absent = fleet.missing("duckdb", "fsspec")
+    if absent:
+        raise click.ClickException(f"query needs {', '.join(absent)}: {fleet.EXTRA}")
+    import duckdb  # noqa: PLC0415 (the [fleet] extra, checked above)
+
+    from blinkcan.fleet.query import connect  # noqa: PLC0415
+
+    try:
+        with connect(dataset) as connection:
+            result = connection.execute(sql)
+            names = [column[0] for column in result.description or []]
+            rows = result.fetchall()
+    except (duckdb.Error, ValueError) as error:
+        raise click.ClickException(str(error).splitlines()[0]) from None
+    out = sys.stdout
+    if as_csv:
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerow(names)
+        writer.writerows([[_json_value(v) for v in row] for row in rows])
+    elif as_json:
+        for row in rows:
+            out.write(json.dumps(dict(zip(names, map(_json_value, row), strict=True))) + "\n")
+    else:
+        table = Table(*names, show_lines=False)
+        for row in rows[:TABLE_ROWS]:
+            table.add_row(*("" if v is None else str(_json_value(v)) for v in row))
+        Console().print(table)
+        if len(rows) > TABLE_ROWS:
+            click.echo(f"{len(rows):,} rows; the first {TABLE_ROWS:,} shown (--csv or --json "
+                       "print all)", err=True)

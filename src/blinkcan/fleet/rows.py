@@ -1,0 +1,193 @@
+"""Decoder events as table rows: what each event says about keys, LEDs, outputs and faults.
+
+One event can be several rows (a key-state frame that presses two keys is two ``key`` rows)
+and is always at least one, so every frame of a log is in the table. Where a frame repeats
+a device's state (the Keybox's periodic fault message, KBX §25; an LED frame sent again), the
+row says ``unchanged`` rather than repeating the pins or keys: a ``fault`` row with a pin is a
+pin that went into FAULT (``fault``) or out of it (``cleared``), so counting them counts fuse
+blows. The state followed per node starts where the devices start (LEDs dark, outputs OFF, no
+FAULT) and restarts at each boot-up. No pyarrow here: the rows are plain tuples.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+from blinkcan.decode.decoder import Decoder, Event, Kind
+from blinkcan.decode.j1939 import colour_name
+from blinkcan.devices.colours import channel_name
+from blinkcan.devices.keypad_j1939 import LedState
+from blinkcan.devices.registry import describe_device
+
+#: the event kinds of the table, in the order the schema documents them
+KINDS = ("key", "led", "output", "fault", "heartbeat", "nmt", "sdo", "j1939", "pdo", "sync",
+         "remote", "error", "undecoded")
+_CHANNEL_BITS = (("red", 1), ("green", 2), ("blue", 4))
+_SIMPLE = {Kind.SYNC: "sync", Kind.REMOTE: "remote", Kind.ERROR: "error",
+           Kind.FRAME: "undecoded"}
+_LED_STATES = {"led_on": "on", "led_blink": "blink"}
+_COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))
+
+
+class Detail(NamedTuple):
+    """The per-row part of an event's rows (the rest is the event's own time, frame, text)."""
+
+    kind: str
+    key: int | None = None
+    pin: int | None = None
+    state: str | None = None
+    colour: str | None = None
+    value: int | None = None
+
+
+class Rowed(NamedTuple):
+    """An event's rows: the node and model they are about, and one detail per row."""
+
+    node: int | None
+    model: str | None
+    details: list[Detail]
+
+
+def _int_value(value: object) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
+
+
+class EventRows:
+    """Rows of the events of one log, in order (it follows each node's LEDs, outputs and
+    faults to say what changed)."""
+
+    def __init__(self, decoder: Decoder) -> None:
+        self._decoder = decoder
+        self._leds: dict[tuple[int, str], dict[int, str]] = {}  # (node, pdo) -> key -> colour
+        self._outputs: dict[int, dict[int, str]] = {}  # node -> pin -> "high" / "off"
+        self._faults: dict[int, frozenset[int]] = {}  # node -> pins in FAULT
+        self._models: dict[str, str] = {}
+        self._pdo: dict[str, Callable[[int, dict[str, Any]], list[Detail]]] = {
+            "key_state": self._keys, "led_on": self._led_picture,
+            "led_blink": self._led_picture, "outputs": self._output_states,
+            "faults": self._fault_pins,
+        }
+
+    def rows(self, event: Event) -> Rowed:
+        kind = event.kind
+        node = event.node_id
+        if kind is Kind.J1939:
+            return Rowed(node, self._model_named(event.device), [self._j1939(event.fields)])
+        if kind is Kind.NMT:
+            target = event.fields.get("target") or None
+            return Rowed(target, self._model_of(target), [
+                Detail("nmt", state=event.fields.get("command"), value=target)])
+        model = self._model_of(node)
+        if kind is Kind.PDO and node is not None:
+            name = str(event.fields.get("pdo"))
+            follow = self._pdo.get(name)
+            if follow is not None:
+                return Rowed(node, model, follow(node, event.fields))
+            return Rowed(node, model, [Detail("pdo", state=name, value=_only_int(event.fields))])
+        if kind is Kind.HEARTBEAT:
+            return Rowed(node, model, [Detail("heartbeat", state=event.fields.get("state"))])
+        if kind is Kind.BOOT_UP:
+            self._reboot(node)
+            return Rowed(node, model, [Detail("heartbeat", state="boot-up")])
+        simple = _SIMPLE.get(kind)
+        if simple is not None:
+            return Rowed(node, model, [Detail(simple)])
+        # SDO services: the kind of step as the state, the value where it is a number
+        return Rowed(node, model, [Detail("sdo", state=kind.value,
+                                          value=_int_value(event.fields.get("value")))])
+
+    # -- models -----------------------------------------------------------------------------
+
+    def _model_of(self, node: int | None) -> str | None:
+        if node is None:
+            return None
+        description = self._decoder.device(node)
+        return description.model if description is not None else None
+
+    def _model_named(self, device: str | None) -> str | None:
+        if device is None:
+            return None
+        model = self._models.get(device)
+        if model is None:
+            model = self._models[device] = describe_device(device).model
+        return model
+
+    # -- state followed ---------------------------------------------------------------------
+
+    def _reboot(self, node: int | None) -> None:
+        """Boot-up: LEDs dark, outputs OFF, no FAULT (the devices' power-on state)."""
+        for key in [k for k in self._leds if k[0] == node]:
+            del self._leds[key]
+        if node is not None:
+            self._outputs.pop(node, None)
+            self._faults.pop(node, None)
+
+    def _keys(self, node: int, fields: dict[str, Any]) -> list[Detail]:
+        details = [Detail("key", key=key, state="pressed") for key in fields["pressed"]]
+        details += [Detail("key", key=key, state="released") for key in fields["released"]]
+        return details or [Detail("key", state="held", value=len(fields["held"]))]
+
+    def _led_picture(self, node: int, fields: dict[str, Any]) -> list[Detail]:
+        name = str(fields["pdo"])
+        state = _LED_STATES[name]
+        lit: dict[int, int] = {}
+        for channel, bit in _CHANNEL_BITS:
+            for key in fields.get(channel, ()):
+                lit[key] = lit.get(key, 0) | bit
+        before = self._leds.setdefault((node, name), {})
+        details = []
+        for key in sorted(lit.keys() | before.keys()):
+            colour = _COLOUR_NAMES[lit.get(key, 0)]
+            if before.get(key, "off") != colour:
+                before[key] = colour
+                details.append(Detail("led", key=key, state=state, colour=colour))
+        return details or [Detail("led", state="unchanged")]
+
+    def _output_states(self, node: int, fields: dict[str, Any]) -> list[Detail]:
+        high = set(fields["high"])
+        before = self._outputs.setdefault(node, {})
+        details = []
+        for pin in sorted(high | set(fields["off"]) | set(before)):
+            state = "high" if pin in high else "off"  # KBX §17: the decoder applied OFF wins
+            if before.get(pin, "off") != state:
+                before[pin] = state
+                details.append(Detail("output", pin=pin, state=state))
+        return details or [Detail("output", state="unchanged")]
+
+    def _fault_pins(self, node: int, fields: dict[str, Any]) -> list[Detail]:
+        now = frozenset(fields["faults"])
+        before = self._faults.get(node, frozenset())
+        self._faults[node] = now
+        details = [Detail("fault", pin=pin, state="fault") for pin in sorted(now - before)]
+        details += [Detail("fault", pin=pin, state="cleared") for pin in sorted(before - now)]
+        return details or [Detail("fault", state="unchanged", value=len(now))]
+
+    # -- J1939 --------------------------------------------------------------------------------
+
+    @staticmethod
+    def _j1939(fields: dict[str, Any]) -> Detail:
+        message, command = fields.get("message"), fields.get("command")
+        if message == "key":
+            return Detail("key", key=fields["key"],
+                          state="pressed" if fields["pressed"] else "released")
+        if message == "heartbeat":  # spec/pkp-2600-si-j1939.md §18: counter and keys held
+            return Detail("heartbeat", state="j1939", value=fields["counter"])
+        if command == "single_led":  # §7a
+            state = LedState(fields["state"]).name.lower() if fields["state"] in \
+                LedState._value2member_map_ else f"state {fields['state']:02X}h"
+            return Detail("led", key=fields["key"], state=state,
+                          colour=colour_name(fields["colour"]))
+        return Detail("j1939", state=str(message or command or "address"),
+                      value=_int_value(fields.get("value")))
+
+
+def _only_int(fields: dict[str, Any]) -> int | None:
+    """The value of a PDO with one numeric signal (a brightness level), else None."""
+    values = [v for k, v in fields.items() if k != "pdo"]
+    if len(values) == 1:
+        value = values[0]
+        if isinstance(value, float) and value.is_integer():
+            return int(value)
+        return _int_value(value)
+    return None

@@ -1,0 +1,107 @@
+"""Many log files into one dataset: in this process, on ``jobs`` local processes, or one task
+per file on a Dask cluster. Every way runs the same per-file task (``task.py``), so the
+dataset is the same whichever ran it."""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Iterable, Mapping
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+from blinkcan.fleet.schema import ROWS_PER_GROUP
+from blinkcan.fleet.task import FileResult, decode_file
+
+
+def log_files(paths: Iterable[str | os.PathLike[str]]) -> list[str]:
+    """The files to decode, each once, in order: a folder stands for the files under it
+    (hidden ones and ``_`` names, such as a dataset's own, left out)."""
+    found: dict[str, None] = {}
+    for path in paths:
+        source = Path(path)
+        if source.is_dir():
+            for inner in sorted(source.rglob("*")):
+                parts = inner.relative_to(source).parts
+                if inner.is_file() and not any(p.startswith((".", "_")) for p in parts):
+                    found.setdefault(os.path.abspath(inner))
+        else:
+            found.setdefault(os.path.abspath(source))
+    return list(found)
+
+
+def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any = None,
+                 jobs: int | None = None, *, force: bool = False,
+                 devices: Mapping[int, str] | None = None,
+                 rows_per_group: int = ROWS_PER_GROUP,
+                 on_result: Callable[[FileResult], None] | None = None,
+                 on_frames: Callable[[int], None] | None = None) -> list[FileResult]:
+    """Decode log files (or folders of them) into the Parquet dataset at ``out``: a folder or
+    any fsspec URL (``s3://bucket/lake``, ``memory://lake``). With ``client`` (a
+    ``dask.distributed.Client``) one task per file runs on its workers (they must see the
+    files and ``out``); else ``jobs`` local processes (default 1: this process). Returns one
+    result per file, in order; a file that cannot be read is a "failed" result, the others
+    go on. ``on_result`` hears each result as it comes, ``on_frames`` frame counts (in this
+    process only). ``devices`` maps node ids to models (``{0x15: "keypad@1.5"}``)."""
+    if jobs is not None and jobs < 1:
+        raise ValueError(f"jobs must be 1 or more, not {jobs}")
+    sources = log_files(paths)
+    task = partial(decode_file, out=out, force=force, devices=dict(devices or {}),
+                   rows_per_group=rows_per_group)
+    if client is not None:
+        results = _on_dask(client, sources, task, on_result)
+    elif jobs is None or jobs == 1 or len(sources) < 2:
+        results = {}
+        for source in sources:
+            results[source] = result = task(source, progress=on_frames)
+            if on_result is not None:
+                on_result(result)
+    else:
+        results = _on_processes(min(jobs, len(sources)), sources, task, on_result)
+    return [results[source] for source in sources]
+
+
+def _on_processes(jobs: int, sources: list[str], task: Callable[..., FileResult],
+                  on_result: Callable[[FileResult], None] | None) -> dict[str, FileResult]:
+    methods = multiprocessing.get_all_start_methods()
+    # fork: the workers need nothing of __main__ (python -m blinkcan runs the CLI on import)
+    context = multiprocessing.get_context("fork" if "fork" in methods else None)
+    results: dict[str, FileResult] = {}
+    with ProcessPoolExecutor(jobs, mp_context=context) as pool:
+        futures: dict[Future[FileResult], str] = {pool.submit(task, s): s for s in sources}
+        for future in as_completed(futures):
+            source = futures[future]
+            results[source] = result = _result(source, future)
+            if on_result is not None:
+                on_result(result)
+    return results
+
+
+def _on_dask(client: Any, sources: list[str], task: Callable[..., FileResult],
+             on_result: Callable[[FileResult], None] | None) -> dict[str, FileResult]:
+    from distributed import as_completed as dask_completed  # noqa: PLC0415 (optional)
+
+    # pure=False: a task is run again when asked again (the file may have grown); a worker
+    # that dies has its task run again elsewhere (the scheduler's allowed-failures)
+    futures = {client.submit(task, source, pure=False, key=f"blinkcan-decode-{n}-"
+                             f"{os.urandom(6).hex()}"): source
+               for n, source in enumerate(sources)}
+    results: dict[str, FileResult] = {}
+    for future in dask_completed(list(futures)):  # type: ignore[no-untyped-call]
+        source = futures[future]
+        results[source] = result = _result(source, future)
+        if on_result is not None:
+            on_result(result)
+    return results
+
+
+def _result(source: str, future: Any) -> FileResult:
+    """The task's result, or a failed one naming what stopped it (a killed worker, ...)."""
+    try:
+        result = future.result()
+    except Exception as error:
+        return FileResult(source, "failed", error=f"{type(error).__name__}: {error}")
+    assert isinstance(result, FileResult)
+    return result

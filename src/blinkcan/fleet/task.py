@@ -1,0 +1,220 @@
+"""One log file into the dataset: the task that runs in a process, a pool or on a Dask worker.
+
+Whole or nothing, and never twice:
+- the rows are written to ``_blinkcan/tmp/<key>-<attempt>/`` (readers skip ``_`` names);
+- only once the whole log is decoded, a journal ``_blinkcan/<key>.pending.json`` names every
+  file about to be replaced, the files are renamed into their partitions, the file's older
+  outputs that the new decoding does not have are removed, and the manifest
+  ``_blinkcan/<key>.json`` (source, size, mtime, blinkcan version, outputs) is written and the
+  journal removed;
+- a task that finds a journal (its predecessor died while renaming) removes what the journal
+  names first, and the attempts of dead predecessors (their temporary folders);
+- a file whose manifest matches its size, mtime, blinkcan version and decoding settings is
+  skipped unless ``force``.
+
+``<key>`` is a hash of the source's absolute path, so one source always writes the same names.
+A file that cannot be read is a failed result with the reason, never an exception.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import can
+from fsspec import AbstractFileSystem
+from fsspec.core import url_to_fs
+
+from blinkcan import __version__
+from blinkcan.decode.decoder import Decoder, Event, Kind, error_event
+from blinkcan.devices.registry import describe_device
+from blinkcan.fleet.rows import EventRows
+from blinkcan.fleet.schema import ROWS_PER_GROUP, UNKNOWN
+from blinkcan.fleet.sources import read_items
+from blinkcan.fleet.writer import PartitionWriter, int64_or_none
+from blinkcan.formats.logs import LogError, describe_frame, frame_kind
+from blinkcan.protocol.frame import Frame
+
+META = "_blinkcan"
+#: how often (in frames) a local task reports its progress
+PROGRESS_EVERY = 16_384
+#: the devices assumed where none are given: each model's own default node id
+DEFAULT_DEVICES = ("keypad", "keybox")
+
+
+@dataclass(frozen=True)
+class FileResult:
+    """What became of one source file: ``status`` is "decoded", "skipped" (already decoded
+    by this blinkcan version) or "failed" (``error`` says why)."""
+
+    source: str
+    status: str
+    frames: int = 0
+    rows: int = 0
+    outputs: tuple[str, ...] = ()
+    error: str | None = None
+
+
+def source_key(source: str) -> str:
+    return hashlib.sha256(source.encode()).hexdigest()[:20]
+
+
+def _other_event(decoder: Decoder, message: can.Message) -> Event:
+    """A remote, error or CAN FD frame as ``blinkcan decode`` shows it."""
+    kind = frame_kind(message)
+    if kind == "error":
+        return error_event(message.timestamp, message.arbitration_id, bytes(message.data))
+    if kind == "remote":
+        return decoder.decode_remote(message.arbitration_id, message.is_extended_id,
+                                     message.dlc, message.timestamp)
+    frame = Frame.trusted(message.arbitration_id, bytes(message.data[:8]),
+                          message.is_extended_id)
+    note = f"{len(message.data)} bytes (CAN FD is not decoded)" if kind == "fd" else \
+        "not a valid classic CAN frame"
+    return Event(message.timestamp, frame, Kind.FRAME, f"{describe_frame(message)}: {note}")
+
+
+def make_decoder(devices: Mapping[int, str] | None) -> Decoder:
+    if devices:
+        return Decoder(dict(devices))
+    known = [describe_device(name) for name in DEFAULT_DEVICES]
+    return Decoder({d.default_node_id: d for d in known})
+
+
+class _Store:
+    """The dataset's folder on any fsspec filesystem."""
+
+    def __init__(self, out: str, key: str) -> None:
+        fs, root = url_to_fs(out)
+        self.fs: AbstractFileSystem = fs
+        self.root = root.rstrip("/")
+        self.meta = f"{self.root}/{META}"
+        self.manifest = f"{self.meta}/{key}.json"
+        self.journal = f"{self.meta}/{key}.pending.json"
+        self.temporary = f"{self.meta}/tmp"
+        self.key = key
+
+    def read_json(self, path: str) -> dict[str, Any] | None:
+        try:
+            with self.fs.open(path, "rb") as stream:
+                document = json.loads(stream.read())
+        except (FileNotFoundError, ValueError):
+            return None
+        return document if isinstance(document, dict) else None
+
+    def write_json(self, path: str, document: dict[str, object]) -> None:
+        """Written aside, then renamed: never half a manifest."""
+        aside = f"{self.temporary}/{self.key}-{uuid.uuid4().hex}.json"
+        self.fs.makedirs(self.temporary, exist_ok=True)
+        with self.fs.open(aside, "wb") as stream:
+            stream.write(json.dumps(document, indent=1).encode())
+        self.fs.mv(aside, path)
+
+    def remove(self, path: str) -> None:
+        if self.fs.exists(path):
+            self.fs.rm(path, recursive=True)
+
+    def recover(self) -> None:
+        """Undo what a dead predecessor left: a journal's files, its temporary folders."""
+        journal = self.read_json(self.journal)
+        if journal is not None:
+            self.remove(self.manifest)
+            for relative in journal.get("outputs", []):
+                self.remove(f"{self.root}/{relative}")
+            self.remove(self.journal)
+        if self.fs.exists(self.temporary):
+            for path in self.fs.ls(self.temporary, detail=False):
+                if path.rstrip("/").rsplit("/", 1)[-1].startswith(f"{self.key}-"):
+                    self.remove(path)
+
+    def commit(self, attempt: str, outputs: list[str], manifest: dict[str, object]) -> None:
+        old = self.read_json(self.manifest) or {}
+        stale = [p for p in old.get("outputs", []) if p not in outputs]
+        self.write_json(self.journal, {"outputs": sorted({*outputs, *stale})})
+        self.remove(self.manifest)
+        for relative in outputs:
+            target = f"{self.root}/{relative}"
+            self.fs.makedirs(target.rsplit("/", 1)[0], exist_ok=True)
+            self.fs.mv(f"{attempt}/{relative}", target)
+        for relative in stale:
+            self.remove(f"{self.root}/{relative}")
+        self.write_json(self.manifest, manifest)
+        self.remove(self.journal)
+        self.remove(attempt)
+
+
+def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False,
+                devices: Mapping[int, str] | None = None,
+                rows_per_group: int = ROWS_PER_GROUP,
+                progress: Callable[[int], None] | None = None) -> FileResult:
+    """Decode one log file into the dataset at ``out`` (a folder or an fsspec URL).
+    ``progress`` (local runs) hears the count of frames decoded every PROGRESS_EVERY."""
+    path = os.path.abspath(os.fspath(source))
+    try:
+        stat = os.stat(path)
+    except OSError as error:
+        return FileResult(path, "failed", error=f"cannot read: {error.strerror or error}")
+    store = _Store(out, source_key(path))
+    settings = {"devices": sorted([node, model] for node, model in (devices or {}).items())}
+    identity = {"source": path, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns,
+                "blinkcan": __version__, "settings": settings}
+    store.recover()
+    old = store.read_json(store.manifest)
+    if not force and old is not None and all(old.get(k) == v for k, v in identity.items()):
+        outputs = old.get("outputs", [])
+        return FileResult(path, "skipped", int(old.get("frames", 0)), int(old.get("rows", 0)),
+                          tuple(outputs))
+    attempt = f"{store.temporary}/{store.key}-{uuid.uuid4().hex}"
+    writer = PartitionWriter(store.fs, attempt, f"{store.key}.parquet", path, rows_per_group)
+    try:
+        frames = _decode_into(writer, path, devices, progress)
+        outputs = writer.close()
+    except Exception as error:  # a file that cannot be read (or decoded): named and skipped
+        writer.abandon()
+        store.remove(attempt)
+        return FileResult(path, "failed", error=_reason(error))
+    except BaseException:
+        writer.abandon()
+        store.remove(attempt)
+        raise
+    manifest = {**identity, "outputs": outputs, "frames": frames, "rows": writer.rows}
+    store.commit(attempt, outputs, manifest)
+    return FileResult(path, "decoded", frames, writer.rows, tuple(outputs))
+
+
+def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] | None,
+                 progress: Callable[[int], None] | None) -> int:
+    decoder = make_decoder(devices)
+    rows = EventRows(decoder).rows
+    decode = decoder.decode
+    append, time_and_date = writer.append, writer.time_and_date
+    frames = 0
+    for timestamp, item, channel in read_items(path):
+        event = decode(item, timestamp) if isinstance(item, Frame) else \
+            _other_event(decoder, item)
+        frame = event.frame
+        micros, date = time_and_date(timestamp)
+        node, model, details = rows(event)
+        partition = (model or UNKNOWN, date)
+        text, can_id, extended, data = str(event), frame.can_id, frame.extended, frame.data
+        append(partition, [(micros, channel, can_id, extended, node, kind, key, pin, state,
+                             colour, int64_or_none(value), text, data)
+                            for kind, key, pin, state, colour, value in details])
+        frames += 1
+        if progress is not None and not frames % PROGRESS_EVERY:
+            progress(PROGRESS_EVERY)
+    if progress is not None:
+        progress(frames % PROGRESS_EVERY)
+    return frames
+
+
+def _reason(error: BaseException) -> str:
+    if isinstance(error, LogError):
+        return str(error)
+    text = str(error).splitlines()[0] if str(error) else ""
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__

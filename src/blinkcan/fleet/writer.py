@@ -1,0 +1,116 @@
+"""Rows into Parquet files, one per (model, date) partition, in row groups of bounded size.
+
+Rows are gathered as tuples; at ``rows_per_group`` rows in all the partitions' rows become
+Arrow arrays, column by column, and a row group each, so memory stays the same
+whatever the log's size. Files go to a folder of the caller's choice (the caller renames them
+into the dataset once the whole log is decoded).
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+from typing import Any
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+from fsspec import AbstractFileSystem
+
+from blinkcan.fleet.schema import ROWS_PER_GROUP, SCHEMA, UNKNOWN
+
+_EPOCH_ORDINAL = datetime.date(1970, 1, 1).toordinal()
+_DAY_S = 86_400
+#: times a Parquet timestamp in microseconds carries (years 1..9999)
+_EARLIEST_S, _LATEST_S = -62_135_596_800, 253_402_300_800
+_INT64 = 1 << 63
+_COLUMNS = [field.name for field in SCHEMA if field.name != "source"]
+
+
+def partition_path(model: str, date: str) -> str:
+    return f"model={model}/date={date}"
+
+
+class PartitionWriter:
+    """Appends rows to the partitions of one source file; :meth:`close` says which files."""
+
+    def __init__(self, fs: AbstractFileSystem, folder: str, name: str, source: str,
+                 rows_per_group: int = ROWS_PER_GROUP) -> None:
+        if rows_per_group < 1:
+            raise ValueError(f"rows_per_group must be 1 or more, not {rows_per_group}")
+        self._fs, self._folder, self._name, self._source = fs, folder, name, source
+        self._rows_per_group = rows_per_group
+        self._buffers: dict[tuple[str, str], list[tuple[Any, ...]]] = {}
+        self._writers: dict[tuple[str, str], tuple[Any, pq.ParquetWriter]] = {}
+        self._buffered = 0
+        self._days: dict[int, str] = {}
+        #: rows written so far
+        self.rows = 0
+
+    def time_and_date(self, seconds: float) -> tuple[int | None, str]:
+        """(microseconds since the epoch, the UTC date) of a log time; (None, "unknown")
+        for one no timestamp carries (not finite, before year 1 or after 9999)."""
+        if not (math.isfinite(seconds) and _EARLIEST_S <= seconds < _LATEST_S):
+            return None, UNKNOWN
+        day = int(seconds // _DAY_S)
+        date = self._days.get(day)
+        if date is None:
+            date = self._days[day] = datetime.date.fromordinal(_EPOCH_ORDINAL + day).isoformat()
+        return round(seconds * 1_000_000), date
+
+    def append(self, partition: tuple[str, str], rows: list[tuple[Any, ...]]) -> None:
+        """Rows of one partition: the values of the schema's columns but ``source``, in its
+        order."""
+        buffer = self._buffers.get(partition)
+        if buffer is None:
+            buffer = self._buffers[partition] = []
+        buffer += rows
+        self._buffered += len(rows)
+        if self._buffered >= self._rows_per_group:
+            self.flush()
+
+    def flush(self) -> None:
+        """Every partition's rows so far as a row group."""
+        for partition, rows in self._buffers.items():
+            if not rows:
+                continue
+            arrays = [pa.array(values, type=SCHEMA.field(name).type)
+                      for name, values in zip(_COLUMNS, zip(*rows, strict=True), strict=True)]
+            arrays.insert(SCHEMA.get_field_index("source"),
+                          pa.array([self._source] * len(rows), type=pa.string()))
+            self._writer(partition).write_table(pa.Table.from_arrays(arrays, schema=SCHEMA))
+            self.rows += len(rows)
+            rows.clear()
+        self._buffered = 0
+
+    def _writer(self, partition: tuple[str, str]) -> pq.ParquetWriter:
+        entry = self._writers.get(partition)
+        if entry is None:
+            folder = f"{self._folder}/{partition_path(*partition)}"
+            self._fs.makedirs(folder, exist_ok=True)
+            stream = self._fs.open(f"{folder}/{self._name}", "wb")
+            entry = self._writers[partition] = (stream, pq.ParquetWriter(stream, SCHEMA))
+        return entry[1]
+
+    def close(self) -> list[str]:
+        """Write what is left and close the files; their paths relative to the folder."""
+        self.flush()
+        written = []
+        for partition, (stream, writer) in sorted(self._writers.items()):
+            writer.close()
+            stream.close()
+            written.append(f"{partition_path(*partition)}/{self._name}")
+        self._writers.clear()
+        return written
+
+    def abandon(self) -> None:
+        """Close the files without finishing them (the caller removes the folder)."""
+        for stream, writer in self._writers.values():
+            try:
+                writer.close()
+            finally:
+                stream.close()
+        self._writers.clear()
+
+
+def int64_or_none(value: int | None) -> int | None:
+    return value if value is None or -_INT64 <= value < _INT64 else None
