@@ -6,5 +6,5 @@ import pytest
 
 from blinkcan import fleet
 
-if fleet.missing("pyarrow", "duckdb", "fsspec", "zstandard"):
+if fleet.missing("pyarrow", "duckdb", "fsspec", "zstandard", "distributed"):
     pytest.skip(f"the fleet extra is not installed: {fleet.EXTRA}", allow_module_level=True)
