@@ -85,6 +85,7 @@ class HostBus:
         self._fast: dict[int, Handler] = {}
         self._extended: list[Handler] = []
         self._sdo: dict[int, SdoChannel] = {}
+        self._sdo_lock = threading.Lock()
         self._own = OwnFrames(bus)
         self._detach: Callable[[], None] | None = None
         self._started = False
@@ -291,9 +292,10 @@ class HostBus:
     def sdo(self, node_id: int, timeout: float = 0.5, retries: int = 1) -> SdoClient:
         """A client of the one SDO channel to ``node_id`` on this bus (shared by every driver,
         so requests to a node never overlap), with its own ``timeout`` and ``retries``."""
-        channel = self._sdo.get(node_id)
-        if channel is None:
-            channel = self._sdo[node_id] = SdoChannel(self, node_id)
+        with self._sdo_lock:  # drivers opened in two threads at once share one channel too
+            channel = self._sdo.get(node_id)
+            if channel is None:
+                channel = self._sdo[node_id] = SdoChannel(self, node_id)
         return SdoClient(channel, timeout, retries)
 
     def produce_sync(self, period: float) -> Timer:

@@ -144,6 +144,9 @@ class Device:
         #: held while an output or LED command is sent and the driver's picture updated, and
         #: while a restore computes what to send and sends it: the two never interleave
         self._command_lock = threading.Lock()
+        #: held while the host heartbeat producer is replaced or stopped, and at close
+        self._producer_lock = threading.Lock()
+        self._closed = False
         self._unsubscribe: list[Callable[[], None]] = [
             self.host.subscribe(HEARTBEAT + node_id, self._on_heartbeat),
             self.host.subscribe(NMT, self._on_nmt_heard),
@@ -450,10 +453,12 @@ class Device:
                 self._watch_heartbeat(own_ms / 1000)
             else:
                 self.monitor_heartbeat(period)
-        if self._producer is not None:
-            self._producer.cancel()
         frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
-        self._producer = self.host.call_every(period, lambda: self._send_host_heartbeat(frame))
+        with self._producer_lock:  # one producer, whichever threads call this at once
+            if self._producer is not None:
+                self._producer.cancel()
+            self._producer = self.host.call_every(period,
+                                                  lambda: self._send_host_heartbeat(frame))
 
     def _send_host_heartbeat(self, frame: Frame) -> None:
         self.host.send(frame)
@@ -465,13 +470,19 @@ class Device:
 
     def stop_host_heartbeat(self) -> None:
         """Stop the host heartbeat (as a crashed application would): the device reacts."""
-        if self._producer is not None:
-            self._producer.cancel()
-            self._producer = None
+        with self._producer_lock:
+            if self._producer is not None:
+                self._producer.cancel()
+                self._producer = None
 
     # -- lifecycle --------------------------------------------------------------------------------
 
     def close(self) -> None:
+        """Let go of the bus; a second close (from any thread) does nothing."""
+        with self._producer_lock:
+            if self._closed:
+                return
+            self._closed = True
         self.stop_host_heartbeat()
         for unsubscribe in self._unsubscribe:
             unsubscribe()
