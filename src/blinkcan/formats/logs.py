@@ -27,6 +27,7 @@ from types import TracebackType
 import can
 from can.io.blf import BLFParseError, BLFWriter
 
+from blinkcan.errors import BlinkcanError
 from blinkcan.formats.candump import read_candump, with_error_details
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
 from blinkcan.formats.carried import CARRIES, Losses
@@ -36,7 +37,7 @@ from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_message
 
 
-class LogError(ValueError):
+class LogError(BlinkcanError, ValueError):
     """A file that cannot be read or written as a CAN log."""
 
 
