@@ -164,8 +164,8 @@ def _group(kind: str) -> click.Group:
     titles = ", ".join(found.description().title for found in kinds)
     names = [name for found in kinds for name in found.names]
 
-    @click.group(kind, help=f"One-shot control of a {kind} ({titles}); the model is read from "
-                            "the device (100Bh) unless --model names it.")
+    @click.group(kind, help=f"One-shot control of a {kind}. Models: {titles}; which one is "
+                            "read from the device (100Bh) unless --model names it.")
     @click.option("--node-id", type=NODE_ID, default=default,
                   help=f"The {kind}'s node id (default {default:02X}h).")
     @click.option("--model", type=click.Choice(names, case_sensitive=False), default=None,
