@@ -59,5 +59,6 @@ def test_outputs_go_off_when_the_controller_dies(
     assert keybox_twin.snapshot()["pins"][1]["state"] == "high"  # the heartbeat keeps it on
     controller.keybox.stop_host_heartbeat()  # as a crashed controller would
     rig.advance(0.25)
-    assert keybox_twin.snapshot()["pins"][1]["state"] == "off"
-    assert keybox_twin.snapshot()["nmt_state"] == "pre-operational"
+    assert keybox_twin.snapshot()["pins"][1]["state"] == "off"  # the Keybox's watchdog tripped
+    rig.advance(1.0)
+    assert keybox_twin.snapshot()["pins"][1]["state"] == "off"  # and nothing switched it back

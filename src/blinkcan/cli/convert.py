@@ -23,7 +23,9 @@ from blinkcan.formats.logs import FrameWriter, LogError, read_messages
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 def convert(source: str, target: str, force: bool) -> None:
     """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap.
-    Remote and error frames are kept; what TARGET's format cannot carry is counted and named."""
+    Every frame is kept whole (identifier, kind, flags, data, channel, time) where TARGET's
+    format can hold it; what it cannot (e.g. .csv: channel, CAN FD flags) is counted, named
+    and explained, one line each."""
     check_target(target, force)
     try:
         with writing(target), FrameWriter(target, replace=force) as writer:
@@ -34,6 +36,8 @@ def convert(source: str, target: str, force: bool) -> None:
     click.echo(f"{writer.count} frames written to {target}", err=True)
     if (skipped := writer.skipped_text()) is not None:
         click.echo(skipped, err=True)
+    for line in writer.lost_lines():
+        click.echo(line, err=True)
 
 
 class _StopError(Exception):
@@ -83,6 +87,8 @@ def record(target: str, duration: float | None, force: bool) -> None:
     click.echo(f"{writer.count} frames recorded", err=True)
     if (skipped := writer.skipped_text()) is not None:
         click.echo(skipped, err=True)
+    for line in writer.lost_lines():
+        click.echo(line, err=True)
     if (errors := faults.summary()) is not None:
         click.echo(errors, err=True)
     if faults.given_up():

@@ -1,12 +1,15 @@
 """Frames from and to files: every log format python-can reads and writes (ASC, BLF, candump,
 TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type.
 
-Lossless: remote (RTR) and error frames are read and written like data frames. Where a target
-format cannot carry a kind of frame (python-can's TRC writer drops remote, error and CAN FD
-frames), :class:`FrameWriter` counts and names what it did not write instead of losing it
-silently. A conversion goes to a temporary file beside the target, created exclusively under
-an unpredictable name, renamed over the target when complete; a recording is written under its
-own name as it goes, valid up to its last flush (:class:`FrameWriter`).
+Lossless: remote (RTR), error and CAN FD frames are read and written like data frames, each
+whole (formats/log_writers.py mends python-can's writers where they change one; reading mends
+what its readers misread: :func:`_as_written`). Where a target format cannot carry a kind of
+frame (python-can's TRC writer drops remote, error and CAN FD frames) or a part of one (.csv:
+the channel, the CAN FD flags), :class:`FrameWriter` counts and names what it did not write
+(formats/carried.py) instead of losing it silently. A conversion goes to a temporary file
+beside the target, created exclusively under an unpredictable name, renamed over the target
+when complete; a recording is written under its own name as it goes, valid up to its last
+flush (:class:`FrameWriter`).
 """
 
 from __future__ import annotations
@@ -23,10 +26,11 @@ from types import TracebackType
 
 import can
 from can.io.blf import BLFParseError, BLFWriter
-from can.io.logger import MESSAGE_WRITERS
 
 from blinkcan.formats.candump import read_candump, with_error_details
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
+from blinkcan.formats.carried import CARRIES, Losses
+from blinkcan.formats.log_writers import WRITERS
 from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_message
@@ -40,8 +44,6 @@ class LogError(ValueError):
 _READ_ERRORS = (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError,
                 sqlite3.Error, EOFError, can.CanError, NotImplementedError, ImportError,
                 BLFParseError)
-#: kinds of frame a format's python-can writer drops (can/io/trc.py: TRCWriter)
-_CANNOT_CARRY = {".trc": frozenset({"remote", "error", "fd"})}
 
 
 def frame_kind(message: can.Message) -> str:
@@ -70,19 +72,35 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
+    suffix = source.suffix.lower()
+    # an ASC file's times count from its start date: absolute, as every other format's
+    options = {"relative_timestamp": False} if suffix == ".asc" else {}
     try:
-        reader = can.LogReader(str(source))
+        reader = can.LogReader(str(source), **options)
     except _READ_ERRORS as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
-            if source.suffix.lower() == ".log":
+            if suffix == ".log":
                 with source.open(encoding="utf-8") as lines:
                     yield from with_error_details(iter(reader), lines)
             else:
-                yield from reader
+                for message in reader:
+                    yield _as_written(message, suffix)
         except _READ_ERRORS as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _as_written(message: can.Message, suffix: str) -> can.Message:
+    """The frame the file holds, where python-can's reader reads it otherwise."""
+    if len(message.data) > 8:  # .csv, .db: no FD flag, but only CAN FD carries over 8 bytes
+        message.is_fd = True
+    if message.is_fd and message.is_remote_frame:  # .asc: a 0-byte CAN FD frame reads as
+        message.is_remote_frame = False  # remote; CAN FD has no remote frames (ISO 11898-1)
+        message.dlc = 0
+    if suffix == ".trc" and isinstance(message.channel, int):  # TRC numbers buses from 1:
+        message.channel -= 1  # python-can's writer adds 1, its reader takes it as it is
+    return message
 
 
 def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.Message]]:
@@ -136,10 +154,10 @@ RECORDABLE = (".pcap", ".cap", ".log", ".asc", ".blf", ".csv", ".trc", ".db")
 
 def _writer_class(suffix: str) -> type[can.io.generic.MessageWriter]:
     try:
-        return MESSAGE_WRITERS[suffix]
+        return WRITERS[suffix]  # type: ignore[no-any-return]
     except KeyError:
         raise LogError(f"no write support for {suffix or 'a file without a suffix'} "
-                       f"(pcap, or {' '.join(sorted(MESSAGE_WRITERS))})") from None
+                       f"(pcap, or {' '.join(sorted(WRITERS))})") from None
 
 
 def _check_target(path: Path, replace: bool, live: bool) -> None:
@@ -183,7 +201,9 @@ class FrameWriter:
         self._pcap: PcapWriter | None = None
         self._file: WholeRecords | None = None
         self._logger: can.io.generic.MessageWriter | None = None
-        self._cannot = _CANNOT_CARRY.get(suffix, frozenset())
+        carries = CARRIES.get(suffix)
+        self._cannot = carries.dropped if carries is not None else frozenset()
+        self.losses = Losses(suffix)
         self._unflushed = 0
         self.count = 0
         self.skipped: Counter[str] = Counter()
@@ -249,6 +269,7 @@ class FrameWriter:
                 self.skipped_names.append(describe_frame(message))
             return
         self.count += 1
+        self.losses.count(message, describe_frame)
         if self._pcap is not None:
             self._pcap.write(message)
         else:
@@ -286,6 +307,11 @@ class FrameWriter:
         return (f"{total} frame{'s' if total != 1 else ''} {self.path.suffix} cannot carry "
                 f"{'were' if total != 1 else 'was'} not written: {kinds} "
                 f"({', '.join(self.skipped_names)}{more})")
+
+    def lost_lines(self) -> list[str]:
+        """What the written frames lost, one line each ("3 frames lost their channel (can0,
+        can1): .csv has no channel"); empty when the format kept everything."""
+        return self.losses.lines()
 
     def _finish(self) -> None:
         if self._logger is not None:

@@ -46,7 +46,8 @@ def encode_record(message: can.Message) -> bytes:
     """The SocketCAN bytes of one message: data, remote, error or CAN FD frame."""
     if message.is_error_frame:
         can_id = CAN_ERR_FLAG | (message.arbitration_id & CAN_EFF_MASK)
-        return _CAN.pack(can_id, CAN_ERR_DLC, 0, bytes(message.data[:8]).ljust(8, b"\x00"))
+        data = bytes(message.data[:CAN_ERR_DLC])  # SocketCAN's have 8; a log's may have none
+        return _CAN.pack(can_id, len(data), 0, data.ljust(8, b"\x00"))
     can_id = message.arbitration_id | (CAN_EFF_FLAG if message.is_extended_id else 0)
     if message.is_remote_frame:
         return _CAN.pack(can_id | CAN_RTR_FLAG, message.dlc, 0, bytes(8))

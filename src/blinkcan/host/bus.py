@@ -9,7 +9,8 @@ Handlers and timers run on the bus's scheduler (``runtime.scheduler``), one at a
 drivers need no locks for their state: a thread of its own on real buses, the simulation
 itself on a ``SimulatedBus`` (``blinkcan.testing.Rig``). SDO replies take a fast path: they are
 handed to the waiting caller straight from the reader. An exception in a handler is logged
-with its traceback; the loop goes on.
+with its traceback and the loop goes on; in simulated time it is raised again from the call
+that ran the simulation (``Scheduler.guarded``), so a test sees it.
 
 The bus is read the way every blinkcan reader reads (``runtime.canbus.BusReader``): a frame
 it cannot decode is counted and dropped, a failing bus (unplugged adapter) is reported once and
@@ -38,7 +39,6 @@ from blinkcan.runtime.scheduler import (
     Scheduler,
     Signal,
     Timer,
-    guarded,
 )
 from blinkcan.runtime.simbus import SimulatedBus
 
@@ -85,6 +85,7 @@ class HostBus:
         self._fast: dict[int, Handler] = {}
         self._extended: list[Handler] = []
         self._sdo: dict[int, SdoChannel] = {}
+        self._sdo_lock = threading.Lock()
         self._own = OwnFrames(bus)
         self._detach: Callable[[], None] | None = None
         self._started = False
@@ -278,7 +279,7 @@ class HostBus:
     def _dispatch(self, frame: Frame, now: float) -> None:
         handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())
         for handler in list(handlers):
-            guarded(handler, frame, now)
+            self.scheduler.guarded(handler, frame, now)
 
     def _bus_closed(self) -> None:
         """On the reader thread, once the bus was shut down: waiting SDO calls return now
@@ -291,9 +292,10 @@ class HostBus:
     def sdo(self, node_id: int, timeout: float = 0.5, retries: int = 1) -> SdoClient:
         """A client of the one SDO channel to ``node_id`` on this bus (shared by every driver,
         so requests to a node never overlap), with its own ``timeout`` and ``retries``."""
-        channel = self._sdo.get(node_id)
-        if channel is None:
-            channel = self._sdo[node_id] = SdoChannel(self, node_id)
+        with self._sdo_lock:  # drivers opened in two threads at once share one channel too
+            channel = self._sdo.get(node_id)
+            if channel is None:
+                channel = self._sdo[node_id] = SdoChannel(self, node_id)
         return SdoClient(channel, timeout, retries)
 
     def produce_sync(self, period: float) -> Timer:

@@ -19,6 +19,10 @@ commands sent to it (by this driver or heard from another master on 000h):
   that: its consumer heartbeat (1016h) missed the host's, and it switched its outputs (Keybox,
   KBX §28) or LEDs (keypad generation 2, rev 1.5 §26) off. :meth:`watch_host` turns the
   device's own heartbeat on (1017h, if it was off) so that the driver sees this.
+
+A heartbeat answers an NMT command only if it can come after it: the states commands asked for
+are kept until a heartbeat reports them, so a heartbeat sent just before a command (still on
+the wire when it went out) is never taken for its answer, nor for a trip.
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
 
 BOOT_UP, STATE, LOST, BACK, WATCHDOG = "boot-up", "state", "lost", "back", "watchdog"
 #: the state an NMT command asks for (CiA 301 NMT state machine); resets answer with a boot-up
+_ASKED_KEPT = 8  # NMT commands remembered until a heartbeat reports what they asked for
 _ASKED = {NmtCommand.START: NmtState.OPERATIONAL, NmtCommand.STOP: NmtState.STOPPED,
           NmtCommand.ENTER_PRE_OPERATIONAL: NmtState.PRE_OPERATIONAL}
 #: what a driver compares to confirm the device: 1000h, 1018h/01, 100Bh (PKP §26/§31/§32,
@@ -110,7 +115,10 @@ class Device:
         #: application said not to check): until then a boot-up restores nothing
         self.confirmed = False
         self.nmt_state: NmtState | None = None  # as the device last reported it
-        self._asked_state: NmtState | None = None  # what the last NMT command asked for
+        #: states NMT commands asked for that no heartbeat has reported yet, oldest first: a
+        #: heartbeat sent before a command can still be on the wire after it went out, and
+        #: answers an earlier command, never this one (issue 17: only what comes after counts)
+        self._asked: list[NmtState] = []
         self.alive: bool | None = None
         self._heartbeat_timeout: float | None = None
         self._watch: Timer | None = None
@@ -119,6 +127,9 @@ class Device:
         #: held while an output or LED command is sent and the driver's picture updated, and
         #: while a restore computes what to send and sends it: the two never interleave
         self._command_lock = threading.Lock()
+        #: held while the host heartbeat producer is replaced or stopped, and at close
+        self._producer_lock = threading.Lock()
+        self._closed = False
         self._unsubscribe: list[Callable[[], None]] = [
             self.host.subscribe(HEARTBEAT + node_id, self._on_heartbeat),
             self.host.subscribe(NMT, self._on_nmt_heard),
@@ -162,8 +173,21 @@ class Device:
             self._nmt_commanded(request.command)
 
     def _nmt_commanded(self, command: NmtCommand) -> None:
-        self._asked_state = _ASKED.get(command)
+        asked = _ASKED.get(command)
+        if asked is not None:
+            self._asked = [*self._asked[-(_ASKED_KEPT - 1):], asked]
         self._on_nmt_command(command)
+
+    def _answered(self, state: NmtState) -> bool:
+        """Whether a reported ``state`` is what a pending NMT command asked for; the commands
+        up to that one are then carried out (an NMT slave acts on them in order). A report
+        of the state already known answers only the oldest pending command: it may as well
+        have been sent before the commands."""
+        asked = self._asked
+        if state not in asked or (state == self.nmt_state and asked[0] is not state):
+            return False
+        del asked[:asked.index(state) + 1]
+        return True
 
     def _on_nmt_command(self, command: NmtCommand) -> None:
         """An NMT command was sent to the device: drivers update their picture."""
@@ -210,21 +234,23 @@ class Device:
             self.health.emit(HealthEvent(self.node_id, BACK, now))
         self.alive = True
         if code == NmtState.BOOT_UP:
-            self.nmt_state, self._asked_state = NmtState.PRE_OPERATIONAL, None
+            self.nmt_state, self._asked = NmtState.PRE_OPERATIONAL, []
             self.health.emit(HealthEvent(self.node_id, BOOT_UP, now, NmtState.BOOT_UP))
             if self.confirmed:  # never command a device before knowing what it is
                 self._on_boot_up(now)
-        elif code in NmtState._value2member_map_ and code != self.nmt_state:
-            self._on_reported(NmtState(code), now)
+        elif code in NmtState._value2member_map_:
+            asked = self._answered(NmtState(code))
+            if code != self.nmt_state:
+                self._on_reported(NmtState(code), now, asked)
         self._rearm()
 
-    def _on_reported(self, state: NmtState, now: float) -> None:
+    def _on_reported(self, state: NmtState, now: float, asked: bool) -> None:
         before, self.nmt_state = self.nmt_state, state
         self.health.emit(HealthEvent(self.node_id, STATE, now, state))
         # KBX §28 / rev 1.5 §26 note 2: a consumer heartbeat loss is the one way these
         # devices leave operational for pre-operational unasked
         if (before is NmtState.OPERATIONAL and state is NmtState.PRE_OPERATIONAL
-                and self._asked_state is not NmtState.PRE_OPERATIONAL):
+                and not asked):
             self.health.emit(HealthEvent(self.node_id, WATCHDOG, now, state))
             if self.confirmed:
                 self._on_watchdog_trip(now)
@@ -410,10 +436,12 @@ class Device:
                 self._watch_heartbeat(own_ms / 1000)
             else:
                 self.monitor_heartbeat(period)
-        if self._producer is not None:
-            self._producer.cancel()
         frame = Frame(HEARTBEAT + self.host_node_id, bytes((NmtState.OPERATIONAL,)))
-        self._producer = self.host.call_every(period, lambda: self._send_host_heartbeat(frame))
+        with self._producer_lock:  # one producer, whichever threads call this at once
+            if self._producer is not None:
+                self._producer.cancel()
+            self._producer = self.host.call_every(period,
+                                                  lambda: self._send_host_heartbeat(frame))
 
     def _send_host_heartbeat(self, frame: Frame) -> None:
         self.host.send(frame)
@@ -425,13 +453,19 @@ class Device:
 
     def stop_host_heartbeat(self) -> None:
         """Stop the host heartbeat (as a crashed application would): the device reacts."""
-        if self._producer is not None:
-            self._producer.cancel()
-            self._producer = None
+        with self._producer_lock:
+            if self._producer is not None:
+                self._producer.cancel()
+                self._producer = None
 
     # -- lifecycle --------------------------------------------------------------------------------
 
     def close(self) -> None:
+        """Let go of the bus; a second close (from any thread) does nothing."""
+        with self._producer_lock:
+            if self._closed:
+                return
+            self._closed = True
         self.stop_host_heartbeat()
         for unsubscribe in self._unsubscribe:
             unsubscribe()

@@ -1,7 +1,9 @@
 """Events from drivers, as callbacks or an iterator (a queue per iteration).
 
-A callback that raises is logged and the others still get the event. ``close()`` ends every
-iterator. On a simulated bus an iterator waiting for its next event runs the simulation.
+A callback that raises is logged and the others still get the event; under simulated time
+(``blinkcan.testing``) the exception is then raised from the call that ran the simulation.
+``close()`` ends every iterator. On a simulated bus an iterator waiting for its next event runs
+the simulation.
 """
 
 from __future__ import annotations
@@ -53,9 +55,12 @@ class EventSource(Generic[E]):
         for callback in list(self._callbacks):
             try:
                 callback(event)
-            except Exception:
-                log.exception("an event callback raised; the other subscribers still get %r",
-                              event)
+            except Exception as error:
+                what = f"an event callback (the other subscribers still get {event!r})"
+                if self._scheduler is not None:
+                    self._scheduler.failed(error, what)
+                else:
+                    log.error("%s raised", what, exc_info=error)
         with self._lock:
             for waiting in self._queues:
                 waiting.put(event)

@@ -9,6 +9,7 @@ so they work in the keypad's default LED management mode (§13).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -72,7 +73,8 @@ def look_of(on: int, blink: int) -> LedLook:
 
 class J1939KeypadLink:
     """Frames to and from the keypad at ``address``; ``on_key(key, pressed, now)`` is called
-    on the bus's loop for each key message (§6)."""
+    on the bus's loop for each key message (§6). Thread-safe: the LED looks sent change under
+    a lock, and one software revision request is outstanding at a time."""
 
     def __init__(self, host: HostBus, address: int, on_key: Callable[[int, bool, float], None],
                  source: int = DEFAULT_HOST_ADDRESS) -> None:
@@ -84,8 +86,10 @@ class J1939KeypadLink:
         self.source = source
         self._on_key = on_key
         self._looks: dict[int, LedLook] = {}
+        self._looks_lock = threading.RLock()
         self._revision: str | None = None
         self._revision_signal = host.signal()
+        self._revision_lock = threading.Lock()
         self._unsubscribe = host.subscribe_extended(self._on_frame)
 
     def close(self) -> None:
@@ -99,10 +103,11 @@ class J1939KeypadLink:
 
     def show(self, looks: dict[int, LedLook], force: bool = False) -> None:
         """Send a single-LED command for every key whose look changed."""
-        for key, look in sorted(looks.items()):
-            if force or self._looks.get(key) != look:
-                self.send("single_led", key, look.colour, int(look.state), look.secondary)
-                self._looks[key] = look
+        with self._looks_lock:
+            for key, look in sorted(looks.items()):
+                if force or self._looks.get(key) != look:
+                    self.send("single_led", key, look.colour, int(look.state), look.secondary)
+                    self._looks[key] = look
 
     def write(self, name: str, value: int) -> None:
         """A CANopen setting the driver writes, as its J1939 command."""
@@ -117,14 +122,16 @@ class J1939KeypadLink:
         self.send(SETTING_COMMANDS[name], value)
 
     def software_revision(self, timeout: float = 0.5) -> str:
-        """Ask the keypad for its software revision (§11)."""
-        self._revision = None
-        self._revision_signal.clear()
-        self.send("software_revision")
-        if not self.host.wait(self._revision_signal, timeout) or self._revision is None:
-            raise TimeoutError(f"J1939 keypad {self.address:02X}h did not answer within "
-                               f"{timeout} s")
-        return self._revision
+        """Ask the keypad for its software revision (§11); callers in other threads wait
+        their turn (the reply names no request)."""
+        with self._revision_lock:
+            self._revision = None
+            self._revision_signal.clear()
+            self.send("software_revision")
+            if not self.host.wait(self._revision_signal, timeout) or self._revision is None:
+                raise TimeoutError(f"J1939 keypad {self.address:02X}h did not answer within "
+                                   f"{timeout} s")
+            return self._revision
 
     def _on_frame(self, frame: Frame, now: float) -> None:
         ident = parse_id(frame.can_id)

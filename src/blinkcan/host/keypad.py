@@ -8,12 +8,17 @@ it is when it is sent (the backlight colour goes by SDO, serialised with the app
 backlight commands, so a restore never writes a colour the application has since changed).
 In J1939 mode (``protocol="j1939"``, or after :meth:`Keypad.switch_to_j1939`) the same calls
 go through :class:`~blinkcan.host.j1939_keypad.J1939KeypadLink`.
+
+Every public method may be called from any thread: the picture (LEDs, brightness, the J1939
+link) changes and is sent under one lock, so the last change sent is always the whole picture
+as it is then; nothing blocking (no SDO, no wait for the bus thread) runs under it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import functools
+import threading
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -145,6 +150,11 @@ class Keypad(Device):
         self._blink: dict[int, int] = {}  # key -> channels that blink
         self._sent: tuple[Frame, Frame] | None = None
         self._batching = 0
+        self._force_pending = False  # a forced re-send asked for during a batch
+        #: the picture (LEDs, brightness, the J1939 link): changed and sent under it, by the
+        #: application's threads and the bus thread's restores alike
+        self._picture_lock = threading.RLock()
+        self._generation_lock = threading.Lock()
         self._indicator: int | None = None
         self._backlight_level: int | None = None
         self._backlight_colour: int | None = None
@@ -178,13 +188,15 @@ class Keypad(Device):
         """Find the generation by probing 1016h, which only generation 2 has
         (pkp-rev1.1-vs-rev1.5.md): one SDO read, the first time only."""
         if self._generation is None:
-            try:
-                self.sdo.upload(0x1016, 0)
-                found = "1.5"
-            except SdoAbortError:
-                found = "1.1"
-            self._generation = found
-            self.description = self._describe(found, self.node_id)
+            with self._generation_lock:
+                if self._generation is None:
+                    try:
+                        self.sdo.upload(0x1016, 0)
+                        found = "1.5"
+                    except SdoAbortError:
+                        found = "1.1"
+                    self.description = self._describe(found, self.node_id)
+                    self._generation = found
         return self._generation
 
     def _detect_or_close(self) -> None:
@@ -279,14 +291,16 @@ class Keypad(Device):
         # the twin's phase model: phase A shows the "on" channels, phase B the on-and-not-
         # blinking plus the blinking-and-not-on ones; so one colour blinks with on = blink =
         # colour, and two alternate with on = colour, blink = colour ^ other.
-        self._steady[key] = int(steady)
         if blink is None:
-            self._blink[key] = 0
+            toggled = 0
         elif blinking == steady:
-            self._blink[key] = int(steady)
+            toggled = int(steady)
         else:
-            self._blink[key] = int(steady ^ blinking)
-        self._flush()
+            toggled = int(steady ^ blinking)
+        with self._picture_lock:
+            self._steady[key] = int(steady)
+            self._blink[key] = toggled
+            self._flush()
 
     def read_leds(self) -> None:
         """Take the LEDs the keypad shows now (2001h/2002h, PKP §11) as this driver's picture,
@@ -305,13 +319,11 @@ class Keypad(Device):
         steady = {key: key_channels(on, key, width) for key in keys}
         blinking = {key: key_channels(blink, key, width) for key in keys}
 
-        def take() -> None:
+        with self._picture_lock:
             self._steady = {key: channels for key, channels in steady.items() if channels}
             self._blink = {key: channels for key, channels in blinking.items() if channels}
             self._sent = (self._pdo_frame("led_on", _masks(self._steady)),
                           self._pdo_frame("led_blink", _masks(self._blink)))
-
-        self.host.run(take)
 
     def set_leds(self, colours: Mapping[int, str], blink: Mapping[int, str] | None = None) -> None:
         """Several keys at once, in at most two PDOs."""
@@ -326,17 +338,28 @@ class Keypad(Device):
 
     @contextlib.contextmanager
     def batch(self) -> Iterator[None]:
-        """LED changes inside are sent together when the block ends."""
-        self._batching += 1
+        """LED changes inside are sent together when the block ends (changes other threads
+        make meanwhile go with them)."""
+        with self._picture_lock:
+            self._batching += 1
         try:
             yield
         finally:
-            self._batching -= 1
-            self._flush()
+            with self._picture_lock:
+                self._batching -= 1
+                self._flush()
 
     def _flush(self, force: bool = False) -> None:
-        if self._batching:
-            return
+        """Send what changed in the picture (everything with ``force``); under the picture
+        lock, so what is sent last is the picture as it is then."""
+        with self._picture_lock:
+            if self._batching:
+                self._force_pending |= force  # e.g. a reboot during a batch: all at its end
+                return
+            force, self._force_pending = force or self._force_pending, False
+            self._send_picture(force)
+
+    def _send_picture(self, force: bool) -> None:
         if self.j1939 is not None:
             self.j1939.show({key: look_of(self._steady.get(key, 0), self._blink.get(key, 0))
                              for key in range(1, self.description.face.keys + 1)}, force)
@@ -360,11 +383,12 @@ class Keypad(Device):
     def set_brightness(self, level: int) -> None:
         """Indicator LED brightness 0..63 (PKP §13; 0 is the minimum, not off)."""
         check_range("brightness", level, 0, LEVEL_MAX)
-        self._indicator = level
-        if self.j1939 is not None:
-            self.j1939.send("led_brightness", level)
-            return
-        self.host.send(self._pdo_frame("indicator_brightness", {"level": level}))
+        with self._picture_lock:
+            self._indicator = level
+            if self.j1939 is not None:
+                self.j1939.send("led_brightness", level)
+                return
+            self.host.send(self._pdo_frame("indicator_brightness", {"level": level}))
 
     def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
         """Backlight colour (by name, PKP §18c) and level 0..63 (0 = off, PKP §14)."""
@@ -376,19 +400,21 @@ class Keypad(Device):
                 self.write("backlight_colour", int(code))
                 self._backlight_colour = int(code)
             if level is not None:
-                self._backlight_level = level
-                if self.j1939 is not None:
-                    self.j1939.send("backlight_level", level)
-                else:
-                    self.host.send(self._backlight_frame(level))
+                with self._picture_lock:
+                    self._backlight_level = level
+                    if self.j1939 is not None:
+                        self.j1939.send("backlight_level", level)
+                    else:
+                        self.host.send(self._backlight_frame(level))
 
     def _restore_backlight(self) -> None:
         """The backlight as it is when this runs (after any backlight command in flight)."""
         with self._command_lock:
             if self._backlight_colour is not None:
                 self.write("backlight_colour", self._backlight_colour)
-            if self._backlight_level is not None:
-                self.host.send(self._backlight_frame(self._backlight_level))
+            with self._picture_lock:
+                if self._backlight_level is not None:
+                    self.host.send(self._backlight_frame(self._backlight_level))
 
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
@@ -442,29 +468,33 @@ class Keypad(Device):
         if not confirm:
             raise ValueError("the keypad will stop speaking CANopen: pass confirm=True")
         self.write("can_protocol", 1)
-        self._use_j1939(address)
+        with self._picture_lock:
+            self._use_j1939(address)
         if self.restore:
             self._restore_j1939()
 
     def switch_to_canopen(self) -> None:
         """The documented way back from J1939 (§27, PKP §44), to CANopen factory settings; the
         keypad's boot-up then restarts it and the driver re-sends the picture over CANopen."""
-        if self.j1939 is None:
-            self.host.send(J1939_RETURN)
-            return
-        self.j1939.send("switch_to_canopen", 0)
-        self.j1939.close()
-        self.j1939 = None
-        self._sent = None
+        with self._picture_lock:
+            if self.j1939 is None:
+                self.host.send(J1939_RETURN)
+                return
+            self.j1939.send("switch_to_canopen", 0)
+            self.j1939.close()
+            self.j1939 = None
+            self._sent = None
 
     def _use_j1939(self, address: int) -> None:
         self.j1939 = J1939KeypadLink(self.host, address, self._on_j1939_key)
         self._unsubscribe.append(self.j1939.close)
 
     def _restore_j1939(self) -> None:
-        self._flush(force=True)
-        if self._indicator is not None:
-            self.set_brightness(self._indicator)
+        with self._picture_lock:
+            self._flush(force=True)
+            if self._indicator is not None:
+                self.set_brightness(self._indicator)
+        # outside the picture lock: set_backlight takes the command lock first
         if self._backlight_colour is not None or self._backlight_level is not None:
             colour = self._backlight_colour
             self.set_backlight(BacklightColour(colour).label if colour else None,
@@ -485,13 +515,15 @@ class Keypad(Device):
     def _recover(self) -> None:
         if self.auto_start:
             self.start()
-        if not self.restore:
-            self._sent = None
-            return
-        self._flush(force=True)  # errata field report: a rebooted keypad forgot its LEDs
-        if self._indicator is not None:
-            self.host.send(self._pdo_frame("indicator_brightness", {"level": self._indicator}))
-        if self._backlight_colour is not None:
-            self.host.spawn(self._restore_backlight)  # the colour goes by SDO: off this thread
-        elif self._backlight_level is not None:
-            self.host.send(self._backlight_frame(self._backlight_level))
+        with self._picture_lock:
+            if not self.restore:
+                self._sent = None
+                return
+            self._flush(force=True)  # errata field report: a rebooted keypad forgot its LEDs
+            if self._indicator is not None:
+                self.host.send(self._pdo_frame("indicator_brightness",
+                                               {"level": self._indicator}))
+            if self._backlight_colour is not None:
+                self.host.spawn(self._restore_backlight)  # the colour goes by SDO: off here
+            elif self._backlight_level is not None:
+                self.host.send(self._backlight_frame(self._backlight_level))

@@ -134,8 +134,9 @@ class Pkp3500Keypad(Keypad):
             raise ValueError(f"ring {encoder} has LEDs {ring[0]}..{ring[-1]}, not "
                              f"{sorted(chosen - set(ring))}")
         own = sum(1 << (led - 1) for led in chosen)
-        others = (self._rings or 0) & ~sum(1 << (led - 1) for led in ring)
-        self._send_rings(others | own)
+        with self._picture_lock:  # the other ring's LEDs as they are now, not as read before
+            others = (self._rings or 0) & ~sum(1 << (led - 1) for led in ring)
+            self._send_rings(others | own)
 
     def ring(self, encoder: int) -> list[int]:
         """The ring LEDs of ``encoder`` this driver last set."""
@@ -147,8 +148,9 @@ class Pkp3500Keypad(Keypad):
         self.write("led_blink_rings", item_mask(leds, "ring LED", 32))
 
     def _send_rings(self, word: int) -> None:
-        self._rings = word
-        self.host.send(self._pdo_frame("ring_leds", {"rings": word}))
+        with self._picture_lock:
+            self._rings = word
+            self.host.send(self._pdo_frame("ring_leds", {"rings": word}))
 
     # -- inputs (MT §14, §23, §24) -----------------------------------------------------------------
 
@@ -189,8 +191,9 @@ class Pkp3500Keypad(Keypad):
 
     def _on_boot_up(self, now: float) -> None:
         super()._on_boot_up(now)
-        if self.restore and self._rings is not None:
-            self.host.send(self._pdo_frame("ring_leds", {"rings": self._rings}))
+        with self._picture_lock:
+            if self.restore and self._rings is not None:
+                self.host.send(self._pdo_frame("ring_leds", {"rings": self._rings}))
 
 
 class AsyncPkp3500Keypad(_AsyncDevice[Pkp3500Keypad]):

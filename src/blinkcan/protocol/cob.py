@@ -5,6 +5,8 @@ A COB-ID is function code + node id, e.g. the keypad's SDO replies on 580h + 15h
 
 from __future__ import annotations
 
+import math
+
 NMT = 0x000
 SYNC = 0x080
 EMCY = 0x080
@@ -33,6 +35,19 @@ def check_range(what: str, value: int, low: int, high: int, hexadecimal: bool = 
         if hexadecimal:
             raise ValueError(f"{what} {value:#x} outside {low:#04x}..{high:#04x}")
         raise ValueError(f"{what} {value} outside {low}..{high}")
+    return value
+
+
+def check_time(what: str, value: float, minimum: float | None = None,
+               infinite: bool = False) -> float:
+    """Return ``value`` if it is a number of seconds, finite (or +inf where ``infinite``) and
+    at least ``minimum``; else TypeError/ValueError (non-finite times are bad arguments)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"{what} must be a number of seconds, not {type(value).__name__}")
+    if not (math.isfinite(value) or (infinite and value == math.inf)):
+        raise ValueError(f"{what} must be a finite number of seconds, not {value!r}")
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{what} must be >= {minimum:g} seconds, not {value!r}")
     return value
 
 

@@ -14,7 +14,12 @@ Rules:
 - With ``response_delay`` > 0 a twin's reply leaves that long after the request, and an SDO
   request that reaches a twin still busy answering the previous one is dropped, as real keypads
   do (errata.md, field reports).
-- An exception in a twin is logged with its traceback and never stops the loop.
+- An exception in a twin is logged with its traceback and never stops the loop (in simulated
+  time it is raised again from the call that ran the simulation, as a handler's is).
+- Every deadline a twin names is consumed when time reaches it: after ``advance(now)`` the
+  twin's next deadline is later than ``now``. A twin that breaks this would make the loop spin
+  at that instant; in simulated time that is a ``StuckDeadlineError`` naming the twin and the
+  time, in real time it is logged and the twin is asked again a little later.
 - The bus is read as every blinkcan reader reads it (``runtime.canbus.BusReader``): a frame
   it cannot decode is counted and dropped, a failing bus is read with a back-off, a shut-down
   bus stops the reader; each is logged once.
@@ -36,14 +41,22 @@ from typing import Any, TypeVar
 
 import can
 
+from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
-from blinkcan.runtime.scheduler import RealTimeScheduler, Scheduler, Timer
+from blinkcan.runtime.scheduler import (
+    RealTimeScheduler,
+    Scheduler,
+    StuckDeadlineError,
+    Timer,
+)
 from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.twin.base import CanopenTwin
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
+#: real time: how long a twin whose deadline did not move waits before it is asked again
+_STUCK_RETRY_S = 0.001
 
 
 @dataclass
@@ -78,8 +91,7 @@ class Emulator:
         notifier: can.Notifier | None = None,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        if response_delay < 0:
-            raise ValueError(f"response_delay must be >= 0 seconds, got {response_delay}")
+        check_time("response_delay", response_delay, 0)
         self.bus = bus
         self.twins: list[CanopenTwin] = list(twins)
         self.response_delay = response_delay
@@ -103,6 +115,7 @@ class Emulator:
         self._index: dict[int, tuple[int, ...]] = {}
         self._routes_seen: list[object] = [None] * len(self.twins)
         self._index_dirty = True
+        self._stuck_reported: set[int] = set()
         #: optional tap: ``on_frame(frame, sent, now)`` for every frame sent or received
         self.on_frame: Callable[[Frame, bool, float], object] | None = None
 
@@ -198,6 +211,7 @@ class Emulator:
         return self.run(twin.power_on)
 
     def power_cycle(self, twin: CanopenTwin, off_time: float = 0.0) -> list[Frame]:
+        check_time("off_time", off_time, 0)
         self.power_off(twin)
         if off_time:
             self.scheduler.sleep(off_time)
@@ -255,8 +269,10 @@ class Emulator:
         with self._lock:
             self._planned = None
             if self._running:
-                self._run_timers(self._clock())
-                self._arm()
+                try:
+                    self._run_timers(self._clock())
+                finally:
+                    self._arm()
 
     def _perform(self, action: Callable[[float], T]) -> T:
         now = self._clock()
@@ -270,9 +286,9 @@ class Emulator:
     def _call(self, i: int, method: Callable[..., list[Frame]], *args: Any) -> list[Frame]:
         try:
             return method(*args)
-        except Exception:
+        except Exception as error:
             self.stats.twin_errors += 1
-            log.exception("twin %s raised; the emulator goes on", self.twins[i].__class__.__name__)
+            self.scheduler.failed(error, f"twin {self._name(i)}")
             return []
 
     def _deliver(self, frame: Frame, source: int | None, now: float) -> None:
@@ -357,6 +373,7 @@ class Emulator:
             self._emit(i, frames, now)
         timers = self._timers
         lateness = self.stats.lateness
+        stuck: list[int] = []
         while timers and timers[0][0] <= now:
             deadline, _, i = heapq.heappop(timers)
             if deadline != self._deadline[i]:
@@ -364,6 +381,30 @@ class Emulator:
             self._deadline[i] = None
             frames = self._call(i, self.twins[i].advance, now)
             self._reschedule(i)
+            following = self._deadline[i]
+            if following is not None and following <= now:
+                stuck.append(i)  # advance(now) left it due: asking again would spin
+                self._deadline[i] = None
             if frames:
                 lateness.append(now - deadline)
                 self._emit(i, frames, now)
+        for i in stuck:
+            self._stuck(i, now)
+
+    def _stuck(self, i: int, now: float) -> None:
+        """Twin ``i`` named a deadline that ``advance(now)`` did not consume."""
+        deadline = self.twins[i].next_deadline()
+        message = (f"twin {self._name(i)} names deadline t={deadline!r} s that advance() at "
+                   f"t={now!r} s did not consume: time could not move past it")
+        if self.scheduler.simulated:
+            raise StuckDeadlineError(message)  # the simulation would spin here for ever
+        if i not in self._stuck_reported:  # once per twin: it is asked again every retry
+            self._stuck_reported.add(i)
+            log.error("%s; asking it again every %g s", message, _STUCK_RETRY_S)
+        retry = now + _STUCK_RETRY_S
+        self._deadline[i] = retry
+        heapq.heappush(self._timers, (retry, next(self._seq), i))
+
+    def _name(self, i: int) -> str:
+        twin = self.twins[i]
+        return f"{type(twin).__name__} at node {twin.node_id:02X}h"

@@ -13,6 +13,15 @@ Two implementations share one interface:
 Everything that waits goes through :meth:`Scheduler.wait` on a :class:`Signal` made by the same
 scheduler, and blocking work that must leave a handler goes through :meth:`Scheduler.spawn`,
 so drivers are written once for both kinds of time.
+
+An exception raised in a handler, a timer or spawned work (:meth:`Scheduler.guarded`): in real
+time it is logged with its traceback and the loop goes on (a controller keeps running); in
+simulated time it is raised again, with its traceback, from the call that drove the simulation
+when it happened (``rig.tap``, ``rig.advance``, a driver call waiting for its reply), so the
+test that caused it fails.
+
+Times are checked: a non-finite time or timeout is a ValueError (a NaN deadline never comes and
+never passes, so it would hang a simulation).
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Hashable
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Protocol, TypeVar
+
+from blinkcan.protocol.cob import check_time
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -68,26 +79,47 @@ class Flag:
 
 
 class Timer:
-    """A scheduled call; :meth:`cancel` stops it (and its repetitions)."""
+    """A scheduled call; :meth:`cancel` stops it (and its repetitions). A repeating timer is
+    due at ``origin + count x period`` (no float sums that drift), each time strictly later."""
 
-    __slots__ = ("callback", "cancelled", "due", "period")
+    __slots__ = ("callback", "cancelled", "count", "due", "origin", "period")
 
     def __init__(self, due: float, period: float | None, callback: Callable[[], object]) -> None:
         self.due = due
         self.period = period
         self.callback = callback
         self.cancelled = False
+        self.origin = due
+        self.count = 0
+
+    def rearm(self, now: float) -> None:
+        """The next due time of a repeating timer that ran at ``now``: the next multiple of
+        the period, or ``now`` once when it ran late (then every period from there)."""
+        assert self.period is not None
+        self.count += 1
+        due = self.origin + self.count * self.period
+        if due <= now:
+            self.origin, self.count, due = now, 0, now
+        if due <= self.due:  # a period below the clock's resolution: time still moves
+            due = math.nextafter(self.due, math.inf)
+        self.due = due
 
     def cancel(self) -> None:
         self.cancelled = True
 
 
 def guarded(callback: Callable[..., object], *args: object) -> None:
-    """Run a handler; an exception is logged with its traceback and the loop goes on."""
+    """Run a handler; an exception is logged with its traceback and the loop goes on (the
+    real-time rule; :meth:`Scheduler.guarded` follows the scheduler's rule)."""
     try:
         callback(*args)
     except Exception:
         log.exception("a blinkcan handler raised; the loop goes on")
+
+
+class StuckDeadlineError(RuntimeError):
+    """A simulation would spin: a twin names a deadline that ``advance()`` at that time does
+    not consume, so virtual time could never move past it."""
 
 
 class Scheduler(ABC):
@@ -98,6 +130,18 @@ class Scheduler(ABC):
     @abstractmethod
     def clock(self) -> float:
         """Seconds, monotonic: wall time or virtual time."""
+
+    def guarded(self, callback: Callable[..., object], *args: object,
+                what: str = "a blinkcan handler") -> None:
+        """Run a handler, a timer or spawned work; an exception goes to :meth:`failed`."""
+        try:
+            callback(*args)
+        except Exception as error:
+            self.failed(error, what)
+
+    def failed(self, error: Exception, what: str = "a blinkcan handler") -> None:
+        """``what`` raised ``error``: logged with its traceback, and the loop goes on."""
+        log.error("%s raised; the loop goes on", what, exc_info=error)
 
     @abstractmethod
     def _push(self, timer: Timer) -> Timer:
@@ -140,7 +184,7 @@ class Scheduler(ABC):
         """Stop the loop; calls still queued fail."""
 
     def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
-        return self._push(Timer(when, None, callback))
+        return self._push(Timer(check_time("when", when), None, callback))
 
     def post(self, callback: Callable[[], object]) -> None:
         """Run ``callback`` on the loop as soon as it can, after what was posted before
@@ -148,13 +192,15 @@ class Scheduler(ABC):
         self.call_soon(callback)
 
     def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
-        return self._push(Timer(self.clock() + delay, None, callback))
+        return self._push(Timer(self.clock() + check_time("delay", delay), None, callback))
 
     def call_soon(self, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(self.clock(), None, callback))
 
     def call_every(self, period: float, callback: Callable[[], object], first: float = 0.0
                    ) -> Timer:
+        check_time("period", period)
+        check_time("first", first)
         if period <= 0:
             raise ValueError(f"period must be > 0 seconds, got {period}")
         return self._push(Timer(self.clock() + first, period, callback))
@@ -180,11 +226,11 @@ class _Heap:
         """The next timer due by ``now`` (re-armed first if it repeats), or None."""
         entries = self.entries
         while entries and entries[0][0] <= now:
-            due, _, timer = heapq.heappop(entries)
+            _, _, timer = heapq.heappop(entries)
             if timer.cancelled:
                 continue
             if timer.period is not None:
-                timer.due = max(due + timer.period, now)
+                timer.rearm(now)
                 self.push(timer)
             return timer
         return None
@@ -257,10 +303,10 @@ class RealTimeScheduler(Scheduler):
 
     def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
         assert isinstance(signal, threading.Event)
-        return signal.wait(timeout)
+        return signal.wait(check_time("timeout", timeout))
 
     def sleep(self, seconds: float) -> None:
-        time.sleep(seconds)
+        time.sleep(check_time("seconds", seconds, 0))
 
     def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
         if key is not None:
@@ -273,7 +319,7 @@ class RealTimeScheduler(Scheduler):
 
         def work() -> None:
             try:
-                guarded(action)
+                self.guarded(action, what="work handed to spawn")
             finally:  # the same work is not queued again until this one is over
                 if key is not None:
                     with self._pending_lock:
@@ -306,7 +352,7 @@ class RealTimeScheduler(Scheduler):
                     break
             now = self._clock()
             while (timer := heap.pop_due(now)) is not None:
-                guarded(timer.callback)
+                self.guarded(timer.callback)
 
     def _handle(self, item: Any) -> None:
         if isinstance(item, Timer):
@@ -314,7 +360,7 @@ class RealTimeScheduler(Scheduler):
             return
         action, future = item
         if action is _POSTED:
-            guarded(future)
+            self.guarded(future)
             return
         try:
             future.set_result(action())
@@ -327,13 +373,16 @@ class SimulatedScheduler(Scheduler):
 
     Not thread-safe by design: the thread that calls it (the test) is the loop. Blocking work
     handed to :meth:`spawn` runs when no one is waiting, so it never interleaves with a
-    transfer the caller is in the middle of.
+    transfer the caller is in the middle of. An exception in a handler, timer or spawned work
+    is raised again from the outermost call that runs the simulation (see the module
+    docstring), once the handler that raised it returned.
     """
 
     simulated = True
 
     def __init__(self, start: float = 0.0) -> None:
-        self._now = start
+        self._now = check_time("start", start)
+        self._failures: list[tuple[Exception, str]] = []
         self._heap = _Heap()
         self._depth = 0  # handlers running (waits inside them nest)
         self._base = 0  # depth at which the running background work started
@@ -366,6 +415,7 @@ class SimulatedScheduler(Scheduler):
         return Flag()
 
     def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
+        check_time("timeout", timeout, infinite=True)
         if background:
             return self.run_until(signal.is_set, self._now + timeout)
         self._waits += 1
@@ -377,7 +427,7 @@ class SimulatedScheduler(Scheduler):
                 self.call_soon(self._run_background)
 
     def sleep(self, seconds: float) -> None:
-        self.run_until(None, self._now + seconds)
+        self.run_until(None, self._now + check_time("seconds", seconds, 0))
 
     def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
         if key is not None and any(key == pending for pending, _ in self._background):
@@ -392,15 +442,30 @@ class SimulatedScheduler(Scheduler):
         try:
             while self._background and not self._waits:
                 _, action = self._background.popleft()
-                guarded(action)
+                self.guarded(action, what="work handed to spawn")
         finally:
             self._base = base
 
     def next_due(self) -> float | None:
         return self._heap.next_due()
 
+    def failed(self, error: Exception, what: str = "a blinkcan handler") -> None:
+        """Kept, and raised again by the call that drives the simulation."""
+        self._failures.append((error, what))
+
+    def raise_failures(self) -> None:
+        """Raise the first exception a handler raised since the last call (the others are
+        logged), with its traceback; nothing when none did."""
+        if not self._failures:
+            return
+        failures, self._failures = self._failures, []
+        for error, what in failures[1:]:
+            log.error("%s also raised at t=%.6f", what, self._now, exc_info=error)
+        raise failures[0][0]
+
     def step(self, until: float) -> bool:
-        """Run the next event due by ``until``; False when there is none (the clock stays)."""
+        """Run the next event due by ``until``; False when there is none (the clock stays).
+        An exception the event's handlers raised is raised here once they are done."""
         due = self._heap.next_due()
         if due is None or due > until:
             return False
@@ -409,19 +474,26 @@ class SimulatedScheduler(Scheduler):
         if timer is not None:
             self._depth += 1
             try:
-                guarded(timer.callback)
+                self.guarded(timer.callback)
             finally:
                 self._depth -= 1
+            if not self._depth:
+                self.raise_failures()
         return True
 
     def run_until(self, predicate: Callable[[], object] | None, until: float) -> bool:
         """Run events in order until ``predicate()`` is true (True) or the clock reaches
-        ``until`` (False; the clock then stands at ``until``)."""
+        ``until`` (False; the clock then stands at ``until``; +inf: no end)."""
+        check_time("until", until, infinite=True)
         while True:
             if predicate is not None and predicate():
-                return True
-            if not self.step(until):
+                met = True
                 break
-        if until != math.inf:  # with no end given, the clock stays at the last event
-            self._now = max(self._now, until)
-        return bool(predicate()) if predicate is not None else True
+            if not self.step(until):
+                if until != math.inf:  # with no end given, the clock stays at the last event
+                    self._now = max(self._now, until)
+                met = bool(predicate()) if predicate is not None else True
+                break
+        if not self._depth:
+            self.raise_failures()
+        return met

@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 
 import can
 
+from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
@@ -42,8 +43,7 @@ class SimulatedNetwork:
     """The shared wire of one simulation."""
 
     def __init__(self, scheduler: SimulatedScheduler, latency: float = 0.0) -> None:
-        if latency < 0:
-            raise ValueError(f"latency must be >= 0 seconds, got {latency}")
+        check_time("latency", latency, 0)
         self.scheduler = scheduler
         self.latency = latency
         self.frames: list[TimedFrame] = []
@@ -145,7 +145,10 @@ class SimulatedBus(can.BusABC):
         or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`)."""
         received = self._received
         scheduler = self.scheduler
-        end = scheduler.clock() + (RECV_FOREVER if timeout is None else max(0.0, timeout))
+        if timeout is not None:  # NaN is refused; +inf waits as None does
+            check_time("timeout", timeout, infinite=True)
+        wait = RECV_FOREVER if timeout is None or timeout == float("inf") else max(0.0, timeout)
+        end = scheduler.clock() + wait
         while True:
             while received:
                 when, frame = received.popleft()

@@ -8,7 +8,13 @@ driver call that waits for a reply runs the simulation until the reply (or its t
 virtual seconds), and the same scenario gives the same frames at the same times every run.
 
 Fault injection is here in one place: power, fuses, inputs, keys, heartbeats, frames dropped or
-delayed, an SDO server too busy to answer, a bus that goes away.
+delayed, an SDO server too busy to answer, a bus that goes away. Every fault and input call
+takes the twin, or the node id a twin on this rig answers at; anything else is a TypeError.
+
+An exception raised in your handlers (a driver's ``on_key``/``subscribe`` callbacks) or in work
+handed to ``host.spawn`` is raised again, with its traceback, from the rig or driver call that
+ran the simulation when it happened; one still pending is raised by :meth:`Rig.close`. Every
+time argument must be a finite number of seconds (ValueError otherwise).
 """
 
 from __future__ import annotations
@@ -16,7 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
-from blinkcan.protocol.cob import HEARTBEAT
+from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.emulator import Emulator
 from blinkcan.runtime.scheduler import SimulatedScheduler
@@ -37,6 +43,9 @@ class Rig:
 
     def __init__(self, *, start: float = 0.0, latency: float = 0.0,
                  response_delay: float = 0.0) -> None:
+        check_time("start", start)
+        check_time("latency", latency, 0)
+        check_time("response_delay", response_delay, 0)
         self.scheduler = SimulatedScheduler(start)
         self.network = SimulatedNetwork(self.scheduler, latency)
         self._twins_bus = SimulatedBus(self.network, "twins")
@@ -59,18 +68,17 @@ class Rig:
         return self.network.frames
 
     def frames_since(self, start: float) -> list[TimedFrame]:
+        check_time("start", start)
         return [timed for timed in self.network.frames if timed.time >= start]
 
     def advance(self, seconds: float) -> None:
         """Run ``seconds`` of virtual time."""
-        if seconds < 0:
-            raise ValueError(f"seconds must be >= 0, got {seconds}")
-        self.scheduler.run_until(None, self.now + seconds)
+        self.scheduler.run_until(None, self.now + check_time("seconds", seconds, 0))
 
     def settle(self, limit: float = 1.0) -> None:
         """Run until no frame is in flight, no delayed reply waits and nothing else is due
         now; at most ``limit`` virtual seconds (periodic frames do not keep it busy)."""
-        end = self.now + limit
+        end = self.now + check_time("limit", limit, 0)
         emulator = self.emulator
         while self.now <= end:
             self.scheduler.run_until(None, self.now)  # everything due at this instant
@@ -86,7 +94,7 @@ class Rig:
         """Run until ``predicate()`` holds and return the virtual time it did; AssertionError
         if it did not within ``timeout`` virtual seconds."""
         start = self.now
-        if not self.scheduler.run_until(predicate, start + timeout):
+        if not self.scheduler.run_until(predicate, start + check_time("timeout", timeout, 0)):
             raise AssertionError(f"condition not met within {timeout} virtual s "
                                  f"(from t={start:.3f} to t={self.now:.3f})")
         return self.now
@@ -95,7 +103,44 @@ class Rig:
 
     def add(self, twin: W) -> W:
         """Put ``twin`` on the bus, powered on now."""
+        if not isinstance(twin, CanopenTwin):
+            raise TypeError(f"rig.add takes a twin, not {type(twin).__name__}")
         self.emulator.add(twin)
+        return twin
+
+    @property
+    def twins(self) -> tuple[CanopenTwin, ...]:
+        """The twins on this rig, in the order they were added."""
+        return tuple(self.emulator.twins)
+
+    def twin(self, device: CanopenTwin | int) -> CanopenTwin:
+        """The twin ``device`` names: a twin on this rig, or the node id one of them answers
+        at. TypeError for anything else; ValueError for a twin not on this rig, or a node id
+        no twin (or more than one) answers at."""
+        if isinstance(device, CanopenTwin):
+            if not any(device is twin for twin in self.emulator.twins):
+                raise ValueError(f"this {type(device).__name__} is not on the rig: "
+                                 "rig.add(twin) it first")
+            return device
+        node_id = self._node_id(device)
+        found = [twin for twin in self.emulator.twins if twin.node_id == node_id]
+        if len(found) != 1:
+            nodes = ", ".join(f"{twin.node_id:02X}h" for twin in self.emulator.twins) or "none"
+            raise ValueError(f"{len(found) or 'no'} twins answer at node {node_id:02X}h on this "
+                             f"rig; pass the twin (twins at: {nodes})")
+        return found[0]
+
+    @staticmethod
+    def _node_id(device: object) -> int:
+        if isinstance(device, bool) or not isinstance(device, int):
+            raise TypeError(f"a twin or a node id (int) is needed, not {type(device).__name__}")
+        return check_node_id(device)
+
+    def _able(self, device: CanopenTwin | int, action: str) -> Any:
+        """The twin ``device`` names, if it can do ``action`` (TypeError if it cannot)."""
+        twin = self.twin(device)
+        if not callable(getattr(twin, action, None)):
+            raise TypeError(f"a {type(twin).__name__} has no {action}()")
         return twin
 
     def act(self, action: Callable[[float], T]) -> T:
@@ -107,72 +152,106 @@ class Rig:
             self.scheduler.run_until(None, self.now)
         return result
 
-    def snapshot(self, twin: CanopenTwin) -> dict[str, Any]:
-        return twin.snapshot()
+    def snapshot(self, device: CanopenTwin | int) -> dict[str, Any]:
+        return self.twin(device).snapshot()
 
-    # -- fault injection ----------------------------------------------------------------------
+    # -- fault injection and inputs: a twin, or the node id it answers at ---------------------
 
-    def power_off(self, twin: CanopenTwin) -> None:
+    def power_off(self, device: CanopenTwin | int) -> None:
+        twin = self.twin(device)
         self.act(lambda now: twin.power_off())
 
-    def power_on(self, twin: CanopenTwin) -> None:
-        self.act(twin.power_on)
+    def power_on(self, device: CanopenTwin | int) -> None:
+        self.act(self.twin(device).power_on)
 
-    def power_cycle(self, twin: CanopenTwin, off_time: float = 0.1) -> None:
+    def power_cycle(self, device: CanopenTwin | int, off_time: float = 0.1) -> None:
         """Off for ``off_time`` virtual seconds, then on (boot-up, stored settings back)."""
+        twin = self.twin(device)
+        check_time("off_time", off_time, 0)
         self.power_off(twin)
         self.advance(off_time)
         self.power_on(twin)
 
-    def press(self, twin: Any, key: int) -> None:
+    def press(self, device: CanopenTwin | int, key: int) -> None:
+        twin = self._able(device, "press")
         self.act(lambda now: twin.press(key, now))
 
-    def release(self, twin: Any, key: int) -> None:
+    def release(self, device: CanopenTwin | int, key: int) -> None:
+        twin = self._able(device, "release")
         self.act(lambda now: twin.release(key, now))
 
-    def tap(self, twin: Any, key: int, hold: float = 0.1) -> None:
+    def tap(self, device: CanopenTwin | int, key: int, hold: float = 0.1) -> None:
         """Press ``key``, hold it ``hold`` virtual seconds, release it."""
+        twin = self._able(device, "press")
+        check_time("hold", hold, 0)
         self.press(twin, key)
         self.advance(hold)
         self.release(twin, key)
 
-    def long_press(self, twin: Any, key: int, hold: float = 1.0) -> None:
-        self.tap(twin, key, hold)
+    def long_press(self, device: CanopenTwin | int, key: int, hold: float = 1.0) -> None:
+        self.tap(device, key, hold)
 
-    def blow_fuse(self, twin: Any, pin: int) -> None:
+    def turn(self, device: CanopenTwin | int, encoder: int, ticks: int) -> None:
+        """Turn an encoder by ``ticks`` (> 0 clockwise)."""
+        twin = self._able(device, "turn")
+        self.act(lambda now: twin.turn(encoder, ticks, now))
+
+    def set_analog(self, device: CanopenTwin | int, input: int, volts: float) -> None:
+        twin = self._able(device, "set_analog")
+        self.act(lambda now: twin.set_analog(input, volts, now))
+
+    def set_digital_input(self, device: CanopenTwin | int, input: int, level: bool) -> None:
+        twin = self._able(device, "set_digital_input")
+        self.act(lambda now: twin.set_digital_input(input, level, now))
+
+    def blow_fuse(self, device: CanopenTwin | int, pin: int) -> None:
+        twin = self._able(device, "blow_fuse")
         self.act(lambda now: twin.blow_fuse(pin, now))
 
-    def replace_fuse(self, twin: Any, pin: int) -> None:
+    def replace_fuse(self, device: CanopenTwin | int, pin: int) -> None:
+        twin = self._able(device, "replace_fuse")
         self.act(lambda now: twin.replace_fuse(pin, now))
 
-    def set_input(self, twin: Any, pin: int, level: bool) -> None:
+    def set_input(self, device: CanopenTwin | int, pin: int, level: bool) -> None:
+        twin = self._able(device, "set_input")
         self.act(lambda now: twin.set_input(pin, level, now))
 
     def drop(self, match: Callable[[Frame], bool]) -> Callable[[], None]:
         """Drop every frame ``match`` accepts until the returned function is called."""
+        if not callable(match):
+            raise TypeError(f"match must be a function of a frame, not {type(match).__name__}")
         return self.network.add_rule(lambda frame: "drop" if match(frame) else None)
 
     def delay(self, match: Callable[[Frame], bool], seconds: float) -> Callable[[], None]:
         """Delay every frame ``match`` accepts by ``seconds``; call the result to stop."""
-        if seconds < 0:
-            raise ValueError(f"seconds must be >= 0, got {seconds}")
+        if not callable(match):
+            raise TypeError(f"match must be a function of a frame, not {type(match).__name__}")
+        check_time("seconds", seconds, 0)
         return self.network.add_rule(lambda frame: seconds if match(frame) else None)
 
-    def drop_node(self, node_id: int) -> Callable[[], None]:
-        """Drop every frame of a device's COB-IDs (xxx + node id, 11-bit) until undone."""
-        return self.drop(lambda frame: not frame.extended and frame.can_id & 0x7F == node_id
-                         and frame.can_id > 0x80)
+    def _node_of(self, device: CanopenTwin | int) -> Callable[[], int]:
+        """The node id ``device`` names, read when a frame passes: a twin's in use (it may
+        change), or a node id (any device's, the controller's too)."""
+        if isinstance(device, CanopenTwin):
+            twin = self.twin(device)
+            return lambda: twin.node_id
+        node_id = self._node_id(device)
+        return lambda: node_id
 
-    def stop_heartbeat(self, node_id: int) -> Callable[[], None]:
-        """Drop node ``node_id``'s heartbeat frames (700h + id) until the result is called."""
-        cob_id = HEARTBEAT + node_id
-        return self.drop(lambda frame: frame.can_id == cob_id and not frame.extended)
+    def drop_node(self, device: CanopenTwin | int) -> Callable[[], None]:
+        """Drop every frame of a device's COB-IDs (xxx + node id, 11-bit) until undone."""
+        node = self._node_of(device)
+        return self.drop(lambda frame: not frame.extended and frame.can_id > 0x80
+                         and frame.can_id & 0x7F == node())
+
+    def stop_heartbeat(self, device: CanopenTwin | int) -> Callable[[], None]:
+        """Drop a device's heartbeat frames (700h + node id) until the result is called."""
+        node = self._node_of(device)
+        return self.drop(lambda frame: not frame.extended and frame.can_id == HEARTBEAT + node())
 
     def busy(self, response_delay: float) -> None:
         """Every twin answers ``response_delay`` s late and drops SDO requests meanwhile."""
-        if response_delay < 0:
-            raise ValueError(f"response_delay must be >= 0 seconds, got {response_delay}")
-        self.emulator.response_delay = response_delay
+        self.emulator.response_delay = check_time("response_delay", response_delay, 0)
 
     def bus_down(self) -> None:
         """The bus goes away: nothing is delivered and sending raises ``can.CanOperationError``."""
@@ -184,11 +263,14 @@ class Rig:
     # -- lifecycle ----------------------------------------------------------------------------
 
     def close(self) -> None:
+        """Stop the twins and the buses; an exception a handler raised and no call has raised
+        yet is raised here."""
         if not self._closed:
             self._closed = True
             self.emulator.stop()
             self.bus.shutdown()
             self._twins_bus.shutdown()
+        self.scheduler.raise_failures()
 
     def __enter__(self) -> Rig:
         return self

@@ -35,7 +35,7 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, check_node_id
+from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import (
     PDO_ALLOWED,
@@ -60,9 +60,9 @@ from blinkcan.twin.hooks import (
     StateHook,
     Watcher,
     WriteHook,
-    next_due,
 )
 from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm, NvmError
+from blinkcan.twin.schedule import Ticker, milliseconds
 
 _Route = Callable[[Frame, float], list[Frame]]
 _new_tuple = tuple.__new__
@@ -145,8 +145,7 @@ class CanopenTwin:
         self._after_reply: list[Action] = []
         self._now = 0.0
         self._boot_time = 0.0
-        self._heartbeat_next: float | None = None
-        self._heartbeat_period = 0.0
+        self._heartbeat = Ticker()
         self._use_node_id(self._store.get_int("node_id"))
         self._store.set_hook("producer_heartbeat_time", self._on_heartbeat_time)
         self._consumer = ConsumerState.OFF
@@ -216,6 +215,7 @@ class CanopenTwin:
 
     def power_on(self, now: float) -> list[Frame]:
         """Apply power: boot, send the boot-up frame, enter the startup state."""
+        check_time("now", now)
         if self._powered:
             return []
         self._powered = True
@@ -231,7 +231,7 @@ class CanopenTwin:
         self._powered = False
         self._nmt = NmtState.BOOT_UP
         self._routes = {}
-        self._heartbeat_next = None
+        self._heartbeat.stop()
         self._consumer = ConsumerState.OFF
         self._consumer_deadline = None
         self._sdo.reset()
@@ -239,6 +239,8 @@ class CanopenTwin:
 
     def receive(self, frame: Frame, now: float) -> list[Frame]:
         """The frames the device sends in reaction to ``frame`` (often none)."""
+        if now - now:  # NaN or infinite (cheaper than math.isfinite on every frame)
+            check_time("now", now)
         if not self._powered:
             return []
         if frame.extended:
@@ -251,25 +253,25 @@ class CanopenTwin:
         return route(frame, now)
 
     def advance(self, now: float) -> list[Frame]:
-        """Frames due by ``now``: heartbeat, periodic PDOs, timeouts."""
+        """Frames due by ``now``: heartbeat, periodic PDOs, timeouts. Every deadline
+        :meth:`next_deadline` named up to ``now`` is consumed (twin/schedule.py)."""
+        if now - now:  # NaN or infinite
+            check_time("now", now)
         if not self._powered:
             return []
         self._now = now
         frames: list[Frame] = []
-        due = self._heartbeat_next
-        if due is not None and now >= due:
+        if self._heartbeat.fire(now):
             frames.append(self._heartbeat_frames[self._nmt])
-            self._heartbeat_next = next_due(due, self._heartbeat_period, now)
         deadline = self._consumer_deadline
         if deadline is not None and now >= deadline:
             frames += self._heartbeat_lost(now)
         for hook in self._advance_hooks:
             frames += hook(now)
-        for timer in self._timers:  # Periodic.advance, inlined: the emulator calls this often
+        for timer in self._timers:
             due = timer.due
             if due is not None and now >= due:
-                frames += timer.produce(now)
-                timer.due = next_due(due, timer.period, now)
+                frames += timer.advance(now)
         return frames
 
     def next_deadline(self) -> float | None:
@@ -277,7 +279,7 @@ class CanopenTwin:
         # the emulator asks after every call: no lists on the way
         if not self._powered:
             return None
-        best = self._heartbeat_next
+        best = self._heartbeat.due
         deadline = self._consumer_deadline
         if deadline is not None and (best is None or deadline < best):
             best = deadline
@@ -424,7 +426,7 @@ class CanopenTwin:
         no routes, no heartbeat, no timers, NMT initialising."""
         self._routes = {}
         self._nmt = NmtState.BOOT_UP
-        self._heartbeat_next = None
+        self._heartbeat.stop()
         for timer in self._timers:
             timer.stop()
 
@@ -601,8 +603,7 @@ class CanopenTwin:
     def _schedule_heartbeat(self, period_ms: int, now: float) -> None:
         """The running period is kept apart from the stored value, which may change (restore
         defaults) without taking effect until the next reset."""
-        self._heartbeat_period = period_ms / 1000
-        self._heartbeat_next = now + self._heartbeat_period if period_ms else None
+        self._heartbeat.run(now, milliseconds(period_ms))
 
     # -- consumer heartbeat and restore defaults (KBX §28/§36, PKP rev 1.5 §26/§34) ----------
 

@@ -15,6 +15,7 @@ from blinkcan.devices.objects import Value
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState
+from blinkcan.twin.schedule import TICKS_PER_S, Ticker, ticks
 
 #: an object written (SDO or RPDO): frames to send after the reply, an abort code to refuse the
 #: value, or None
@@ -39,42 +40,35 @@ SnapshotHook = Callable[[float], Mapping[str, object]]
 ExtraSettings = Callable[[], Mapping[str, Value]]
 
 
-def next_due(due: float, period: float, now: float) -> float:
-    """The next time of a periodic event that was due at ``due``: no drift, and no burst of
-    catch-up frames after a stall."""
-    due += period
-    return due if due > now else now + period
-
-
-class Periodic:
+class Periodic(Ticker):
     """A periodic producer registered with a twin (``twin.add_timer``): ``produce(now)`` runs
-    every ``period`` seconds from :meth:`start` until :meth:`stop`. ``produce`` may change
-    :attr:`period`; the next run is counted from the one that was due."""
+    every ``period`` seconds from :meth:`start` until :meth:`stop`, at exact times
+    (:mod:`blinkcan.twin.schedule`). ``produce`` may change :attr:`period`; the next run is
+    counted from the one that was due."""
 
-    __slots__ = ("due", "period", "produce")
+    __slots__ = ("produce",)
 
     def __init__(self, produce: Action) -> None:
+        super().__init__()
         self.produce = produce
-        self.period = 0.0
-        #: when it next runs, or None while stopped
-        self.due: float | None = None
 
     def start(self, period: float, now: float, running: bool = True) -> None:
         """Run every ``period`` s from ``now`` (a period of 0, or ``running=False``, stops)."""
-        self.period = period
-        self.due = now + period if running and period else None
-
-    def stop(self) -> None:
-        self.due = None
+        self.run(now, ticks(period), running)
 
     @property
-    def running(self) -> bool:
-        return self.due is not None
+    def period(self) -> float:
+        return self.period_ticks / TICKS_PER_S
+
+    @period.setter
+    def period(self, seconds: float) -> None:
+        self.retime(ticks(seconds))
 
     def advance(self, now: float) -> list[Frame]:
         due = self.due
         if due is None or now < due:
             return []
         frames = self.produce(now)
-        self.due = next_due(due, self.period, now)
+        if self.due == due:  # not stopped or started again by produce
+            self.fire(now)
         return frames

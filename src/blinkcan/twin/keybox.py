@@ -29,6 +29,7 @@ from blinkcan.devices.model import Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pdo import PdoLayout
 from blinkcan.protocol.abort import AbortCode
+from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState
 from blinkcan.twin.base import CanopenTwin
@@ -95,6 +96,7 @@ class KeyboxTwin(CanopenTwin):
     def set_input(self, pin: int, level: bool, now: float) -> list[Frame]:
         """The external level on ``pin`` (read by 2003h, errata K21)."""
         check_pin(pin)
+        check_time("now", now)
         if not isinstance(level, bool):
             raise TypeError(f"level must be a bool, not {type(level).__name__}")
         self.outputs.external[pin - 1] = level
@@ -103,6 +105,7 @@ class KeyboxTwin(CanopenTwin):
         return []
 
     def _physical(self, action: Any, pin: int, now: float) -> list[Frame]:
+        check_time("now", now)
         faults = action(pin)
         self._inputs_changed = True  # a fuse changes what the pin reads
         if not self.powered:

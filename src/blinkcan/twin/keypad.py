@@ -29,7 +29,7 @@ from blinkcan.devices.model import DeviceDescription, Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import load_class
 from blinkcan.devices.registry import model as registered_model
-from blinkcan.protocol.cob import NMT, SYNC, check_range
+from blinkcan.protocol.cob import NMT, SYNC, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import J1939Name
@@ -183,6 +183,7 @@ class KeypadTwin(CanopenTwin):
         return frozenset(item_numbers(self._keys))
 
     def _set_key(self, key: int, down: bool, now: float) -> list[Frame]:
+        check_time("now", now)
         if not self.powered:
             return []
         self.note_time(now)
@@ -371,6 +372,7 @@ class KeypadTwin(CanopenTwin):
         return self.reset_node(now)
 
     def power_on(self, now: float) -> list[Frame]:
+        check_time("now", now)
         if self.powered:
             return []
         self._choose_protocol()

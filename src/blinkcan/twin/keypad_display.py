@@ -13,6 +13,7 @@ Durations the manuals do not give (blink period, show steps) are blinkcan decisi
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 from blinkcan.devices.colours import (
@@ -24,6 +25,7 @@ from blinkcan.devices.colours import (
 )
 from blinkcan.devices.colours import key_channels as colour_key_channels
 from blinkcan.devices.keypad import FACE, LEVEL_MAX, SHOW_COMPLETE, SHOW_FAST_FLASH
+from blinkcan.twin.schedule import TICK_S, at, ticks
 
 BLINK_PERIOD_S = 0.5  # one phase A + one phase B; not in the manual
 #: the PKP-2600-SI's shows and DEMO mode below light its keys, one LED bit per key
@@ -65,24 +67,32 @@ def render_key(on: int, blink: int, key: int, width: int = _KEYS) -> dict[str, o
 
 @dataclass(frozen=True)
 class ShowStep:
-    duration: float
+    """One step of a show: ``ticks`` long (whole ticks of ``schedule.TICK_S``), its picture."""
+
+    ticks: int
     on: int
     blink: int = 0
+
+
+_STEP = ticks(0.06)  # the complete show's fill steps (ours)
+_WHITE = ticks(0.3)  # its last step, all keys white (ours)
+_FLASH = ticks(0.1)  # fast flash: on and off (ours)
 
 
 def _complete_show(keys: tuple[int, ...], width: int) -> tuple[ShowStep, ...]:
     """Each colour fills the keys one by one, then all keys white (durations ours)."""
     masks = [sum(1 << (key - 1) for key in keys[:count]) for count in range(1, len(keys) + 1)]
-    steps = [ShowStep(0.06, fill(mask, channel, width))
+    steps = [ShowStep(_STEP, fill(mask, channel, width))
              for channel in (Channel.RED, Channel.GREEN, Channel.BLUE) for mask in masks]
-    steps.append(ShowStep(0.3, fill(masks[-1], Channel.RED | Channel.GREEN | Channel.BLUE, width)))
+    steps.append(ShowStep(_WHITE,
+                          fill(masks[-1], Channel.RED | Channel.GREEN | Channel.BLUE, width)))
     return tuple(steps)
 
 
 def _fast_flash(keys: tuple[int, ...], width: int) -> tuple[ShowStep, ...]:
     every = sum(1 << (key - 1) for key in keys)
     white = fill(every, Channel.RED | Channel.GREEN | Channel.BLUE, width)
-    return (ShowStep(0.1, white), ShowStep(0.1, 0)) * 3
+    return (ShowStep(_FLASH, white), ShowStep(_FLASH, 0)) * 3
 
 
 def startup_shows(keys: tuple[int, ...], width: int) -> dict[int, tuple[ShowStep, ...]]:
@@ -95,32 +105,33 @@ SHOW_NAMES = {0: "off", SHOW_COMPLETE: "complete", SHOW_FAST_FLASH: "fast flash"
 
 
 class ShowPlayer:
-    """Plays a sequence of steps from ``start``, once or looping."""
+    """Plays a sequence of steps from ``start``, once or looping. Step ``i`` of round ``r``
+    ends at ``schedule.at(start, r x length + its end in ticks)``: the one time
+    :meth:`next_change` names and :meth:`step` turns at, so a change is always consumed."""
 
     def __init__(self, steps: tuple[ShowStep, ...], start: float, loop: bool = False) -> None:
+        if not steps or any(step.ticks <= 0 for step in steps):
+            raise ValueError("a show needs steps of at least one tick each")
         self.steps = steps
         self.start = start
         self.loop = loop
-        self._length = sum(step.duration for step in steps)
+        self._ends = tuple(itertools.accumulate(step.ticks for step in steps))
+        self._length = self._ends[-1]
 
     def _locate(self, now: float) -> tuple[int, float] | None:
         """(step index, time that step ends) at ``now``, or None once a single play is over."""
-        elapsed = now - self.start
-        if elapsed < 0:
-            elapsed = 0.0
-        base = self.start
-        if self.loop:
-            rounds = int(elapsed // self._length)
-            elapsed -= rounds * self._length
-            base += rounds * self._length
-        elif elapsed >= self._length:
-            return None
-        end = base
-        for i, step in enumerate(self.steps):
-            end += step.duration
-            if elapsed < end - base:
-                return i, end
-        return len(self.steps) - 1, end
+        rounds = 0
+        if self.loop and now > self.start:  # an estimate one round early, then exact
+            rounds = max(0, int((now - self.start) / (self._length * TICK_S)) - 1)
+        while True:
+            played = rounds * self._length
+            for index, end in enumerate(self._ends):
+                ends_at = at(self.start, played + end)
+                if ends_at > now:
+                    return index, ends_at
+            if not self.loop:
+                return None
+            rounds += 1
 
     def finished(self, now: float) -> bool:
         return self._locate(now) is None
@@ -134,6 +145,7 @@ class ShowPlayer:
         return None if located is None else located[0]
 
     def next_change(self, now: float) -> float | None:
+        """When the step shown at ``now`` ends: always after ``now`` (None: the show is over)."""
         located = self._locate(now)
         return None if located is None else located[1]
 
@@ -154,7 +166,7 @@ DEMO_PAIR_COLOURS: tuple[Channel, ...] = (
 )
 DEMO_STEP_NAMES = ("complete LED show", "keys on in sequence", "alternate blinking pairs")
 DEMO_LEVEL_STEP = 8  # keys 2 and 3 change the brightness by this much (ours)
-_SEQUENCE_STEP_S = 0.2  # ours
+_SEQUENCE_STEP = ticks(0.2)  # ours
 
 
 def _pair_blink() -> tuple[int, int]:
@@ -196,7 +208,7 @@ class DemoMode:
             return ShowPlayer(STARTUP_SHOWS[SHOW_COMPLETE], now, loop=True)
         if self.step == 1:
             steps = tuple(
-                ShowStep(_SEQUENCE_STEP_S, (1 << count) - 1) for count in range(1, _KEYS + 1)
+                ShowStep(_SEQUENCE_STEP, (1 << count) - 1) for count in range(1, _KEYS + 1)
             )
             return ShowPlayer(steps, now, loop=True)
         return None

@@ -68,10 +68,12 @@ from blinkcan.twin.keypad_display import (
     fill,
     render_key,
 )
+from blinkcan.twin.schedule import Ticker, ticks
 
 _KEYS = FACE.keys  # the PKP-2600-SI's keys (its J1939 mode, pkp-2600-si-j1939.md)
 _KEY_BITS = (1 << _KEYS) - 1
 _LED_PGNS = (PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2)
+_UNIT = ticks(TIME_UNIT_S)  # §17/§18: the periods count 10 ms
 
 
 def _clear_key(word: int, key: int) -> int:
@@ -103,9 +105,9 @@ class J1939Keypad:
         self._nibbles = ([0] * _KEYS, [0] * _KEYS)
         self._live = {"led_brightness": 0, "backlight_level": 0}
         self._claimer: AddressClaimer | None = None
-        self._heartbeat_next: float | None = None
+        self._heartbeat_timer = Ticker()  # §18
         self._heartbeat_counter = 0
-        self._periodic_next: float | None = None
+        self._periodic_timer = Ticker()  # §17
         self._show: ShowPlayer | None = None
         self._demo: DemoMode | None = None
         self._handlers: dict[int, Callable[[J1939Command, dict[str, int], float], list[Frame]]]
@@ -152,7 +154,8 @@ class J1939Keypad:
     def power_off(self) -> None:
         self._powered = False
         self._claimer = None
-        self._heartbeat_next = self._periodic_next = None
+        self._heartbeat_timer.stop()
+        self._periodic_timer.stop()
         self._show = self._demo = None
 
     @property
@@ -306,11 +309,11 @@ class J1939Keypad:
 
     def _schedule_heartbeat(self, now: float) -> None:
         on, period = self.settings["heartbeat"], self.settings["heartbeat_period"]
-        self._heartbeat_next = now + period * TIME_UNIT_S if on and self._powered else None
+        self._heartbeat_timer.run(now, period * _UNIT if on and self._powered else 0)
 
     def _schedule_periodic(self, now: float) -> None:
         on, period = self.settings["periodic_key_state"], self.settings["key_message_period"]
-        self._periodic_next = now + period * TIME_UNIT_S if on and self._powered else None
+        self._periodic_timer.run(now, period * _UNIT if on and self._powered else 0)
 
     def advance(self, now: float) -> list[Frame]:
         if not self._powered:
@@ -319,17 +322,11 @@ class J1939Keypad:
         frames: list[Frame] = []
         if self._claimer is not None:
             self._claimer.advance(now)
-        due = self._heartbeat_next
-        if due is not None and now >= due:
-            period = self.settings["heartbeat_period"] * TIME_UNIT_S
-            self._heartbeat_next = due + period if due + period > now else now + period
+        if self._heartbeat_timer.fire(now):
             frames += self._send(heartbeat_message(self._heartbeat_counter, self._keys,
                                                    self.settings["identifier"]))
             self._heartbeat_counter = (self._heartbeat_counter + 1) & 0xFF  # J-6
-        due = self._periodic_next
-        if due is not None and now >= due:
-            period = self.settings["key_message_period"] * TIME_UNIT_S
-            self._periodic_next = due + period if due + period > now else now + period
+        if self._periodic_timer.fire(now):
             frames += self._all_key_messages()
         if self._show is not None and self._show.finished(now):
             self._show = None
@@ -338,8 +335,8 @@ class J1939Keypad:
     def deadlines(self) -> Iterable[float | None]:
         now = self._now
         return (
-            self._heartbeat_next,
-            self._periodic_next,
+            self._heartbeat_timer.due,
+            self._periodic_timer.due,
             self._claimer.deadline if self._claimer is not None else None,
             self._show.next_change(now) if self._show is not None else None,
             self._demo.next_change(now) if self._demo is not None else None,

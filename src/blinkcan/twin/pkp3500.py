@@ -38,7 +38,7 @@ from blinkcan.devices.pkp3500 import (
     describe_pkp3500,
 )
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import check_range
+from blinkcan.protocol.cob import check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState
@@ -176,6 +176,7 @@ class Pkp3500Twin(KeypadTwin):
         knob = self._encoders[check_range("encoder", encoder, 1, len(self._encoders)) - 1]
         if isinstance(ticks, bool) or not isinstance(ticks, int):
             raise TypeError(f"ticks must be an int, not {type(ticks).__name__}")
+        check_time("now", now)
         if not self.powered or not ticks:
             return []
         self.note_time(now)
@@ -194,6 +195,7 @@ class Pkp3500Twin(KeypadTwin):
         if isinstance(volts, bool) or not isinstance(volts, (int, float)) \
                 or not 0 <= volts < float("inf"):  # NaN fails the comparison
             raise ValueError(f"volts must be a number >= 0, not {volts!r}")
+        check_time("now", now)
         self.note_time(now)
         self._counts[input] = min(ANALOG_COUNTS, round(volts * 100))  # 10 mV per count (M44)
         self._refresh_inputs()

@@ -1,0 +1,81 @@
+"""python-can's log writers, mended where they change a frame the format itself can hold.
+
+- candump ``.log``: python-can writes every error frame as a bus error without data, a remote
+  frame without its DLC, and moves a time earlier than the one before; can-utils' own lines
+  keep all three (``20000004#0004000000000000``, ``70C#R3``: can-utils lib.c sprint_canframe).
+- ``.asc``: the start date (``Begin Triggerblock``) carries milliseconds, and python-can counts
+  the relative times from the first frame's exact time, so reading the absolute times back
+  loses the rest of that millisecond; and a frame earlier than the first is written as an
+  absolute time that reads back as a relative one. Here the times count from the first
+  frame's millisecond, and an earlier frame takes that time (counted: formats/carried.py).
+- ``.blf``: the header holds no date before 1990, yet python-can counts the times from the
+  first frame: a log whose times start near 0 reads back shifted by its first time. Such a log
+  counts from 0 here.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+import can
+from can.io.asc import ASCWriter
+from can.io.blf import BLFWriter
+from can.io.canutils import CanutilsLogWriter
+from can.io.logger import MESSAGE_WRITERS
+
+from blinkcan.formats.carried import BLF_DATED_FROM, channel_key, start_millisecond
+from blinkcan.formats.pcap import CAN_EFF_MASK, CAN_ERR_FLAG, CANFD_BRS, CANFD_ESI
+
+
+class CandumpWriter(CanutilsLogWriter):
+    """candump ``-L`` lines as can-utils writes them (see the module docstring)."""
+
+    def on_message_received(self, msg: can.Message) -> None:
+        channel = channel_key(msg.channel) or self.channel
+        stamp = f"({msg.timestamp:f}) {channel}"
+        if msg.is_error_frame:  # linux/can/error.h: the class in the identifier, 8 data bytes
+            ident = CAN_ERR_FLAG | (msg.arbitration_id & CAN_EFF_MASK)
+            self.file.write(f"{stamp} {ident:08X}#{bytes(msg.data[:8]).hex().upper()}\n")
+            return
+        ident_text = f"{msg.arbitration_id:08X}" if msg.is_extended_id else \
+            f"{msg.arbitration_id:03X}"
+        if msg.is_remote_frame:
+            body = f"R{msg.dlc:X}" if msg.dlc else "R"
+        elif msg.is_fd:
+            flags = (CANFD_BRS if msg.bitrate_switch else 0) | (
+                CANFD_ESI if msg.error_state_indicator else 0)
+            body = f"#{flags:X}{bytes(msg.data).hex().upper()}"
+        else:
+            body = bytes(msg.data).hex().upper()
+        self.file.write(f"{stamp} {ident_text}#{body} {'R' if msg.is_rx else 'T'}\n")
+
+
+class AscWriter(ASCWriter):
+    """ASC whose absolute times read back as written (see the module docstring)."""
+
+    def log_event(self, message: str, timestamp: float | None = None) -> None:
+        if timestamp is not None:
+            if not self.header_written:
+                start = start_millisecond(timestamp)
+                self.started = self.last_timestamp = start
+                date = self._format_header_datetime(datetime.fromtimestamp(start))
+                self.file.write(f"Begin Triggerblock {date}\n")
+                self.header_written = True
+                super().log_event("Start of measurement")
+            timestamp = max(timestamp, self.started)
+        super().log_event(message, timestamp)
+
+
+class BlfWriter(BLFWriter):
+    """BLF whose times near 0 read back as written (see the module docstring)."""
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if self.start_timestamp is None and msg.timestamp < BLF_DATED_FROM:
+            self.start_timestamp = 0.0
+        super().on_message_received(msg)
+
+
+#: the writer of each suffix: python-can's, mended as above
+WRITERS: dict[str, Any] = {**MESSAGE_WRITERS, ".log": CandumpWriter, ".asc": AscWriter,
+                           ".blf": BlfWriter}
