@@ -62,3 +62,22 @@ def test_outputs_go_off_when_the_controller_dies(
     assert keybox_twin.snapshot()["pins"][1]["state"] == "off"  # the Keybox's watchdog tripped
     rig.advance(1.0)
     assert keybox_twin.snapshot()["pins"][1]["state"] == "off"  # and nothing switched it back
+
+
+def test_leds_follow_the_keybox_when_it_power_cycles(
+        rig: Rig, keypad_twin: KeypadTwin, keybox_twin: KeyboxTwin,
+        controller: ToggleController) -> None:
+    """Issue 17: key 4 stayed green after the Keybox rebooted with output 4 off."""
+    rig.tap(keypad_twin, 4)
+    rig.tap(keypad_twin, 6)
+    rig.advance(0.1)
+    assert keybox_twin.snapshot()["pins"][3]["state"] == "high"
+    rig.power_cycle(keybox_twin)  # a brown-out: every output OFF after the reboot
+    rig.advance(0.5)
+    pins, leds = keybox_twin.snapshot()["pins"], keypad_twin.snapshot()["commanded"]
+    assert [pins[i]["state"] for i in (3, 5)] == ["off", "off"]
+    assert [leds[i]["colour"] for i in (3, 5)] == ["off", "off"]
+    rig.tap(keypad_twin, 4)  # one press switches it on again, as the LED promised
+    rig.advance(0.1)
+    assert keybox_twin.snapshot()["pins"][3]["state"] == "high"
+    assert keypad_twin.snapshot()["commanded"][3]["colour"] == "green"

@@ -93,3 +93,35 @@ def test_an_endless_segmented_transfer_is_no_longer_followed_past_the_limit() ->
               for n in range(TRANSFER_MAX_BYTES // 7 + 10)]
     assert "no longer followed" in str(events[TRANSFER_MAX_BYTES // 7])
     assert events[-1].kind is Kind.FRAME  # the transfer is gone: nothing accumulates
+
+
+def test_other_ecus_frames_are_written_as_their_events_say() -> None:
+    """Frames no device sends are skipped by their id (issue 22); their lines stay exactly
+    what their events say, also once a node's model is learned (then its frames are named)."""
+    from blinkcan.decode.decoder import _encode
+
+    fast, plain = Decoder(), Decoder()
+    others = [Frame(0x0A2, b"\x01\x02"), Frame(0x0CF00400, bytes(8), True),
+              Frame(0x18FEF117, b"\x01" * 8, True), Frame(0x0A2, b"\x03")]
+    learn = [frame("622 40 00 10 00 00 00 00 00"), frame("5A2 43 00 10 00 91 01 0B 00")]
+    seen: list[str] = []
+    for n, item in enumerate(others * 2 + learn + others * 2):
+        line = fast.json_line(item, n / 4)
+        event = plain.decode(item, n / 4)
+        assert line == _encode(event.to_json())
+        seen.append(str(event))
+    assert seen[0] == "node 22h: frame 0A2h"
+    assert seen[1] == "extended frame 0CF00400h"
+    assert seen[-1] == "keypad 22h: frame 0A2h"  # 1000h named the node's model
+
+
+def test_a_keypad_pgn_from_a_learned_address_is_still_decoded() -> None:
+    """Only PGNs the keypad never uses are skipped by id: a keypad learned at a new address is
+    decoded on an identifier seen before it was learned."""
+    decoder = Decoder()
+    heartbeat = Frame(0x18EFFF30, bytes((0x04, 0x1B, 0xF9, 0x07, 0x00, 0x00, 0xFF, 0x30)), True)
+    command = Frame(0x18EF3000, bytes((0x04, 0x1B, 0x02, 0x20, 0xFF, 0xFF, 0xFF, 0xFF)), True)
+    assert decoder.decode(command).kind is Kind.FRAME  # 30h is not known as a keypad yet
+    assert decoder.decode(heartbeat).kind is Kind.J1939  # §18: only a keypad sends it
+    assert decoder.decode(command).kind is Kind.J1939
+    assert json.loads(decoder.json_line(command))["kind"] == "j1939"

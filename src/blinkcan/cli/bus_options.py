@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
-import can
 import click
 
 from blinkcan.protocol.cob import check_node_id
-from blinkcan.runtime import open_bus
+
+if TYPE_CHECKING:  # python-can and the runtime load when a bus is opened (start-up: issue 22)
+    import can
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -57,12 +58,14 @@ def _remember(ctx: click.Context, param: click.Parameter, value: Any) -> None:
 def parse_bus_kwargs(items: Sequence[str]) -> dict[str, Any]:
     """``NAME=VALUE`` items as python-can's ``--bus-kwargs`` reads them (numbers and booleans
     converted)."""
+    from can.util import cast_from_string  # noqa: PLC0415 (start-up: only with --bus-kwargs)
+
     kwargs: dict[str, Any] = {}
     for item in items:
         match = _BUS_KWARG.fullmatch(item)
         if match is None:
             raise click.BadParameter(f"{item!r} is not NAME=VALUE", param_hint="--bus-kwargs")
-        kwargs[match["name"].replace("-", "_")] = can.util.cast_from_string(match["value"])
+        kwargs[match["name"].replace("-", "_")] = cast_from_string(match["value"])
     return kwargs
 
 
@@ -112,6 +115,8 @@ def bus_options(function: F) -> F:
 
 def _configured(settings: dict[str, Any]) -> bool:
     """Whether python-can's configuration (file or environment) names an interface."""
+    import can  # noqa: PLC0415 (start-up: only where a bus is named)
+
     try:
         can.util.load_config(config={k: v for k, v in settings.items() if k != "kwargs"})
     except can.CanInterfaceNotImplementedError:
@@ -154,6 +159,8 @@ def cli_bus() -> can.BusABC:
     interface, channel, bitrate = (config.pop(key, None)
                                    for key in ("interface", "channel", "bitrate"))
     try:
+        from blinkcan.runtime import open_bus  # noqa: PLC0415 (start-up: issue 22)
+
         return open_bus(interface, channel, bitrate, **config)
     except TypeError as error:
         missing = re.search(r"missing \d+ required (?:positional )?arguments?: (.*)", str(error))

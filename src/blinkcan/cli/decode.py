@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import json
 import sys
+from typing import TYPE_CHECKING
 
-import can
 import click
-from rich.console import Console
-from rich.progress import Progress, SpinnerColumn, TextColumn
 
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.decode import Decoder, Event, Kind
@@ -17,6 +15,10 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.logs import LogError, describe_frame, frame_kind, read_log
 from blinkcan.protocol.frame import Frame
+
+if TYPE_CHECKING:  # a candump log decodes without python-can (start-up: issue 22)
+    import can
+    from rich.progress import Progress
 
 #: the devices assumed where no --device is given: each at its factory node id
 DEFAULT_DEVICES = ("keypad", "keybox")
@@ -102,20 +104,32 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
     if not devices:
         click.echo(assumed_text(known), err=True)
     decoder = Decoder(known)
-    out = sys.stdout
-    write = out.write
     progress = None
     if not as_json and sys.stderr.isatty():
+        from rich.console import Console  # noqa: PLC0415 (start-up: only on a terminal)
+        from rich.progress import Progress, SpinnerColumn, TextColumn  # noqa: PLC0415
+
         progress = Progress(SpinnerColumn(), TextColumn("{task.completed:,} frames"),
                             console=Console(stderr=True), transient=True)
+    _decode_to_stdout(decoder, file, as_json, progress)
+
+
+def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Progress | None
+                      ) -> None:
+    """Every frame's line on stdout: JSON, or the text with the frame (and a progress
+    display on a terminal)."""
+    lines: list[str] = []  # written in batches (one write per line costs a tenth of decoding)
+    add = lines.append
     try:
         if as_json:
             json_line = decoder.json_line
             for timestamp, frame in read_log(file):
                 if isinstance(frame, Frame):
-                    write(json_line(frame, timestamp) + "\n")
+                    add(json_line(frame, timestamp))
                 else:
-                    write(json.dumps(other_event(decoder, frame).to_json()) + "\n")
+                    add(json.dumps(other_event(decoder, frame).to_json()))
+                if len(lines) >= _BATCH:
+                    _write(lines)
             return
         task = progress.add_task("decode") if progress is not None else None
         if progress is not None:
@@ -127,10 +141,11 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
                 event = other_event(decoder, item)
                 frame = event.frame
             ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
-            write(f"{timestamp:17.6f}  {ident:>8}  {frame.data.hex(' ').upper():<23}  "
-                  f"{event}\n")
-            if progress is not None and task is not None and count % 5000 == 0:
-                progress.update(task, completed=count)
+            add(f"{timestamp:17.6f}  {ident:>8}  {frame.data.hex(' ').upper():<23}  {event}")
+            if len(lines) >= _BATCH:
+                _write(lines)
+                if progress is not None and task is not None:
+                    progress.update(task, completed=count)
     except LogError as error:
         raise click.ClickException(str(error)) from None
     except BrokenPipeError:
@@ -138,3 +153,18 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
     finally:
         if progress is not None:
             progress.stop()
+        if lines:  # what was decoded before an error is written before its message
+            try:
+                _write(lines)
+            except BrokenPipeError:
+                sys.stderr.close()
+
+
+#: lines written at once
+_BATCH = 500
+
+
+def _write(lines: list[str]) -> None:
+    """Write ``lines`` to stdout, each ended by a newline, and empty the list."""
+    sys.stdout.write("\n".join(lines) + "\n")
+    lines.clear()

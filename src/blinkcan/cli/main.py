@@ -1,4 +1,9 @@
-"""``blinkcan`` command line: one module per subcommand, registered here.
+"""``blinkcan`` command line: one module per subcommand, registered here (:data:`SUBCOMMANDS`).
+
+A subcommand's module is imported when that subcommand runs, not before: ``blinkcan --help``
+and ``blinkcan decode`` do not load python-can's buses, the runtime, cantools or canopen that
+other subcommands need (issue 22: start-up CPU). The listing of ``--help`` reads each
+subcommand's one-line help from :data:`SUBCOMMANDS` (tests/cli check it is the command's own).
 
 Every error ends the same way: one line on stderr and a non-zero exit (2 for a usage mistake,
 1 otherwise); ``-vv`` adds the traceback of an unexpected one.
@@ -9,30 +14,80 @@ from __future__ import annotations
 import logging
 import sys
 from collections.abc import Sequence
+from importlib import import_module
 from typing import Any
 
 import click
 
 from blinkcan import __version__
-from blinkcan.cli import (
-    control,
-    convert,
-    decode,
-    demo,
-    emulate,
-    export,
-    monitor,
-    nmt,
-    query,
-    scan,
-)
 from blinkcan.cli.bus_options import bus_options, spread_bus_kwargs
 
 log = logging.getLogger(__name__)
 
+#: every subcommand: name -> ("module:attribute" of its click command, its one-line help as
+#: its docstring starts); one line registers a subcommand
+SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "emulate": ("blinkcan.cli.emulate:command", "Run device twins on a CAN bus until Ctrl-C."),
+    "demo": ("blinkcan.cli.demo:command",
+             "A controller on a keypad and a Keybox twin: key N toggles output N, shown live."),
+    "decode": ("blinkcan.cli.decode:command", "Decode a log file (any python-can format, or "
+               ".pcap) into what happened; with --parquet, any number of them into a dataset "
+               "for SQL (blinkcan query)."),
+    "export": ("blinkcan.cli.export:command", "Write the EDS or DBC file of a device, from the "
+               "same tables the twins run on."),
+    "convert": ("blinkcan.cli.convert:convert", "Convert a CAN log to another format (by file "
+                "name), e.g. candump .log to .pcap."),
+    "record": ("blinkcan.cli.convert:record", "Record a live bus to a file: .pcap for Wireshark, "
+               "or any python-can log format."),
+    "scan": ("blinkcan.cli.scan:command", "Find devices: boot-up and heartbeat heard, SDO read "
+             "of 1000h, 1018h, 100Bh; keypads in J1939 mode by a software revision request and "
+             "a request for address claimed, to all."),
+    "monitor": ("blinkcan.cli.monitor:command", "Watch a bus live: events, keypad keys and "
+                "LEDs, Keybox outputs."),
+    "keypad": ("blinkcan.cli.control:keypad", "One-shot control of a PKP-2600-SI keypad."),
+    "keybox": ("blinkcan.cli.control:keybox", "One-shot control of a Keybox."),
+    "nmt": ("blinkcan.cli.nmt:command",
+            "NMT commands (CiA 301) to a node, or to all of them with NODE = all."),
+    "query": ("blinkcan.cli.query:command", "Run SQL on the dataset `blinkcan decode --parquet "
+              "OUT` wrote: its rows are the table `events` (columns: time, source, channel, "
+              "can_id, extended, node, kind, key, pin, state, colour, value, text, data, model, "
+              "date)."),
+}
+
+
+def load_subcommand(name: str) -> click.Command:
+    """The click command of a registered subcommand, its module imported now."""
+    module, _, attribute = SUBCOMMANDS[name][0].partition(":")
+    command = getattr(import_module(module), attribute)
+    if not isinstance(command, click.Command):
+        raise TypeError(f"{SUBCOMMANDS[name][0]} is a {type(command).__name__}, not a command")
+    return command
+
 
 class BlinkcanGroup(click.Group):
-    """The root group: python-can's ``--bus-kwargs a=1 b=2`` form, and one-line errors."""
+    """The root group: subcommands imported when they run, python-can's ``--bus-kwargs a=1
+    b=2`` form, and one-line errors."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted({*self.commands, *SUBCOMMANDS})
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.commands and cmd_name in SUBCOMMANDS:
+            self.add_command(load_subcommand(cmd_name), cmd_name)
+        return self.commands.get(cmd_name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """click's listing, with the one-line help of subcommands not imported from
+        :data:`SUBCOMMANDS` (the same text: click shortens both the same way)."""
+        listed = [(name, self.commands.get(name) or click.Command(name, help=SUBCOMMANDS[name][1]))
+                  for name in self.list_commands(ctx)]
+        listed = [(name, command) for name, command in listed if not command.hidden]
+        if not listed:
+            return
+        limit = formatter.width - 6 - max(len(name) for name, _ in listed)
+        with formatter.section("Commands"):
+            formatter.write_dl([(name, command.get_short_help_str(limit))
+                                for name, command in listed])
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         return super().parse_args(ctx, spread_bus_kwargs(args))
@@ -89,19 +144,6 @@ def cli(verbose: int) -> None:
     logging.basicConfig(level=max(level, logging.DEBUG),
                         format="%(levelname)s %(name)s: %(message)s")
 
-
-cli.add_command(emulate.command)
-cli.add_command(demo.command)
-cli.add_command(decode.command)
-cli.add_command(export.command)
-cli.add_command(convert.convert)
-cli.add_command(convert.record)
-cli.add_command(scan.command)
-cli.add_command(monitor.command)
-cli.add_command(control.keypad)
-cli.add_command(control.keybox)
-cli.add_command(nmt.command)
-cli.add_command(query.command)
 
 
 def main() -> None:

@@ -14,6 +14,7 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
+from functools import lru_cache
 from typing import Any, NamedTuple
 
 import orjson
@@ -49,6 +50,10 @@ _STATE_TEXT = {NmtState.STOPPED: "stopped", NmtState.OPERATIONAL: "operational",
 _JSON_CACHE_SIZE = 16_384
 #: a route's JSON stops being cached when, after this many misses, under 1 in 4 lookups hit
 _CACHE_TRIAL = 512
+#: 29-bit identifiers of other ECUs kept (then they start over): a J1939 bus has a few hundred
+_FOREIGN_KEPT = 512
+#: routes kept: every 11-bit identifier, and 29-bit ones the J1939 keypad may use up to this
+_ROUTES_KEPT = 2048 + 256
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
 
 
@@ -88,6 +93,10 @@ class Kind(str, Enum):
 
 
 _NO_FIELDS: dict[str, Any] = {}  # shared, never written
+#: what a frame that means nothing costs: its event's (text, node, device) and its JSON line
+#: before and after the data (Decoder._keep_raw)
+_Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str]
+_new_tuple = tuple.__new__
 
 
 class Event(NamedTuple):
@@ -122,24 +131,20 @@ class Event(NamedTuple):
         }
 
 
-def _item_tables(bits: int) -> tuple[tuple[tuple[int, ...], ...], tuple[str, ...]]:
-    """For every mask below 2**bits: its item numbers (bit 0 = item 1) and their listing.
-    Key, LED and pin masks are 12-13 bits, so decoding a mask is one lookup."""
-    items: list[tuple[int, ...]] = [()]
-    for mask in range(1, 1 << bits):
-        items.append(((mask & -mask).bit_length(),) + items[mask & (mask - 1)])
-    return tuple(items), tuple(", ".join(map(str, i)) if i else "none" for i in items)
+#: masks whose item numbers, listing and JSON are kept (key, LED and pin masks are 12-13 bits,
+#: so a log's masks are found again; a bounded cache keeps memory flat on random ones)
+_MASKS_KEPT = 8192
 
 
-_ITEMS, _ITEM_LISTINGS = _item_tables(13)
-_ITEM_JSON = tuple(f"[{','.join(map(str, items))}]" for items in _ITEMS)
-_TABLED = len(_ITEMS)
+@lru_cache(maxsize=_MASKS_KEPT)
+def _items(mask: int) -> tuple[int, ...]:
+    return tuple(item_numbers(mask))
 
 
 def numbers(mask: int, offset: int = 1) -> list[int]:
     """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
-    if offset == 1 and 0 <= mask < _TABLED:
-        return list(_ITEMS[mask])
+    if offset == 1 and mask >= 0:
+        return list(_items(mask))
     return item_numbers(mask, offset)
 
 
@@ -147,14 +152,16 @@ def listing(items: list[int]) -> str:
     return ", ".join(map(str, items)) if items else "none"
 
 
+@lru_cache(maxsize=_MASKS_KEPT)
 def mask_listing(mask: int) -> str:
-    """``listing(numbers(mask))``, one lookup for the usual masks."""
-    return _ITEM_LISTINGS[mask] if 0 <= mask < _TABLED else listing(numbers(mask))
+    """``listing(numbers(mask))``, one lookup for a mask seen before."""
+    return listing(numbers(mask))
 
 
+@lru_cache(maxsize=_MASKS_KEPT)
 def _mask_json(mask: int) -> str:
-    """``numbers(mask)`` as compact JSON, one lookup for the usual masks."""
-    return _ITEM_JSON[mask] if 0 <= mask < _TABLED else _encode_text_list(numbers(mask))
+    """``numbers(mask)`` as compact JSON, one lookup for a mask seen before."""
+    return _encode_text_list(numbers(mask))
 
 
 def _encode_text_list(items: list[int]) -> str:
@@ -206,17 +213,33 @@ class Decoder:
         self._guessed: set[int] = set()
         #: keypads in J1939 mode, by address (decode/j1939.py)
         self.j1939 = J1939KeypadDecoder()
+        #: 11-bit identifiers no device's frame uses (other ECUs): their event's (text, node,
+        #: device) and their JSON line before and after the data; a lookup is all they cost
+        self._raw_standard: dict[int, _Raw] = {}
+        #: 29-bit identifiers of PGNs the keypad never uses (other ECUs'), with their text
+        self._foreign: dict[int, str] = {}
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
 
     def decode(self, frame: Frame, time: float = 0.0) -> Event:
         """The event one frame makes (every frame makes one)."""
+        if frame[2]:  # another ECU's frame is a lookup (a frame is a tuple underneath)
+            text = self._foreign.get(frame[0])
+            if text is not None:  # the Event built as a tuple: its fields are all given
+                return _new_tuple(Event, (time, frame, Kind.FRAME, text, None, None,
+                                          _NO_FIELDS))
+        else:
+            raw = self._raw_standard.get(frame[0])
+            if raw is not None:
+                return _new_tuple(Event, (time, frame, Kind.FRAME, *raw[0]))
         route = self._routes.get((frame.can_id, frame.extended))
         if route is None:
             route = self._route(frame)
             if not frame.extended:  # at most 2048 standard identifiers: the cache is bounded
                 self._routes[frame.can_id, frame.extended] = route
+            elif len(self._routes) < _ROUTES_KEPT and self.j1939.concerns(frame.can_id):
+                self._routes[frame.can_id, True] = route  # the keypad PGNs' ids, up to a bound
         return route(frame, time)
 
     def json_line(self, frame: Frame, time: float = 0.0) -> str:
@@ -226,7 +249,19 @@ class Decoder:
         depends on its bytes alone, the JSON after the time is kept and reused, for as long as
         that route's frames do repeat. PDOs write their line without building an Event.
         """
-        key = (frame.can_id, frame.extended)
+        can_id, data, extended = frame
+        if extended:  # another ECU's frame: a lookup, and to_json's line written directly
+            text = self._foreign.get(can_id)
+            if text is not None:  # the text has no character JSON escapes
+                return (f'{{"time":{time!r},"id":{can_id},"extended":true,"data":"{data.hex()}",'
+                        f'"kind":"frame","node":null,"device":null,"text":"{text}"}}')
+            event = self.decode(frame, time)  # J1939: never cached (its meaning has state)
+            return _encode(event.to_json())
+        else:
+            raw = self._raw_standard.get(can_id)
+            if raw is not None:  # a frame no device sends: its line around time and data
+                return f'{{"time":{time!r}{raw[1]}{data.hex()}{raw[2]}'
+        key = (can_id, extended)
         keyed = self._keyed.get(key)
         cache_key: object = frame
         cached = key not in self._uncached
@@ -312,8 +347,19 @@ class Decoder:
                     return self._pdo_route(layout, node, device.kind)
         return self._unknown
 
+    def _keep_raw(self, event: Event) -> None:
+        """Remember the 11-bit id of a frame that means nothing here (its text does not depend
+        on its data): the next one is a lookup. The JSON around time and data is to_json's."""
+        line = _encode({**event.to_json(), "time": 0, "data": ""})
+        head, _, tail = line.partition(',"data":""')
+        self._raw_standard[event.frame.can_id] = (
+            (event.text, event.node_id, event.device, _NO_FIELDS),
+            head[len('{"time":0'):] + ',"data":"', '"' + tail)
+
     def _forget_routes(self, node: int) -> None:
         """A node's model became known: its routes and their cached JSON change."""
+        for can_id in [i for i in self._raw_standard if i & 0x7F == node]:
+            del self._raw_standard[can_id]
         for key in [k for k in self._routes if not k[1] and k[0] & 0x7F == node]:
             del self._routes[key]
             self._pure.discard(key)
@@ -359,14 +405,21 @@ class Decoder:
     def _extended(self, frame: Frame, time: float) -> Event:
         meaning = self.j1939.decode(frame)
         if meaning is None:
-            return Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+            event = Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
+            if not self.j1939.concerns(frame.can_id):  # never the keypad's: skip it by id
+                if len(self._foreign) >= _FOREIGN_KEPT:
+                    self._foreign.clear()
+                self._foreign[frame.can_id] = event.text
+            return event
         return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
                      "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})
 
     def _unknown(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
-        return Event(time, frame, Kind.FRAME, f"frame {frame.can_id:03X}h", node or None,
-                     self._who(node))
+        event = Event(time, frame, Kind.FRAME, f"frame {frame.can_id:03X}h", node or None,
+                      self._who(node))
+        self._keep_raw(event)  # until the node's model is learned (_forget_routes)
+        return event
 
     # -- PDOs -------------------------------------------------------------------------------------
 

@@ -11,8 +11,7 @@ to all from a non-keypad) is a command, a frame from a keypad is a message.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from blinkcan.devices.keypad_j1939 import (
     COLOUR_CODES,
@@ -41,6 +40,7 @@ from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import (
     GLOBAL_ADDRESS,
     NULL_ADDRESS,
+    PDU2_FORMAT_MIN,
     PGN_ADDRESS_CLAIMED,
     PGN_REQUEST,
     J1939Name,
@@ -52,14 +52,17 @@ _MODES = {0: "single-LED commands only", 2: "single and multiple LED commands"}
 _BITRATES = {2: "500 kbit/s", 3: "250 kbit/s"}
 
 
-@dataclass(frozen=True)
-class J1939Meaning:
-    """What one extended frame meant. ``address`` is the keypad's (or the claimer's) address."""
+_NO_FIELDS: dict[str, Any] = {}  # shared, never written
+
+
+class J1939Meaning(NamedTuple):
+    """What one extended frame meant. ``address`` is the keypad's (or the claimer's) address.
+    A tuple (immutable, equal by value): one is made per keypad frame of a log."""
 
     text: str
     address: int | None
     keypad: bool
-    fields: dict[str, Any] = field(default_factory=dict)
+    fields: dict[str, Any] = _NO_FIELDS
 
 
 def colour_name(code: int) -> str:
@@ -97,43 +100,70 @@ def _value_text(command: J1939Command, name: str, value: int) -> str:
     return f"{value:02X}h"
 
 
+#: every PGN the keypad's traffic uses (§3, §7b, J1939-21 request, J1939-81 claim): a frame of
+#: any other PGN is never the keypad's, whatever its addresses and data
+KEYPAD_PGNS = frozenset({PGN_ADDRESS_CLAIMED, PGN_REQUEST, PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2,
+                         PGN_COMMAND})
+
+
+#: command meanings kept (then they start over): a few hundred kilobytes at most
+_COMMANDS_KEPT = 1024
+
+
 class J1939KeypadDecoder:
     """Decodes PKP-2600-SI J1939 frames; remembers which addresses are keypads."""
 
     def __init__(self, addresses: Iterable[int] = (DEFAULT_ADDRESS,)) -> None:
         self.addresses = set(addresses)
+        #: commands' meanings by (destination, bytes): their fields hold numbers only
+        self._commands: dict[tuple[int, bytes], J1939Meaning] = {}
+
+    @staticmethod
+    def concerns(can_id: int) -> bool:
+        """Whether a 29-bit identifier can carry the keypad's traffic (its PGN is one the
+        keypad uses); False: :meth:`decode` says None for every frame with it."""
+        return parse_id(can_id).pgn in KEYPAD_PGNS
 
     def decode(self, frame: Frame) -> J1939Meaning | None:
         """The meaning of an extended frame, or None for one that is not the keypad's."""
-        if not frame.extended:
+        can_id, data, extended = frame
+        if not extended:
             return None
-        ident = parse_id(frame.can_id)
-        data = frame.data
-        if ident.pgn == PGN_ADDRESS_CLAIMED and len(data) == 8:
-            return self._claim(ident.source, J1939Name.from_bytes(data))
-        if ident.pgn == PGN_REQUEST and len(data) >= 3:
+        # the identifier's fields (protocol/j1939.py parse_id, inline: one frame of many)
+        pgn, source = (can_id >> 8) & 0x3FFFF, can_id & 0xFF
+        if (pgn >> 8) & 0xFF < PDU2_FORMAT_MIN:  # PDU1: PS is the destination (J1939-21)
+            destination, pgn = pgn & 0xFF, pgn & ~0xFF
+        else:
+            destination = GLOBAL_ADDRESS
+        if pgn == PGN_COMMAND:
+            return self._proprietary(source, destination, data)
+        if pgn == PGN_ADDRESS_CLAIMED and len(data) == 8:
+            return self._claim(source, J1939Name.from_bytes(data))
+        if pgn == PGN_REQUEST and len(data) >= 3:
             requested = int.from_bytes(data[:3], "little")
             if requested == PGN_ADDRESS_CLAIMED:
-                target = "all" if ident.destination == GLOBAL_ADDRESS else \
-                    f"{ident.destination:02X}h"
+                target = "all" if destination == GLOBAL_ADDRESS else f"{destination:02X}h"
                 return J1939Meaning(f"request for address claimed, to {target}",
-                                    ident.source, False, {"source": ident.source})
+                                    source, False, {"source": source})
             return None
-        if ident.pgn in (PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2):
-            if ident.destination not in self.addresses and ident.destination != GLOBAL_ADDRESS:
+        if pgn in (PGN_LEDS_COLOUR_1, PGN_LEDS_COLOUR_2):
+            if destination not in self.addresses and destination != GLOBAL_ADDRESS:
                 return None
-            return self._multiple_leds(ident.pgn, ident.destination, data)
-        if ident.pgn != PGN_COMMAND:
-            return None
+            return self._multiple_leds(pgn, destination, data)
+        return None
+
+    def _proprietary(self, source: int, destination: int, data: bytes) -> J1939Meaning | None:
+        """PGN EF00h: a command to a keypad or a message from one, told by the addresses."""
         # only a keypad sends a heartbeat or a software revision (§18, §11)
         keypad_only = data[:2] == HEADER and len(data) == 8 and (
             data[2] == HEARTBEAT or (data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF))
-        to_keypad = ident.destination in self.addresses or (
-            ident.destination == GLOBAL_ADDRESS and ident.source not in self.addresses)
+        addresses = self.addresses
+        to_keypad = destination in addresses or (
+            destination == GLOBAL_ADDRESS and source not in addresses)
         if to_keypad and data[:2] == HEADER and not keypad_only:
-            return self._command(ident.destination, data)
-        if ident.source in self.addresses or keypad_only:
-            return self._message(ident.source, data)
+            return self._command(destination, data)
+        if source in addresses or keypad_only:
+            return self._message(source, data)
         return None
 
     # -- from the keypad ----------------------------------------------------------------------
@@ -170,6 +200,21 @@ class J1939KeypadDecoder:
     # -- to the keypad ------------------------------------------------------------------------
 
     def _command(self, destination: int, data: bytes) -> J1939Meaning:
+        """A command's meaning: the same bytes to the same address mean the same (commands
+        repeat: LED states sent again and again), so meanings are kept, up to a bound."""
+        key = (destination, data)
+        meaning = self._commands.get(key)
+        if meaning is None:
+            meaning = self._describe_command(destination, data)
+            if len(self._commands) >= _COMMANDS_KEPT:
+                self._commands.clear()
+            self._commands[key] = meaning
+        fields = meaning.fields
+        if fields["command"] == "source_address" and fields["address"] != 0xFF:
+            self.addresses.add(fields["address"])  # §16: the keypad answers there from now
+        return meaning
+
+    def _describe_command(self, destination: int, data: bytes) -> J1939Meaning:
         command = COMMANDS_BY_CODE.get(data[2]) if len(data) > 2 else None
         fields = command.decode(data) if command is not None else None
         if command is None or fields is None:
@@ -189,8 +234,6 @@ class J1939KeypadDecoder:
                 f"{command.label.lower()}: {values}"
             if command.persistence is Persistence.TEMPORARY:
                 text += " until power-off"
-        if command.name == "source_address" and fields["address"] != 0xFF:
-            self.addresses.add(fields["address"])
         return J1939Meaning(text, destination, True, {"command": command.name, **fields})
 
     def _multiple_leds(self, pgn: int, destination: int, data: bytes) -> J1939Meaning:

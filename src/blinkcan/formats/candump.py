@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import io
 from collections.abc import Iterator
-from typing import TextIO
-
-import can
-from can.io.canutils import CanutilsLogReader
+from typing import TYPE_CHECKING, TextIO
 
 from blinkcan.protocol.frame import Frame
+
+if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
+    import can
 
 _ERROR_FLAG = 0x20000000  # linux/can.h CAN_ERR_FLAG
 _DIRECTIONS = frozenset({"R", "T", "r", "t"})
@@ -31,6 +31,8 @@ _new_tuple = tuple.__new__  # Frame.trusted without the call: the ids and data a
 
 def _python_can(line: str) -> can.Message | None:
     """The message python-can reads from one line (None for a blank line)."""
+    from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
+
     reader = CanutilsLogReader(io.StringIO(line))
     message = next(iter(reader), None)
     return restore_error_details(message, line) if message is not None else None
@@ -63,34 +65,51 @@ def with_error_details(messages: Iterator[can.Message], lines: Iterator[str]
         yield restore_error_details(message, line)
 
 
+#: identifier texts remembered per log (then they start over): a log has few distinct ones
+_IDENTS_KEPT = 4096
+
+
+def _plain_id(ident: str) -> tuple[int, bool] | None:
+    """(id, extended) of a data frame's identifier text, None where python-can's own rules
+    decide (bad digits; over 7FFh in 3 digits; an error flag or more in 8)."""
+    size = len(ident)
+    try:
+        can_id = int(ident, 16)
+    except ValueError:
+        return None
+    if not size or (size <= 3 and can_id > 0x7FF) or can_id > 0x1FFFFFFF:
+        return None
+    return can_id, size > 3
+
+
 def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
     ``can.Message`` python-can reads for anything else (remote, error, CAN FD)."""
     new = _new_tuple
     fromhex = bytes.fromhex
+    idents: dict[str, tuple[int, bool] | None] = {}
     for line in stream:
         fields = line.split()
         count = len(fields)
         if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
             stamp = fields[0]
             ident, _, data = fields[2].partition("#")
-            size = len(ident)
-            if stamp[:1] == "(" and size and len(data) <= 16 and not len(data) & 1 \
-                    and data[:1] not in _NOT_DATA:
+            if ident in idents:
+                plain = idents[ident]
+            else:
+                if len(idents) >= _IDENTS_KEPT:
+                    idents.clear()
+                plain = idents[ident] = _plain_id(ident)
+            if plain is not None and stamp[:1] == "(" and len(data) <= 16 \
+                    and not len(data) & 1 and data[:1] not in _NOT_DATA:
                 try:
-                    can_id = int(ident, 16)
                     payload = fromhex(data)
                     timestamp = float(stamp[1:-1])
                 except ValueError:
                     pass
                 else:
-                    if size <= 3:
-                        if can_id <= 0x7FF:
-                            yield timestamp, new(Frame, (can_id, payload, False))
-                            continue
-                    elif can_id <= 0x1FFFFFFF:  # not an error flag: python-can's own rules
-                        yield timestamp, new(Frame, (can_id, payload, True))
-                        continue
+                    yield timestamp, new(Frame, (plain[0], payload, plain[1]))
+                    continue
         if not fields:
             continue
         message = _python_can(line)

@@ -23,27 +23,39 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-
-import can
-from can.io.blf import BLFParseError, BLFWriter
+from typing import TYPE_CHECKING
 
 from blinkcan.formats.candump import read_candump, with_error_details
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
-from blinkcan.formats.carried import CARRIES, Losses
-from blinkcan.formats.log_writers import WRITERS
-from blinkcan.formats.pcap import PcapError, PcapWriter, is_pcap, read_pcap_messages
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import to_message
+
+if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads without it
+    import can
+
+    from blinkcan.formats.pcap import PcapWriter
 
 
 class LogError(ValueError):
     """A file that cannot be read or written as a CAN log."""
 
 
-#: errors python-can's readers raise on a file that is not what its name says
-_READ_ERRORS = (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError,
-                sqlite3.Error, EOFError, can.CanError, NotImplementedError, ImportError,
-                BLFParseError)
+
+
+def _read_errors() -> tuple[type[BaseException], ...]:
+    """The errors python-can's readers raise on a file that is not what its name says (an
+    ``except`` clause evaluates this only when an error came)."""
+    import can  # noqa: PLC0415
+    from can.io.blf import BLFParseError  # noqa: PLC0415
+
+    return (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError, sqlite3.Error,
+            EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError)
+
+
+def is_pcap(path: Path) -> bool:
+    """formats/pcap.py's ``is_pcap`` (python-can loads with it: where a file needs it)."""
+    from blinkcan.formats import pcap  # noqa: PLC0415
+
+    return pcap.is_pcap(path)
 
 
 def frame_kind(message: can.Message) -> str:
@@ -64,6 +76,10 @@ def _source(path: str | os.PathLike[str]) -> Path:
 
 def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
     """Every frame of a log file as python-can messages: data, remote, error, CAN FD."""
+    import can  # noqa: PLC0415
+
+    from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
+
     source = _source(path)
     if is_pcap(source):
         with source.open("rb") as stream:
@@ -77,7 +93,7 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
     options = {"relative_timestamp": False} if suffix == ".asc" else {}
     try:
         reader = can.LogReader(str(source), **options)
-    except _READ_ERRORS as error:
+    except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
@@ -87,7 +103,7 @@ def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
             else:
                 for message in reader:
                     yield _as_written(message, suffix)
-        except _READ_ERRORS as error:
+        except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
 
@@ -111,7 +127,7 @@ def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.
         with source.open(encoding="utf-8") as stream:
             try:
                 yield from read_candump(stream)
-            except _READ_ERRORS as error:
+            except _read_errors() as error:
                 raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
         return
     trusted = Frame.trusted  # python-can (or our pcap reader) parsed and checked the frames
@@ -153,6 +169,8 @@ RECORDABLE = (".pcap", ".cap", ".log", ".asc", ".blf", ".csv", ".trc", ".db")
 
 
 def _writer_class(suffix: str) -> type[can.io.generic.MessageWriter]:
+    from blinkcan.formats.log_writers import WRITERS  # noqa: PLC0415
+
     try:
         return WRITERS[suffix]  # type: ignore[no-any-return]
     except KeyError:
@@ -198,6 +216,10 @@ class FrameWriter:
         self.live = live
         suffix = self.path.suffix.lower()
         _check_target(self.path, replace, live)
+        from blinkcan.formats.carried import CARRIES, Losses  # noqa: PLC0415
+        from blinkcan.runtime.canbus import to_message  # noqa: PLC0415
+
+        self._to_message = to_message
         self._pcap: PcapWriter | None = None
         self._file: WholeRecords | None = None
         self._logger: can.io.generic.MessageWriter | None = None
@@ -235,6 +257,8 @@ class FrameWriter:
     def _open(self, handle: int, suffix: str) -> None:
         """The format's writer on the open file ``handle``."""
         if is_pcap(self.path):
+            from blinkcan.formats.pcap import PcapWriter  # noqa: PLC0415
+
             self._file = WholeRecords(handle, str(self.path))
             self._pcap = PcapWriter(self._file)  # type: ignore[arg-type]
         elif suffix in (".db", ".mf4"):  # python-can's writer (or asammdf) opens it by name
@@ -257,7 +281,7 @@ class FrameWriter:
 
     def write(self, timestamp: float, frame: Frame) -> None:
         """Write one data frame."""
-        self.write_message(to_message(frame, timestamp))
+        self.write_message(self._to_message(frame, timestamp))
 
     def write_message(self, message: can.Message) -> None:
         """Write any frame (data, remote, error, CAN FD), or count it as skipped where the
@@ -287,6 +311,8 @@ class FrameWriter:
         self._unflushed = 0
         if self._file is None:
             return
+        from can.io.blf import BLFWriter  # noqa: PLC0415
+
         if self.live and isinstance(self._logger, BLFWriter):
             blf = self._logger
             blf._flush()  # python-can's BLFWriter.stop() does these two steps

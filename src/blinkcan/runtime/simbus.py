@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import collections
 from collections.abc import Callable
+from functools import partial
 from typing import Any, NamedTuple
 
 import can
@@ -27,6 +28,9 @@ FrameHandler = Callable[[Frame, float], None]
 RECV_FOREVER = 60.0
 #: a wire rule: for a frame, None (unchanged), "drop", or extra delay in seconds
 Rule = Callable[[Frame], "str | float | None"]
+
+
+_timed = tuple.__new__  # TimedFrame without its __new__: a frame and a time made here
 
 
 class TimedFrame(NamedTuple):
@@ -48,14 +52,23 @@ class SimulatedNetwork:
         self.latency = latency
         self.frames: list[TimedFrame] = []
         self.up = True
-        self._endpoints: list[FrameHandler] = []
+        #: the endpoints' handlers, a tuple: delivery reads it for every frame, attach and
+        #: detach (rare) replace it
+        self._endpoints: tuple[FrameHandler, ...] = ()
         self._rules: list[Rule] = []
         self.in_flight = 0
 
     def attach(self, handler: FrameHandler) -> Callable[[], None]:
         """Deliver every frame sent by others to ``handler(frame, now)``; returns the detach."""
-        self._endpoints.append(handler)
-        return lambda: self._endpoints.remove(handler) if handler in self._endpoints else None
+        self._endpoints += (handler,)
+
+        def detach() -> None:
+            endpoints = list(self._endpoints)
+            if handler in endpoints:
+                endpoints.remove(handler)
+                self._endpoints = tuple(endpoints)
+
+        return detach
 
     def add_rule(self, rule: Rule) -> Callable[[], None]:
         """A rule that may drop or delay frames; returns the function that removes it."""
@@ -85,20 +98,18 @@ class SimulatedNetwork:
             self.in_flight -= 1
         if not self.up:
             return
-        now = self.scheduler.clock()
-        self.frames.append(TimedFrame(now, frame))
-        for handler in list(self._endpoints):
+        scheduler = self.scheduler
+        self.frames.append(_timed(TimedFrame, (scheduler.clock(), frame)))
+        handover = self._handover
+        for handler in self._endpoints:  # a tuple: an endpoint attached meanwhile waits
             if handler != sender:  # bound methods: equal, not identical, per access
                 self.in_flight += 1
-                self.scheduler.call_soon(self._handover_later(handler, frame))
+                scheduler.call_soon(partial(handover, handler, frame))
 
-    def _handover_later(self, handler: FrameHandler, frame: Frame) -> Callable[[], None]:
-        def handover() -> None:
-            self.in_flight -= 1
-            if self.up:
-                handler(frame, self.scheduler.clock())
-
-        return handover
+    def _handover(self, handler: FrameHandler, frame: Frame) -> None:
+        self.in_flight -= 1
+        if self.up:
+            handler(frame, self.scheduler.clock())
 
 
 class SimulatedBus(can.BusABC):
@@ -127,7 +138,7 @@ class SimulatedBus(can.BusABC):
         return lambda: self._listeners.remove(handler) if handler in self._listeners else None
 
     def _on_frame(self, frame: Frame, now: float) -> None:
-        self._received.append(TimedFrame(now, frame))
+        self._received.append(_timed(TimedFrame, (now, frame)))
         for listener in self._listeners:
             listener(frame, now)
 

@@ -9,6 +9,10 @@ Fixtures:
 Marker: ``@pytest.mark.blinkcan(manual="1.5", quirks="cia301", keypad_node=0x15,
 keybox_node=0x0C, startup_show=False)`` chooses the twins a test gets.
 
+An exception raised in a test's handlers (key, fault, health callbacks) or in work handed to
+``host.spawn`` fails that test with its traceback: it is raised from the rig or driver call that
+ran the simulation, or at the ``rig`` fixture's teardown (``Rig.close``).
+
 Golden traces: ``assert_matches_trace(rig.frames, path)``; run pytest with
 ``--blinkcan-record`` to (re)write the traces instead of comparing (``golden_trace`` fixture).
 """
