@@ -10,9 +10,8 @@ import can
 import pytest
 
 from blinkcan import Keypad
-from blinkcan.host import KeyEvent
 from blinkcan.devices.registry import models
-from blinkcan.host import NoDeviceError
+from blinkcan.host import KeyEvent, NoDeviceError
 from blinkcan.host.j1939_keypad import KeypadGoneError, look_of, scan_j1939
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
@@ -207,15 +206,15 @@ def configured(rig: Rig, twin: KeypadTwin, *commands: str) -> KeypadTwin:
     return twin
 
 
-def j1939_pair(rig: Rig, model: str, generation: str, claim: bool = False,
-               **options: object) -> tuple[KeypadTwin, Keypad]:
+def j1939_pair(rig: Rig, model: str, generation: str, claim: bool = False
+               ) -> tuple[KeypadTwin, Keypad]:
     """A keypad twin of ``model`` in J1939 mode (with address claim and a 100 ms heartbeat
     when ``claim``) and a driver of it."""
     twin = rig.add(KeypadTwin(model=model, manual=generation, protocol="j1939"))
     rig.settle()
     if claim:
         configured(rig, twin, CLAIM_ON, HEARTBEAT_100_MS)
-    keypad = Keypad(rig.bus, model=model, generation=generation, protocol="j1939", **options)
+    keypad = Keypad(rig.bus, model=model, generation=generation, protocol="j1939")
     rig.settle()
     return twin, keypad
 
@@ -269,7 +268,8 @@ def test_identity_over_j1939(rig: Rig, model: str, generation: str) -> None:
     assert (identity.address, identity.software_version, identity.claim) == (0x21, "V2.6",
                                                                            "claimed")
     assert identity.name == twin.snapshot()["j1939"]["name"]
-    assert identity.heartbeat is not None and "keys held: none" in identity.heartbeat
+    assert identity.heartbeat is not None
+    assert "keys held: none" in identity.heartbeat
     assert not [f for f in frames_of(rig.frames[before:]) if not f.extended]  # no SDO
     keypad.close()
 

@@ -22,6 +22,7 @@ from blinkcan.devices.keypad_j1939 import (
     HEARTBEAT,
     KEY_MESSAGE,
     KEY_PRESSED,
+    KEYS,
     PGN_COMMAND,
     PRIORITY,
     SOFTWARE_REVISION_REPLY,
@@ -214,7 +215,7 @@ class J1939KeypadLink:
         heartbeat = None
         if self.heartbeat is not None:
             counter, keys = self.heartbeat
-            held = [str(key) for key in range(1, 13) if keys >> (key - 1) & 1]
+            held = [str(key) for key in range(1, KEYS + 1) if keys >> (key - 1) & 1]
             heartbeat = f"counter {counter:02X}h, keys held: {', '.join(held) or 'none'}"
         return J1939Identity(self.address, model, revision,
                              self.name.hex(" ").upper() if self.name is not None else None,
@@ -233,7 +234,7 @@ class J1939KeypadLink:
         if ident.pgn != PGN_COMMAND or ident.source != self.address or self.gone or \
                 len(data) != 8 or data[:2] != HEADER:
             return
-        if data[2] == KEY_MESSAGE and 1 <= data[3] <= 12:  # §6
+        if data[2] == KEY_MESSAGE and 1 <= data[3] <= KEYS:  # §6
             self._heard_signal.set()
             self._on_key(data[3], data[4] == KEY_PRESSED, now)
         elif data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF:  # §11
