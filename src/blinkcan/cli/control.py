@@ -5,11 +5,16 @@ restoring factory defaults ask for confirmation first (``--yes`` does not ask).
 Every command, PDO-only ones included (``keypad led``), first confirms which device answers at
 the node id (the drivers' identity check): nothing answering, another kind of device, or more
 than one device answering ("two devices answer at node 15h") is one line and a non-zero exit,
-and the bus sees no command."""
+and the bus sees no command.
+
+Arguments come first (``cli/ranges.py``): checked against the models that may answer before the
+bus is opened (``--model`` names one; else every registered model of the kind), then against
+the model found at the node id before any command. A question ("Go on?") comes after the device
+was found, never before."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -17,10 +22,22 @@ import can
 import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
+from blinkcan.cli.ranges import (
+    Check,
+    candidates,
+    entry_spans,
+    merged,
+    spans_of,
+    whose,
+    within,
+)
+from blinkcan.devices.colours import BacklightColour, led_colour
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
-from blinkcan.devices.registry import model
+from blinkcan.devices.model import DeviceDescription
+from blinkcan.devices.registry import model, parse_spec
 from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
 from blinkcan.host.device import check_one_device
+from blinkcan.host.registry import driver_class
 from blinkcan.protocol.j1939 import ADDRESS_MAX
 from blinkcan.protocol.sdo_client import SdoProtocolError
 
@@ -28,6 +45,8 @@ from blinkcan.protocol.sdo_client import SdoProtocolError
 Target = tuple[str, int]
 #: ``blinkcan keypad --protocol j1939 --address 0x21``: kept in the context's meta
 _J1939_ADDRESS = "blinkcan.j1939_address"
+#: ``blinkcan keypad --model pkp-3500-mt``: kept in the context's meta
+_MODEL = "blinkcan.model"
 
 
 def _j1939_address() -> int | None:
@@ -36,23 +55,64 @@ def _j1939_address() -> int | None:
     return None if context is None else context.meta.get(_J1939_ADDRESS)
 
 
-@contextmanager
-def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
-    kind, node_id = target
+def _model_spec() -> str | None:
+    """``--model`` as given ("pkp-3500-mt", "keypad@1.5"), else None."""
+    context = click.get_current_context(silent=True)
+    return None if context is None else context.meta.get(_MODEL)
+
+
+def _candidates(kind: str) -> tuple[DeviceDescription, ...]:
+    """The descriptions that may answer this command (J1939: the models that have the mode)."""
+    return candidates(kind, _model_spec(), "j1939" if _j1939_address() is not None else None)
+
+
+def _arguments(kind: str, check: Check) -> None:
+    """``check`` against every model that may answer, before the bus: a usage error naming
+    the valid values."""
+    descriptions = _candidates(kind)
+    try:
+        check(descriptions)
+    except ValueError as error:
+        raise click.UsageError(f"{error} ({whose(descriptions)})") from None
+
+
+def _open(bus: can.BusABC, kind: str, node_id: int) -> Keypad | Keybox:
+    """The driver of the device at ``node_id``: the ``--model`` given, the kind's one model,
+    or (several models of the kind) the one its 100Bh names. Nothing is started."""
     address = _j1939_address()
+    if address is not None:  # J1939 (spec/pkp-2600-si-j1939.md): no SDO, nothing to confirm
+        return Keypad(bus, node_id, protocol="j1939", address=address)
+    spec = _model_spec()
+    if spec is not None:
+        found, generation = parse_spec(spec)
+        options = {"generation": generation} if "@" in spec and len(found.generations) > 1 \
+            else {}
+        return driver_class(found.name)(bus, node_id, start=False, **options)  # type: ignore[no-any-return]
+    described = _candidates(kind)
+    driver: Any = driver_class(described[0].model)
+    if len({d.model for d in described}) == 1:
+        return driver(bus, node_id, start=False)  # type: ignore[no-any-return]
+    # several models of the kind (keypads): the driver class reads 100Bh and builds the one
+    return driver.connect(bus, node_id, start=False)  # type: ignore[no-any-return]
+
+
+@contextmanager
+def _device(target: Target, start: bool = False, check: Check | None = None
+            ) -> Iterator[Keypad | Keybox]:
+    """The driver, once the device answered; ``check`` runs against its model first, and
+    ``start`` starts it (NMT) after that: a bad argument never reaches the device."""
+    kind, node_id = target
     bus = cli_bus()
     try:
         try:
-            if kind == "keypad" and address is not None:
-                device: Keypad | Keybox = Keypad(bus, node_id, protocol="j1939",
-                                                 address=address)
-            elif kind == "keypad":
-                device = Keypad(bus, node_id, start=start)
-            else:
-                device = Keybox(bus, node_id, start=start)
+            device = _open(bus, kind, node_id)
         except (IdentityError, SdoError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
         try:
+            if check is not None:
+                _check_found(check, device.description, node_id)
+            if start and getattr(device, "j1939", None) is None:  # J1939: no NMT
+                device.start()
             yield device
         except (SdoError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
@@ -60,6 +120,14 @@ def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
             device.close()
     finally:
         bus.shutdown()
+
+
+def _check_found(check: Check, description: DeviceDescription, node_id: int) -> None:
+    try:
+        check([description])
+    except ValueError as error:
+        raise click.ClickException(f"{error} ({whose([description])} at node "
+                                   f"{node_id:02X}h)") from None
 
 
 def _explained(error: Exception, bus: can.BusABC, node_id: int) -> str:
@@ -116,9 +184,22 @@ node_id_option = click.option("--node-id", type=NODE_ID, default=None, expose_va
 def _group(kind: str, title: str) -> click.Group:
     default = model(kind).default_node_id
 
+    def set_model(ctx: click.Context, param: click.Parameter, value: str | None) -> None:
+        if value is None:
+            return
+        try:
+            candidates(kind, value)
+        except ValueError as error:
+            raise click.BadParameter(str(error), ctx, param) from None
+        ctx.meta[_MODEL] = value
+
     @click.group(kind, help=f"One-shot control of {title}.")
     @click.option("--node-id", type=NODE_ID, default=default,
                   help=f"The {kind}'s node id (default {default:02X}h).")
+    @click.option("--model", default=None, expose_value=False, callback=set_model,
+                  metavar="MODEL[@GEN]",
+                  help=f"The {kind}'s model (default: the one that answers, read from it); "
+                       "arguments are checked against it before the bus is used.")
     @bus_options
     @click.pass_context
     def group(ctx: click.Context, node_id: int) -> None:
@@ -127,7 +208,7 @@ def _group(kind: str, title: str) -> click.Group:
     return group
 
 
-keypad = _group("keypad", "a PKP-2600-SI keypad")
+keypad = _group("keypad", "a keypad (PKP-2600-SI, PKP-3500-MT)")
 
 
 class J1939Address(click.ParamType):  # type: ignore[type-arg]
@@ -189,7 +270,13 @@ for group in (keypad, keybox):
     @click.pass_obj
     def heartbeat(target: Target, milliseconds: int) -> None:
         """Producer heartbeat period in ms (0 = off)."""
-        with _device(target) as device:
+
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            within("heartbeat period in ms", milliseconds,
+                   entry_spans(descriptions, "producer_heartbeat_time"))
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
             device.set_heartbeat(milliseconds / 1000)
         _done(target, f"heartbeat every {milliseconds} ms" if milliseconds else "heartbeat off")
 
@@ -200,9 +287,17 @@ for group in (keypad, keybox):
     @node_id_option
     @click.pass_obj
     def set_node_id(target: Target, new_id: int, yes: bool) -> None:
-        """Store a new node id (applies at the next reset; generation 2 keypads: at once)."""
-        _confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
-        with _device(target) as device:
+        """Store a new node id (applies at the next reset; generation 2 keypads: at once).
+        Asks once the device was found and the new id is free."""
+
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            within("node id", new_id, entry_spans(descriptions, "node_id"))
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
+            if new_id != target[1]:
+                device.check_free(new_id)  # before asking: a taken id is refused anyway
+            _confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
             device.set_node_id(new_id, confirm=True)
         _done(target, f"node id {new_id:02X}h stored")
 
@@ -213,10 +308,19 @@ for group in (keypad, keybox):
     @node_id_option
     @click.pass_obj
     def set_baud(target: Target, bit_rate: int, yes: bool) -> None:
-        """Store a bit rate in bit/s, with this model's own code (applies at the next reset)."""
-        _confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next reset",
-                 yes)
-        with _device(target) as device:
+        """Store a bit rate in bit/s, with this model's own code (applies at the next reset).
+        Asks once the device was found."""
+
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            rates = sorted({rate for d in descriptions for rate in d.bitrates.values()})
+            if bit_rate not in rates:
+                raise ValueError(f"bit rate {bit_rate} bit/s is not one of "
+                                 f"{', '.join(map(str, rates))}")
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
+            _confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
+                     "reset", yes)
             device.set_bitrate(bit_rate, confirm=True)
         _done(target, f"bit rate {bit_rate} bit/s stored, in use after the next reset")
 
@@ -256,8 +360,9 @@ def _blink_words(colour: str, blink: str | None) -> str:
 @node_id_option
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
-    """Light KEY (1-12) in COLOUR (off, red, green, blue, yellow/amber, cyan, magenta,
-    white). Starts the keypad; the other keys keep what they show (read from the keypad first).
+    """Light KEY (a key with an LED: 1-12 on a PKP-2600-SI) in COLOUR (off, red, green, blue,
+    yellow/amber, cyan, magenta, white). Starts the keypad; the other keys keep what they show
+    (read from the keypad first).
 
     \b
     blinkcan keypad led 3 red
@@ -265,7 +370,15 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     blinkcan keypad led 3 red --blink green     (red and green alternating)
     """
     blink = colour if blink == "" else blink
-    with _device(target, start=True) as device:
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        within("key", key, merged(spans_of(d.face.led_keys) for d in descriptions))
+        for name in (colour, blink):
+            if name is not None:
+                led_colour(name)
+
+    _arguments(target[0], check)
+    with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         if device.j1939 is None:  # CANopen: the LED PDO carries every key, so read them first
             device.read_leds()
@@ -283,7 +396,15 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
     """Backlight colour and level."""
     if colour is None and level is None:
         raise click.UsageError("name a --colour, a --level or both")
-    with _device(target, start=True) as device:
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        if colour is not None:
+            BacklightColour.from_name(colour)
+        if level is not None:
+            within("backlight level", level, entry_spans(descriptions, "backlight_brightness"))
+
+    _arguments(target[0], check)
+    with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_backlight(colour, level)
     parts = ([f"colour {colour}"] if colour is not None else []) + (
@@ -298,7 +419,12 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
 @click.pass_obj
 def brightness(target: Target, level: int) -> None:
     """Indicator LED brightness 0-63."""
-    with _device(target, start=True) as device:
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        within("brightness", level, entry_spans(descriptions, "indicator_brightness"))
+
+    _arguments(target[0], check)
+    with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_brightness(level)
     _done(target, f"indicator brightness {level}")
@@ -311,12 +437,16 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
     @node_id_option
     @click.pass_obj
     def command(target: Target, pin: int) -> None:
-        with _device(target) as device:
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            within("pin", pin, merged(spans_of(d.face.pin_numbers) for d in descriptions))
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
             getattr(device, action)(pin)
         _done(target, done.format(pin=pin))
 
 
-_pin_command("on", "on", "Output PIN (1-13) HIGH.", "output {pin} HIGH")
+_pin_command("on", "on", "Output PIN HIGH.", "output {pin} HIGH")
 _pin_command("off", "off", "Output PIN OFF.", "output {pin} OFF")
 _pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} RESET (now OFF)")
 
@@ -328,7 +458,8 @@ _pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} R
 @node_id_option
 @click.pass_obj
 def pwm(target: Target, pins: str, duty: str) -> None:
-    """PWM on PINS (12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps of 10.
+    """PWM on PINS (the Keybox's 12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps
+    of 10.
     Pins not named leave PWM.
 
     \b
@@ -336,18 +467,30 @@ def pwm(target: Target, pins: str, duty: str) -> None:
     blinkcan keybox pwm 12,13 30%
     """
     chosen = [parse_int(pin) for pin in pins.split(",") if pin.strip()]
-    if duty.strip().endswith("%"):
-        percent = parse_int(duty.strip()[:-1])
-        if percent % 10:
-            raise click.BadParameter(f"{duty} is not a step of 10 %", param_hint="DUTY")
-        tenths = percent // 10
-    else:
-        tenths = parse_int(duty)
-    with _device(target) as device:
+    levels = max((d.face.pwm_duty_max for d in _candidates(target[0])), default=0)
+    step = 100 // levels if levels else 100  # KBX §22: 0Ah = 100 %, steps of 10 %
+    percent = duty.strip().endswith("%")
+    level = parse_int(duty.strip()[:-1]) if percent else parse_int(duty)
+    if percent and level % step:
+        raise click.BadParameter(f"{duty} is not a step of {step} %", param_hint="DUTY")
+    tenths = level // step if percent else level
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        allowed = merged(spans_of(d.face.pwm_pins) for d in descriptions)
+        for pin in chosen:
+            within("PWM pin", pin, allowed)
+        top = max((d.face.pwm_duty_max for d in descriptions), default=0)
+        if percent:
+            within("PWM duty in %", level, ((0, top * step),))
+        else:
+            within("PWM duty", level, ((0, top),))
+
+    _arguments(target[0], check)
+    with _device(target, check=check) as device:
         assert isinstance(device, Keybox)
         device.set_pwm(chosen, tenths)
     names = " and ".join(str(pin) for pin in chosen)
-    _done(target, f"output {names} PWM at {tenths * 10} %")
+    _done(target, f"output {names} PWM at {tenths * step} %")
 
 
 @keybox.command("states")

@@ -44,7 +44,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
              "a request for address claimed, to all."),
     "monitor": ("blinkcan.cli.monitor:command", "Watch a bus live: events, keypad keys and "
                 "LEDs, Keybox outputs."),
-    "keypad": ("blinkcan.cli.control:keypad", "One-shot control of a PKP-2600-SI keypad."),
+    "keypad": ("blinkcan.cli.control:keypad",
+               "One-shot control of a keypad (PKP-2600-SI, PKP-3500-MT)."),
     "keybox": ("blinkcan.cli.control:keybox", "One-shot control of a Keybox."),
     "nmt": ("blinkcan.cli.nmt:command",
             "NMT commands (CiA 301) to a node, or to all of them with NODE = all."),
