@@ -50,7 +50,8 @@ def test_the_right_device_is_accepted(rig: Rig) -> None:
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["keypad", "--node-id", "0x0C", "led", "1", "blue"], "node 0Ch is a Keybox, not a keypad"),
+    (["keypad", "--node-id", "0x0C", "led", "1", "blue"],
+     "node 0Ch is a Keybox, not a PKP-2600-SI keypad"),
     (["keybox", "--node-id", "0x15", "info"], "node 15h is a PKP-2600-SI keypad, not a Keybox"),
     (["keypad", "--node-id", "0x22", "brightness", "10"], "no device answers at node 22h"),
 ])

@@ -14,7 +14,7 @@ was found, never before."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -33,13 +33,13 @@ from blinkcan.cli.ranges import (
 )
 from blinkcan.devices.colours import BacklightColour, led_colour
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
-from blinkcan.devices.model import DeviceDescription
-from blinkcan.devices.registry import model, parse_spec
+from blinkcan.devices.model import DeviceDescription, Face, Model
+from blinkcan.devices.registry import identify, model, models
 from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
-from blinkcan.host.device import check_one_device
+from blinkcan.host.device import NoDeviceError, check_one_device
 from blinkcan.host.registry import driver_class
 from blinkcan.protocol.j1939 import ADDRESS_MAX
-from blinkcan.protocol.sdo_client import SdoProtocolError
+from blinkcan.protocol.sdo_client import SdoProtocolError, SdoTimeoutError
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
@@ -55,15 +55,37 @@ def _j1939_address() -> int | None:
     return None if context is None else context.meta.get(_J1939_ADDRESS)
 
 
-def _model_spec() -> str | None:
-    """``--model`` as given ("pkp-3500-mt", "keypad@1.5"), else None."""
+def _chosen_model() -> str | None:
+    """The model named with ``--model``, else None (found from the device)."""
     context = click.get_current_context(silent=True)
     return None if context is None else context.meta.get(_MODEL)
 
 
+def _model_at(bus: Any, node_id: int, kind: str) -> Model:
+    """The registered model of ``kind`` whose model id (100Bh) the device at ``node_id``
+    reports; the kind's first model when it reports none of them (its driver's identity check
+    then says what answered instead)."""
+    first = model(kind)
+    host = HostBus.attach(bus)
+    try:
+        raw = host.sdo(node_id, 0.5, 1).upload(0x100B, 0)
+    except SdoTimeoutError as error:
+        raise NoDeviceError(f"no device answers at node {node_id:02X}h ({error})") from None
+    except SdoError:
+        return first
+    finally:
+        host.release()
+    found = identify(model_id=raw.decode("ascii", "replace"))
+    if found is None:
+        return first
+    answering = model(found.model)
+    base = driver_class(first.name)
+    return answering if issubclass(driver_class(answering.name), base) else first
+
+
 def _candidates(kind: str) -> tuple[DeviceDescription, ...]:
     """The descriptions that may answer this command (J1939: the models that have the mode)."""
-    return candidates(kind, _model_spec(), "j1939" if _j1939_address() is not None else None)
+    return candidates(kind, _chosen_model(), "j1939" if _j1939_address() is not None else None)
 
 
 def _arguments(kind: str, check: Check) -> None:
@@ -76,42 +98,30 @@ def _arguments(kind: str, check: Check) -> None:
         raise click.UsageError(f"{error} ({whose(descriptions)})") from None
 
 
-def _open(bus: can.BusABC, kind: str, node_id: int) -> Keypad | Keybox:
-    """The driver of the device at ``node_id``: the ``--model`` given, the kind's one model,
-    or (several models of the kind) the one its 100Bh names. Nothing is started."""
-    address = _j1939_address()
-    if address is not None:  # J1939 (spec/pkp-2600-si-j1939.md): no SDO, nothing to confirm
-        return Keypad(bus, node_id, protocol="j1939", address=address)
-    spec = _model_spec()
-    if spec is not None:
-        found, generation = parse_spec(spec)
-        options = {"generation": generation} if "@" in spec and len(found.generations) > 1 \
-            else {}
-        return driver_class(found.name)(bus, node_id, start=False, **options)  # type: ignore[no-any-return]
-    described = _candidates(kind)
-    driver: Any = driver_class(described[0].model)
-    if len({d.model for d in described}) == 1:
-        return driver(bus, node_id, start=False)  # type: ignore[no-any-return]
-    # several models of the kind (keypads): the driver class reads 100Bh and builds the one
-    return driver.connect(bus, node_id, start=False)  # type: ignore[no-any-return]
-
-
 @contextmanager
 def _device(target: Target, start: bool = False, check: Check | None = None
-            ) -> Iterator[Keypad | Keybox]:
-    """The driver, once the device answered; ``check`` runs against its model first, and
-    ``start`` starts it (NMT) after that: a bad argument never reaches the device."""
+            ) -> Iterator[Any]:
+    """The driver of the device at the target's node id: the model its 100Bh names (or
+    ``--model``), driven by that model's driver class from the registry. ``check`` runs
+    against that model before anything but the identity reads is sent, then ``start`` starts
+    the device (NMT): a bad argument never reaches it."""
     kind, node_id = target
+    address = _j1939_address()
     bus = cli_bus()
     try:
         try:
-            device = _open(bus, kind, node_id)
+            if address is not None:  # J1939 mode answers no SDO: the kind's first model
+                device = driver_class(kind)(bus, node_id, protocol="j1939", address=address)
+            else:
+                chosen = _chosen_model()
+                found = model(chosen) if chosen else _model_at(bus, node_id, kind)
+                device = driver_class(found.name)(bus, node_id, start=False)
         except (IdentityError, SdoError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
         try:
             if check is not None:
                 _check_found(check, device.description, node_id)
-            if start and getattr(device, "j1939", None) is None:  # J1939: no NMT
+            if start and address is None:  # J1939 has no NMT
                 device.start()
             yield device
         except (SdoError, ValueError) as error:
@@ -181,25 +191,48 @@ node_id_option = click.option("--node-id", type=NODE_ID, default=None, expose_va
                               callback=_set_node_id, help="The device's node id.")
 
 
-def _group(kind: str, title: str) -> click.Group:
-    default = model(kind).default_node_id
+def _models_of(kind: str) -> list[Model]:
+    return [found for found in models() if found.kind == kind]
 
-    def set_model(ctx: click.Context, param: click.Parameter, value: str | None) -> None:
-        if value is None:
-            return
-        try:
-            candidates(kind, value)
-        except ValueError as error:
-            raise click.BadParameter(str(error), ctx, param) from None
+
+def _spans(numbers: Iterable[int]) -> str:
+    """[1, 2, 3, 5] -> "1-3, 5"."""
+    spans: list[list[int]] = []
+    for number in sorted(numbers):
+        if spans and number == spans[-1][-1] + 1:
+            spans[-1].append(number)
+        else:
+            spans.append([number])
+    return ", ".join(f"{s[0]}-{s[-1]}" if len(s) > 1 else f"{s[0]}" for s in spans)
+
+
+def _per_model(kind: str, numbers: Callable[[Face], Iterable[int]]) -> str:
+    """What each model of ``kind`` has, from its face: "1-12 (PKP-2600-SI keypad), ..."."""
+    return ", ".join(f"{_spans(numbers(found.description().face))} "
+                     f"({found.description().title})" for found in _models_of(kind)
+                     if tuple(numbers(found.description().face)))
+
+
+def _set_model(ctx: click.Context, param: click.Parameter, value: str | None) -> None:
+    if value is not None:
         ctx.meta[_MODEL] = value
 
-    @click.group(kind, help=f"One-shot control of {title}.")
+
+def _group(kind: str) -> click.Group:
+    """The command group of one kind of device, its models and their names from the
+    registry."""
+    default = model(kind).default_node_id
+    kinds = _models_of(kind)
+    titles = ", ".join(found.description().title for found in kinds)
+    names = [name for found in kinds for name in found.names]
+
+    @click.group(kind, help=f"One-shot control of a {kind}. Models: {titles}; which one is "
+                            "read from the device (100Bh) unless --model names it.")
     @click.option("--node-id", type=NODE_ID, default=default,
                   help=f"The {kind}'s node id (default {default:02X}h).")
-    @click.option("--model", default=None, expose_value=False, callback=set_model,
-                  metavar="MODEL[@GEN]",
-                  help=f"The {kind}'s model (default: the one that answers, read from it); "
-                       "arguments are checked against it before the bus is used.")
+    @click.option("--model", type=click.Choice(names, case_sensitive=False), default=None,
+                  expose_value=False, callback=_set_model,
+                  help="Drive the device as this model (default: the one it says it is).")
     @bus_options
     @click.pass_context
     def group(ctx: click.Context, node_id: int) -> None:
@@ -208,7 +241,7 @@ def _group(kind: str, title: str) -> click.Group:
     return group
 
 
-keypad = _group("keypad", "a keypad (PKP-2600-SI, PKP-3500-MT)")
+keypad = _group("keypad")
 
 
 class J1939Address(click.ParamType):  # type: ignore[type-arg]
@@ -250,7 +283,7 @@ keypad.params += [
                  expose_value=False, callback=_set_address,
                  help=f"J1939 source address of the keypad (default {DEFAULT_ADDRESS:02X}h)."),
 ]
-keybox = _group("keybox", "a Keybox")
+keybox = _group("keybox")
 
 
 for group in (keypad, keybox):
@@ -350,7 +383,7 @@ def _blink_words(colour: str, blink: str | None) -> str:
     return f"{colour} alternating with {blink}"
 
 
-@keypad.command("led")
+@keypad.command("led", epilog=f"Keys with an LED: {_per_model('keypad', lambda f: f.led_keys)}.")
 @click.argument("key", type=int)
 @click.argument("colour")
 @click.option("--blink", is_flag=False, flag_value="", default=None, metavar="[COLOUR]",
@@ -360,9 +393,8 @@ def _blink_words(colour: str, blink: str | None) -> str:
 @node_id_option
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
-    """Light KEY (a key with an LED: 1-12 on a PKP-2600-SI) in COLOUR (off, red, green, blue,
-    yellow/amber, cyan, magenta, white). Starts the keypad; the other keys keep what they show
-    (read from the keypad first).
+    """Light KEY in COLOUR (off, red, green, blue, yellow/amber, cyan, magenta,
+    white). Starts the keypad; the other keys keep what they show (read from the keypad first).
 
     \b
     blinkcan keypad led 3 red
@@ -446,20 +478,21 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
         _done(target, done.format(pin=pin))
 
 
-_pin_command("on", "on", "Output PIN HIGH.", "output {pin} HIGH")
+_pin_command("on", "on", f"Output PIN HIGH; pins {_per_model('keybox', lambda f: f.pin_numbers)}.",
+             "output {pin} HIGH")
 _pin_command("off", "off", "Output PIN OFF.", "output {pin} OFF")
 _pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} RESET (now OFF)")
 
 
-@keybox.command("pwm")
+@keybox.command("pwm", epilog=f"PWM pins: {_per_model('keybox', lambda f: f.pwm_pins)}.")
 @click.argument("pins")
 @click.argument("duty")
 @bus_options
 @node_id_option
 @click.pass_obj
 def pwm(target: Target, pins: str, duty: str) -> None:
-    """PWM on PINS (the Keybox's 12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps
-    of 10.
+    """PWM on PINS (one or several, comma-separated) at DUTY 0-10 tenths, or 0%-100% in
+    steps of 10.
     Pins not named leave PWM.
 
     \b
