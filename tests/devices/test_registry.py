@@ -9,9 +9,10 @@ from typing import Any
 import pytest
 
 from blinkcan.devices import registry
-from blinkcan.devices.keypad import PKP_2600_SI
+from blinkcan.devices.keypad import PKP_2600_SI, describe_keypad
 from blinkcan.devices.registry import describe_device, identify, model, parse_spec
 from blinkcan.twin import KeyboxTwin, KeypadTwin
+from blinkcan.twin.pkp3500 import Pkp3500Twin
 from blinkcan.twin.registry import build_twin, twin_class
 
 
@@ -103,3 +104,30 @@ def test_keypad_twin_refuses_a_model_that_is_not_a_keypad() -> None:
         KeypadTwin(model="keybox")
     with pytest.raises(ValueError, match="unknown device"):
         KeypadTwin(model="toaster")
+    with pytest.raises(ValueError, match="pkp-2600-si runs on"):
+        Pkp3500Twin(model="pkp-2600-si")  # never half a twin
+
+
+def test_a_keypad_that_behaves_as_the_pkp_2600_si_needs_only_its_description(
+        monkeypatch: pytest.MonkeyPatch, clean_registry: None) -> None:
+    # issue 19: a fourth keypad is its description plus a registry entry naming KeypadTwin
+    import importlib.metadata
+
+    def describe(generation: str, quirks: Any, node_id: int) -> Any:
+        return replace(describe_keypad(generation, quirks, node_id), model="pkp-2612-xx")
+
+    twelve = replace(PKP_2600_SI, name="pkp-2612-xx", aliases=("xx",), describe=describe)
+
+    class Entry:
+        name, value = "pkp-2612-xx", "somewhere:MODEL"
+
+        def load(self) -> Any:
+            return twelve
+
+    monkeypatch.setattr(importlib.metadata, "entry_points",
+                        lambda group: [Entry()] if group == registry.ENTRY_POINT_GROUP else [])
+    twin = KeypadTwin(node_id=0x16, model="xx", manual="1.5")
+    assert type(twin) is KeypadTwin
+    assert (twin.description.model, twin.description.generation) == ("pkp-2612-xx", "1.5")
+    assert twin.power_on(0.0)[0].can_id == 0x716  # boot-up at its node id
+    assert twin.snapshot()["model"] == "pkp-2612-xx"

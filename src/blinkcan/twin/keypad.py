@@ -22,10 +22,9 @@ from blinkcan.devices.keypad import (
     PROTOCOL_CANOPEN,
     PROTOCOL_J1939,
     TICK_PERIOD_S,
-    describe_keypad,
 )
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME, NVM_PREFIX, STORED_SETTINGS
-from blinkcan.devices.model import DeviceDescription, Quirks
+from blinkcan.devices.model import Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import load_class
 from blinkcan.devices.registry import model as registered_model
@@ -62,22 +61,18 @@ class KeypadTwin(CanopenTwin):
     class (a subclass) is built instead.
     """
 
-    #: the model this class runs, and how it describes a generation (a subclass sets both)
+    #: the model this class runs when ``model`` names none (a subclass names its own)
     MODEL: str = MODEL
-    DEFAULT_MANUAL: str = "1.1"
-
-    @staticmethod
-    def describe(manual: str, quirks: Quirks, node_id: int) -> DeviceDescription:
-        return describe_keypad(manual, quirks, node_id)
 
     def __new__(cls, *args: Any, model: str | None = None, **kwargs: Any) -> KeypadTwin:
         """``KeypadTwin(model="pkp-3500-mt")`` builds the twin class the registry names."""
         target: type[KeypadTwin] = cls
-        if model is not None and model != cls.MODEL:
-            found = load_class(registered_model(model.partition("@")[0]).twin, CanopenTwin)
+        if model is not None:
+            found = load_class(registered_model(model).twin, CanopenTwin)
             if not issubclass(found, KeypadTwin):
                 raise ValueError(f"{model!r} is not a keypad")
-            target = found
+            if issubclass(found, cls):  # else __init__ says this class does not run it
+                target = found
         return super().__new__(target)
 
     def __init__(
@@ -91,9 +86,16 @@ class KeypadTwin(CanopenTwin):
         settings: Mapping[str, Value] | None = None,
         model: str | None = None,
     ) -> None:
-        if model is not None and model != self.MODEL:
-            raise ValueError(f"the {self.MODEL} twin runs model {self.MODEL!r}, not {model!r}")
-        description = self.describe(manual or self.DEFAULT_MANUAL, quirks, node_id)
+        # the registry describes the model (its first generation unless ``manual`` names one)
+        found = registered_model(model or self.MODEL)
+        runs_on = load_class(found.twin, CanopenTwin)
+        own = load_class(registered_model(self.MODEL).twin, CanopenTwin)
+        if not (isinstance(self, runs_on) and issubclass(runs_on, own)):  # a subclass may run it
+            raise ValueError(f"{found.name} runs on {found.twin}, not {type(self).__name__}")
+        if manual is not None and manual not in found.generations:
+            raise ValueError(f"the {found.name} manual must be one of "
+                             f"{', '.join(found.generations)}, not {manual!r}")
+        description = found.description(manual, quirks, node_id)
         if protocol not in PROTOCOLS:
             raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, not {protocol!r}")
         if nvm is None:

@@ -25,7 +25,7 @@ from typing import Any
 from blinkcan.devices.colours import BACKLIGHT_CHANNELS, BacklightColour, Channel
 from blinkcan.devices.keypad import LEVEL_MAX
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME
-from blinkcan.devices.model import DeviceDescription, Quirks
+from blinkcan.devices.model import Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.pkp3500 import (
     ANALOG_BYTE_MAX,
@@ -33,9 +33,7 @@ from blinkcan.devices.pkp3500 import (
     ANALOG_PERIOD_UNIT_S,
     DIGITAL_THRESHOLD_COUNTS,
     DIRECTION_MAGNITUDE_MAX,
-    GENERATION,
     MODEL,
-    describe_pkp3500,
 )
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import check_range, check_time
@@ -121,11 +119,6 @@ class Pkp3500Twin(KeypadTwin):
     """
 
     MODEL = MODEL
-    DEFAULT_MANUAL = GENERATION
-
-    @staticmethod
-    def describe(manual: str, quirks: Quirks, node_id: int) -> DeviceDescription:
-        return describe_pkp3500(manual, quirks, node_id)
 
     def __init__(
         self,
