@@ -164,7 +164,9 @@ def test_the_round_trip_on_a_virtual_bus_in_real_time() -> None:
             keypad.set_led(9, "cyan")
             emulator.press(twin, 9)
             wait(lambda: [(e.key, e.action) for e in events] == [(9, "press")])
-            assert emulator.snapshot(twin)["commanded"][8]["colour"] == "cyan"
+            # the LED command and the press travel on different threads (the emulator's reader,
+            # the test's call): the command is applied, not necessarily before the press
+            wait(lambda: emulator.snapshot(twin)["commanded"][8]["colour"] == "cyan")
             keypad.switch_to_canopen()
             wait(lambda: emulator.snapshot(twin)["nmt_state"] == "operational")
             wait(lambda: emulator.snapshot(twin)["commanded"][8]["colour"] == "cyan")

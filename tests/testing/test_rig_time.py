@@ -9,7 +9,10 @@ from typing import Any
 
 import can
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from blinkcan.devices.model import Model
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.runtime.scheduler import (
@@ -19,6 +22,7 @@ from blinkcan.runtime.scheduler import (
 )
 from blinkcan.testing import Rig
 from blinkcan.twin import KeyboxTwin, KeypadTwin
+from tests.twin.test_schedules import IDS, STEPS, VARIANTS, build, operation
 
 SWITCH_TO_J1939 = Frame(0x615, bytes.fromhex("2BFF200101000000"))  # 20FFh/01 = 1 (J-1)
 #: J1939 "switch to CANopen" (§27) to all, from address 80h
@@ -108,6 +112,9 @@ def _rig_calls() -> dict[str, Callable[[Rig, Any], object]]:
         "twin.receive": lambda rig, t: rig.twins[0].receive(Frame(0, b"\x01\x00"), t),
         "twin.advance": lambda rig, t: rig.twins[0].advance(t),
         "twin.press": lambda rig, t: rig.twins[0].press(1, t),
+        "twin.reset_node": lambda rig, t: rig.twins[0].reset_node(t),
+        "keypad.displayed_leds": lambda rig, t: rig.twins[0].displayed_leds(t),
+        "scheduler.step": lambda rig, t: rig.scheduler.step(t),
         "keybox.blow_fuse": lambda rig, t: rig.twins[1].blow_fuse(1, t),
         "keybox.set_input": lambda rig, t: rig.twins[1].set_input(1, True, t),
         "scheduler.call_later": lambda rig, t: rig.scheduler.call_later(t, lambda: None),
@@ -123,7 +130,7 @@ def _rig_calls() -> dict[str, Callable[[Rig, Any], object]]:
 
 
 #: calls where +inf means something (no end): only NaN is refused there
-INFINITE_OK = {"scheduler.wait", "scheduler.run_until", "bus.recv"}
+INFINITE_OK = {"scheduler.wait", "scheduler.run_until", "scheduler.step", "bus.recv"}
 
 
 @pytest.mark.parametrize("value", [NAN, INF, -INF], ids=["nan", "inf", "-inf"])
@@ -160,3 +167,27 @@ def test_schedulers_and_emulators_refuse_non_finite_times(value: float) -> None:
             Emulator(bus, [], response_delay=value)
     finally:
         bus.shutdown()
+
+
+@pytest.mark.parametrize(("model", "generation", "protocol"), VARIANTS, ids=IDS)
+@settings(max_examples=15, deadline=None)
+@given(data=st.data())
+def test_a_rig_runs_every_twin_at_random_times_and_time_always_advances(
+        model: Model, generation: str, protocol: str, data: st.DataObject) -> None:
+    """The emulator's side of tests/twin/test_schedules.py: the same random life of every
+    registered model, generation and protocol on a Rig; each advance ends where it should."""
+    with Rig() as rig:
+        twin = rig.add(build(model, generation, protocol))
+        for _ in range(data.draw(st.integers(1, 8), "actions")):
+            step = data.draw(STEPS, "wait")
+            target = rig.now + step
+            rig.advance(step)
+            assert rig.now == target
+            if data.draw(st.integers(0, 4), "power cycle?") == 0:
+                rig.power_cycle(twin, off_time=data.draw(STEPS, "off time"))
+                continue
+            _, action = data.draw(operation(twin), "action")
+            rig.act(action)
+        target = rig.now + 6.0
+        rig.advance(6.0)
+        assert rig.now == target

@@ -3,8 +3,9 @@ top of the host drivers. Every action prints what it did; changing a node id or 
 restoring factory defaults ask for confirmation first (``--yes`` does not ask).
 
 Every command, PDO-only ones included (``keypad led``), first confirms which device answers at
-the node id (the drivers' identity check): nothing answering, or another kind of device, is one
-line and a non-zero exit, and the bus sees no command."""
+the node id (the drivers' identity check): nothing answering, another kind of device, or more
+than one device answering ("two devices answer at node 15h") is one line and a non-zero exit,
+and the bus sees no command."""
 
 from __future__ import annotations
 
@@ -12,13 +13,16 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
+import can
 import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import model
-from blinkcan.host import IdentityError, Keybox, Keypad, SdoError
+from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
+from blinkcan.host.device import check_one_device
 from blinkcan.protocol.j1939 import ADDRESS_MAX
+from blinkcan.protocol.sdo_client import SdoProtocolError
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
@@ -47,15 +51,31 @@ def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
             else:
                 device = Keybox(bus, node_id, start=start)
         except (IdentityError, SdoError, ValueError) as error:
-            raise click.ClickException(str(error)) from None
+            raise click.ClickException(_explained(error, bus, node_id)) from None
         try:
             yield device
         except (SdoError, ValueError) as error:
-            raise click.ClickException(str(error)) from None
+            raise click.ClickException(_explained(error, bus, node_id)) from None
         finally:
             device.close()
     finally:
         bus.shutdown()
+
+
+def _explained(error: Exception, bus: can.BusABC, node_id: int) -> str:
+    """The error's message; for a reply that did not fit its request, what may be behind it:
+    more than one device answering at the node id (then that is the message)."""
+    if isinstance(error, SdoProtocolError):
+        host = HostBus.attach(bus)
+        try:
+            check_one_device(host.sdo(node_id))
+        except SharedNodeIdError as shared:
+            return str(shared)
+        except SdoError:
+            pass  # the diagnosis itself failed: the first error stands
+        finally:
+            host.release()
+    return str(error)
 
 
 def _done(target: Target, what: str) -> None:

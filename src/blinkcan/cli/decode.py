@@ -70,7 +70,8 @@ def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:
 
 
 @click.command("decode")
-@click.argument("files", metavar="FILE...", nargs=-1, required=True, type=click.Path())
+@click.argument("files", metavar="FILE...", nargs=-1, required=True,
+                type=click.Path(allow_dash=True))
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line.")
 @click.option("--device", "devices", multiple=True, metavar="NODE=MODEL",
               help="Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=keypad@1.1."

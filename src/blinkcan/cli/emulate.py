@@ -1,10 +1,15 @@
-"""``blinkcan emulate DEVICE[@GENERATION][:NODE] ...``: run twins on a bus until Ctrl-C."""
+"""``blinkcan emulate DEVICE[@GENERATION][:NODE] ...``: run twins on a bus until Ctrl-C.
+
+A frame from one of the twins' node ids that the emulator did not send (a boot-up, heartbeat or
+SDO reply; for a keypad in J1939 mode, any frame from its source address) means another device
+uses that id: every SDO request then gets two answers. It is said once per node id."""
 
 from __future__ import annotations
 
 import contextlib
 import threading
 from collections.abc import Iterator
+from types import MappingProxyType
 from typing import Any
 
 import click
@@ -21,6 +26,7 @@ from blinkcan.cli.bus_options import (
 )
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import parse_spec
+from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin.base import CanopenTwin
@@ -129,8 +135,15 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     decoder = Decoder({t.node_id: t.description for t in twins})
     printer = None if quiet else _FramePrinter(console, decoder)
     emulator = Emulator(bus, twins, response_delay=response_delay)
-    if printer is not None:
-        emulator.on_frame = printer
+    foreign = ForeignFrames(emulator.twins, console)
+
+    def on_frame(frame: Frame, sent: bool, now: float) -> None:
+        if not sent:
+            foreign(frame)
+        if printer is not None:
+            printer(frame, sent, now)
+
+    emulator.on_frame = on_frame
     names = ", ".join(_name(t) for t in twins)
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
@@ -174,6 +187,49 @@ def panel(emulator: Emulator, address: str | None, console: Console) -> Iterator
         yield
     finally:
         server.stop()
+
+
+#: what only the device at a node id sends: boot-up and heartbeat, SDO replies (CiA 301)
+_FROM_NODE = MappingProxyType({HEARTBEAT: "heartbeat", SDO_TX: "SDO reply"})
+
+
+class ForeignFrames:
+    """Warns, once per node id or J1939 address, when a frame comes from an id one of
+    ``twins`` uses that the emulator did not send (a bus never hears its own frames)."""
+
+    def __init__(self, twins: list[CanopenTwin], console: Console) -> None:
+        self.twins = twins
+        self.console = console
+        self.warned: set[tuple[bool, int]] = set()  # (J1939, node id or address)
+
+    def __call__(self, frame: Frame) -> None:
+        if frame.extended:
+            self._j1939(frame)
+            return
+        function, node = split_cob_id(frame.can_id)
+        what = _FROM_NODE.get(function)
+        if what is None or (False, node) in self.warned or not any(
+                twin.node_id == node and SDO_RX + node in twin.listening for twin in self.twins):
+            return
+        self.warned.add((False, node))
+        if function == HEARTBEAT and frame.data[:1] == b"\x00":
+            what = "boot-up"
+        self.console.print(
+            f"[yellow]warning:[/] another device uses node {node:02X}h (heard a {what} on "
+            f"{frame.can_id:03X}h that this emulator did not send): two devices at one node id "
+            "answer every SDO request twice; give each its own node id")
+
+    def _j1939(self, frame: Frame) -> None:
+        address = frame.can_id & 0xFF  # J1939-21: the source address is the identifier's low byte
+        if (True, address) in self.warned or not any(
+                isinstance(twin, KeypadTwin) and twin.protocol == "j1939"
+                and twin.j1939.address == address for twin in self.twins):
+            return
+        self.warned.add((True, address))
+        self.console.print(
+            f"[yellow]warning:[/] another device uses J1939 address {address:02X}h (heard "
+            f"{frame.can_id:08X}h, which this emulator did not send); give each its own "
+            "address (address claim, 74h, moves one of them)")
 
 
 class _FramePrinter:

@@ -26,12 +26,25 @@ def command(listen: float) -> None:
     if not found and not j1939:
         raise click.ClickException(f"no device answered on {describe_bus(bus_settings())}")
     table = Table("node", "device", "model", "firmware", "hardware", "device type", "heard")
+    shared = []
     for device in found:
+        if device.shared:  # each SDO request got a reply from each: no identity to show
+            shared.append(device.describe_shared())
+            table.add_row(f"{device.node_id:02X}h", f"[red]{device.answers} devices[/]", "",
+                          "", "", f"{device.device_type:08X}h", "yes" if device.heard else "")
+            continue
         table.add_row(f"{device.node_id:02X}h", device.kind or "other CANopen",
                       device.model_id or "", device.software_version or "",
                       device.hardware_version or "", f"{device.device_type:08X}h",
                       "yes" if device.heard else "")
     for keypad in j1939:  # "node" is the J1939 source address
-        table.add_row(f"{keypad.address:02X}h", "keypad (J1939)", "", keypad.software_revision
+        kind = "keypad (J1939)"
+        if keypad.answers > 1:
+            shared.append(f"{keypad.answers} keypads answer at J1939 address "
+                          f"{keypad.address:02X}h: give each its own address")
+            kind = f"[red]{keypad.answers} keypads (J1939)[/]"
+        table.add_row(f"{keypad.address:02X}h", kind, "", keypad.software_revision
                       or "", "", "", "claimed" if keypad.name else "")
     Console().print(table)
+    if shared:  # a wiring mistake: the table is shown, the exit says something is wrong
+        raise click.ClickException("; ".join(shared))

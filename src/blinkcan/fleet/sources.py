@@ -20,7 +20,8 @@ from typing import BinaryIO, TextIO, cast
 
 import can
 
-from blinkcan.formats.candump import read_candump
+from blinkcan.formats.candump import read_candump_lines
+from blinkcan.formats.log_source import bounded_lines
 from blinkcan.formats.logs import LogError, frame_kind, read_messages
 from blinkcan.protocol.frame import Frame
 
@@ -46,7 +47,7 @@ class _ChannelLines:
         self.channel: str | None = None
 
     def __iter__(self) -> Iterator[str]:
-        for line in self._lines:
+        for line in bounded_lines(self._lines, "candump"):  # never a whole file as one line
             fields = line.split(None, 2)
             self.channel = fields[1] if len(fields) > 1 else None
             yield line
@@ -71,7 +72,7 @@ def _open_text(path: Path, compression: str) -> TextIO:
 def _candump(path: Path, compression: str) -> Iterator[Item]:
     with _open_text(path, compression) as stream:
         lines = _ChannelLines(stream)
-        for timestamp, item in read_candump(cast(TextIO, lines)):
+        for timestamp, item in read_candump_lines(lines):
             yield timestamp, item, lines.channel
 
 

@@ -10,14 +10,18 @@ anything unusual) is handed to python-can's own reader, one line at a time, so t
 python-can's by construction, with one correction where python-can loses what the line says
 (:func:`restore_error_details`: error frames); tests/formats/test_candump.py checks the fast
 path against python-can's reader (plus that correction) on generated logs.
+
+Lines are read with a bounded length (:func:`~blinkcan.formats.log_source.bounded_lines`): a
+file without newlines is refused at its first line, never read whole.
 """
 
 from __future__ import annotations
 
 import io
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
+from blinkcan.formats.log_source import bounded_line_blocks, bounded_lines
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
@@ -65,6 +69,22 @@ def with_error_details(messages: Iterator[can.Message], lines: Iterator[str]
         yield restore_error_details(message, line)
 
 
+def candump_messages(stream: TextIO) -> Iterator[can.Message]:
+    """python-can's messages of a candump log, each error frame completed from its line, the
+    lines bounded: one pass, so a stream is read once."""
+    last = [""]  # the line python-can's reader read last: the one of the message it yields
+
+    def lines() -> Iterator[str]:
+        for line in bounded_lines(stream, "candump"):
+            last[0] = line
+            yield line
+
+    from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
+
+    for message in CanutilsLogReader(lines()):  # type: ignore[arg-type]  # iterates it only
+        yield restore_error_details(message, last[0])
+
+
 #: identifier texts remembered per log (then they start over): a log has few distinct ones
 _IDENTS_KEPT = 4096
 
@@ -87,35 +107,48 @@ def _plain_id(ident: str) -> tuple[int, bool] | None:
 
 def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
-    ``can.Message`` python-can reads for anything else (remote, error, CAN FD)."""
+    ``can.Message`` python-can reads for anything else (remote, error, CAN FD). Lines over
+    MAX_LINE raise :class:`~blinkcan.formats.log_source.LineTooLongError`."""
+    return _read_blocks(bounded_line_blocks(stream, "candump"))
+
+
+def read_candump_lines(lines: Iterable[str]) -> Iterator[tuple[float, Frame | can.Message]]:
+    """:func:`read_candump` of lines the caller reads, one pulled per frame yielded (so the
+    caller knows the line of each frame); bound them with
+    :func:`~blinkcan.formats.log_source.bounded_lines`."""
+    return _read_blocks((lines,))
+
+
+def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame | can.Message]]:
     new = _new_tuple
     fromhex = bytes.fromhex
     idents: dict[str, tuple[int, bool] | None] = {}
-    for line in stream:
-        fields = line.split()
-        count = len(fields)
-        if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
-            stamp = fields[0]
-            ident, _, data = fields[2].partition("#")
-            plain = idents.get(ident, _UNSEEN)
-            if plain is _UNSEEN:
-                if len(idents) >= _IDENTS_KEPT:
-                    idents.clear()
-                plain = idents[ident] = _plain_id(ident)
-            size = len(data)
-            if plain is not None and stamp[0] == "(" and size <= 16 and not size & 1 \
-                    and data[:1] not in _NOT_DATA:
-                try:
-                    payload = fromhex(data)
-                    timestamp = float(stamp[1:-1])
-                except ValueError:
-                    pass
-                else:
-                    can_id, extended = plain
-                    yield timestamp, new(Frame, (can_id, payload, extended))
-                    continue
-        if not fields:
-            continue
-        message = _python_can(line)
-        if message is not None:
-            yield message.timestamp, message
+    for lines in blocks:
+        for line in lines:
+            fields = line.split()
+            count = len(fields)
+            if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
+                stamp = fields[0]
+                ident, _, data = fields[2].partition("#")
+                plain = idents.get(ident, _UNSEEN)
+                if plain is _UNSEEN:
+                    if len(idents) >= _IDENTS_KEPT:
+                        idents.clear()
+                    plain = idents[ident] = _plain_id(ident)
+                size = len(data)
+                if plain is not None and stamp[0] == "(" and size <= 16 and not size & 1 \
+                        and data[:1] not in _NOT_DATA:
+                    try:
+                        payload = fromhex(data)
+                        timestamp = float(stamp[1:-1])
+                    except ValueError:
+                        pass
+                    else:
+                        can_id, extended = plain
+                        yield timestamp, new(Frame, (can_id, payload, extended))
+                        continue
+            if not fields:
+                continue
+            message = _python_can(line)
+            if message is not None:
+                yield message.timestamp, message

@@ -1,6 +1,9 @@
 """Frames from and to files: every log format python-can reads and writes (ASC, BLF, candump,
 TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type.
 
+Reading checks what a path is and reads text in lines of a bounded length (a stream, a
+device, a file without newlines: formats/log_source.py).
+
 Lossless: remote (RTR), error and CAN FD frames are read and written like data frames, each
 whole (formats/log_writers.py mends python-can's writers where they change one; reading mends
 what its readers misread: :func:`_as_written`). Where a target format cannot carry a kind of
@@ -25,8 +28,17 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING
 
-from blinkcan.formats.candump import read_candump, with_error_details
+from blinkcan.formats.candump import candump_messages, read_candump
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
+from blinkcan.formats.log_source import (
+    LineTooLongError,
+    LogError,
+    LogSource,
+    bounded_lines,
+    log_source,
+    open_binary,
+    open_text,
+)
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads without it
@@ -34,11 +46,8 @@ if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads
 
     from blinkcan.formats.pcap import PcapWriter
 
-
-class LogError(ValueError):
-    """A file that cannot be read or written as a CAN log."""
-
-
+__all__ = ["FrameWriter", "LogError", "describe_frame", "frame_kind", "read_frames", "read_log",
+           "read_messages"]
 
 
 def _read_errors() -> tuple[type[BaseException], ...]:
@@ -67,42 +76,61 @@ def frame_kind(message: can.Message) -> str:
     return "fd" if message.is_fd or len(message.data) > 8 else "data"
 
 
-def _source(path: str | os.PathLike[str]) -> Path:
-    source = Path(path)
-    if not source.is_file():
-        raise LogError(f"no such file: {source}")
-    return source
-
-
 def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
-    """Every frame of a log file as python-can messages: data, remote, error, CAN FD."""
+    """Every frame of a log file as python-can messages: data, remote, error, CAN FD. The
+    path is checked and text is read in bounded lines (formats/log_source.py)."""
+    return _messages(log_source(path))
+
+
+def _messages(source: LogSource) -> Iterator[can.Message]:
     import can  # noqa: PLC0415
+    from can.io.generic import TextIOMessageReader  # noqa: PLC0415
+    from can.io.player import MESSAGE_READERS  # noqa: PLC0415
 
     from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
 
-    source = _source(path)
-    if is_pcap(source):
-        with source.open("rb") as stream:
+    if is_pcap(source.path):
+        with open_binary(source) as stream:
             try:
                 yield from read_pcap_messages(stream)
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
-    suffix = source.suffix.lower()
-    # an ASC file's times count from its start date: absolute, as every other format's
-    options = {"relative_timestamp": False} if suffix == ".asc" else {}
+    suffix = source.suffix
+    reader_type = MESSAGE_READERS.get(suffix)
+    if source.stream or (reader_type is not None and issubclass(reader_type,
+                                                                 TextIOMessageReader)):
+        yield from _text_messages(source, MESSAGE_READERS)
+        return
     try:
-        reader = can.LogReader(str(source), **options)
+        reader = can.LogReader(str(source.path))
     except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
+            for message in reader:
+                yield _as_written(message, suffix)
+        except _read_errors() as error:
+            raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _text_messages(source: LogSource, readers: dict[str, type[can.io.generic.MessageReader]]
+                   ) -> Iterator[can.Message]:
+    """A text log's messages from python-can's reader of its format (``readers``: python-can's
+    by suffix), fed bounded lines."""
+    suffix = source.suffix
+    with open_text(source, "utf-8" if suffix == ".log" else None) as stream:
+        try:
             if suffix == ".log":
-                with source.open(encoding="utf-8") as lines:
-                    yield from with_error_details(iter(reader), lines)
-            else:
-                for message in reader:
-                    yield _as_written(message, suffix)
+                yield from candump_messages(stream)
+                return
+            # an ASC file's times count from its start date: absolute, as every other format's
+            options = {"relative_timestamp": False} if suffix == ".asc" else {}
+            lines = bounded_lines(stream, source.kind)
+            for message in readers[suffix](lines, **options):  # type: ignore[arg-type]
+                yield _as_written(message, suffix)
+        except LineTooLongError as error:
+            raise LogError(f"{source}: {error}") from None
         except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
@@ -122,16 +150,18 @@ def _as_written(message: can.Message, suffix: str) -> can.Message:
 def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) pairs: a :class:`Frame` for each classic data frame, the
     ``can.Message`` for a remote, error or CAN FD frame. candump logs take a fast path."""
-    source = _source(path)
-    if source.suffix.lower() == ".log":
-        with source.open(encoding="utf-8") as stream:
+    source = log_source(path)
+    if source.suffix == ".log":
+        with open_text(source, "utf-8") as stream:
             try:
                 yield from read_candump(stream)
+            except LineTooLongError as error:
+                raise LogError(f"{source}: {error}") from None
             except _read_errors() as error:
                 raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
         return
     trusted = Frame.trusted  # python-can (or our pcap reader) parsed and checked the frames
-    for message in read_messages(source):
+    for message in _messages(source):
         if frame_kind(message) == "data":
             yield message.timestamp, trusted(message.arbitration_id, bytes(message.data),
                                              message.is_extended_id)

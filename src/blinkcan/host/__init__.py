@@ -8,6 +8,7 @@ from blinkcan.host.device import (
     Identity,
     IdentityError,
     NoDeviceError,
+    SharedNodeIdError,
     WrongDeviceError,
 )
 from blinkcan.host.j1939_keypad import FoundJ1939, scan_j1939
@@ -35,6 +36,7 @@ __all__ = [
     "SdoAbortError",
     "SdoError",
     "SdoTimeoutError",
+    "SharedNodeIdError",
     "Toggle",
     "WrongDeviceError",
     "async_scan",

@@ -9,6 +9,9 @@ type, 1018h/01 vendor, 100Bh model, compared with its description in ``devices/`
 any other with :class:`WrongDeviceError` (:class:`NoDeviceError` when nothing answers):
 a keypad driver pointed at a Keybox would otherwise switch its outputs with LED PDOs (both
 listen on 200h + node id). ``verify=False`` skips this for devices that cannot answer SDO.
+Two devices at one node id (a wiring mistake, two emulators) answer each request twice, so a
+reply for another object or one nobody awaited makes the check count the answers to one read:
+more than one is :class:`SharedNodeIdError` ("two devices answer at node 15h").
 
 Health (:class:`HealthEvent`) follows what the device reports in its heartbeat, and the NMT
 commands sent to it (by this driver or heard from another master on 000h):
@@ -40,10 +43,11 @@ from blinkcan.devices.objects import ObjectEntry, Value
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.events import EventSource
+from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame, parse_nmt
-from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
+from blinkcan.protocol.sdo_client import SdoAbortError, SdoProtocolError, SdoTimeoutError
 
 BOOT_UP, STATE, LOST, BACK, WATCHDOG = "boot-up", "state", "lost", "back", "watchdog"
 #: the state an NMT command asks for (CiA 301 NMT state machine); resets answer with a boot-up
@@ -86,6 +90,27 @@ class WrongDeviceError(IdentityError):
 
 class NoDeviceError(IdentityError):
     """Nothing answered the identity reads at the node id."""
+
+
+class SharedNodeIdError(IdentityError):
+    """More than one device answers at the node id: every SDO request gets a reply from each,
+    and no driver can tell whose is whose. Give each device its own node id."""
+
+
+def several_answer(count: int, node_id: int) -> str:
+    """"two devices answer at node 15h ..." for ``count`` replies to one request."""
+    word = {2: "two", 3: "three", 4: "four"}.get(count, str(count))
+    return (f"{word} devices answer at node {node_id:02X}h (one SDO request got {count} "
+            "replies): give each device its own node id")
+
+
+def check_one_device(sdo: SdoClient, window: float | None = None) -> None:
+    """:class:`SharedNodeIdError` when more than one device answers a read of 1000h (every
+    CANopen device has it, CiA 301 §7.5.2.1) at ``sdo``'s node within ``window`` seconds
+    (default: the client's timeout)."""
+    replies = sdo.channel.answers(0x1000, 0, sdo.timeout if window is None else window)
+    if len(replies) > 1:
+        raise SharedNodeIdError(several_answer(len(replies), sdo.node_id))
 
 
 @dataclass(frozen=True)
@@ -283,7 +308,19 @@ class Device:
     def confirm(self) -> None:
         """Read 1000h, 1018h/01 and 100Bh and compare them with this driver's description;
         :class:`WrongDeviceError` names what answered instead, :class:`NoDeviceError` says
-        that nothing did. Drivers call it before their first command."""
+        that nothing did, :class:`SharedNodeIdError` that more than one device answers.
+        Drivers call it before their first command."""
+        late = self.sdo.channel.late_replies
+        try:
+            found = self._identity_values()
+        except SdoProtocolError:
+            check_one_device(self.sdo)  # a second device's reply for the previous object?
+            raise
+        if self.sdo.channel.late_replies != late:  # a reply nobody awaited: a second device?
+            check_one_device(self.sdo)
+        self._compare_identity(found)
+
+    def _identity_values(self) -> dict[str, Value | None]:
         found: dict[str, Value | None] = {}
         for name in IDENTITY_ENTRIES:
             try:
@@ -295,6 +332,9 @@ class Device:
                                     f"({error})") from None
             except SdoAbortError:
                 found[name] = None  # a device without the object: not ours
+        return found
+
+    def _compare_identity(self, found: dict[str, Value | None]) -> None:
         expected = {name: self.entry(name).default_for(self.node_id) for name in IDENTITY_ENTRIES}
         if found == expected:
             self.confirmed = True

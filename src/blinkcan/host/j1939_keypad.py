@@ -154,6 +154,9 @@ class FoundJ1939:
     address: int
     software_revision: str | None = None
     name: str | None = None
+    #: keypads that told their revision from this address: more than one share it (a mistake
+    #: address claim, when on, resolves by moving one, J-5)
+    answers: int = 1
 
 
 def scan_j1939(bus: HostBus | can.BusABC, listen: float = 0.3,
@@ -162,6 +165,7 @@ def scan_j1939(bus: HostBus | can.BusABC, listen: float = 0.3,
     request, both to all (J-2), and the answers heard within ``listen`` seconds."""
     host = HostBus.attach(bus)
     revisions: dict[int, str] = {}
+    answers: dict[int, int] = {}
     names: dict[int, str] = {}
 
     def hear(frame: Frame, now: float) -> None:
@@ -172,6 +176,7 @@ def scan_j1939(bus: HostBus | can.BusABC, listen: float = 0.3,
         elif (ident.pgn == PGN_COMMAND and len(data) == 8 and data[:2] == HEADER
               and data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF):
             revisions[ident.source] = data[3:7].rstrip(b"\x00").decode("ascii", "replace")
+            answers[ident.source] = answers.get(ident.source, 0) + 1
 
     remove = host.subscribe_extended(hear)
     try:
@@ -183,5 +188,5 @@ def scan_j1939(bus: HostBus | can.BusABC, listen: float = 0.3,
         remove()
         host.release()
     # a claim alone may be another J1939 node: a keypad is one that told its revision
-    return [FoundJ1939(address, revisions[address], names.get(address))
+    return [FoundJ1939(address, revisions[address], names.get(address), answers[address])
             for address in sorted(revisions)]

@@ -1,6 +1,10 @@
 """Find Blink devices on a bus: boot-up and heartbeat frames heard, then an SDO read of 1000h
 on every node id at once, and identity (1018h vendor 3E2h, 100Bh model, versions) of those that
 answer. Models are recognised from the registry's identity values (100Bh, else 1000h).
+
+Every reply to the 1000h read within the timeout counts: more than one device answering at a
+node id (a wiring mistake, two emulators) is reported as such (``Found.answers``), and their
+identity is not read (each request would get replies from both, taken for one another).
 """
 
 from __future__ import annotations
@@ -12,10 +16,11 @@ import can
 
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import unreversed
+from blinkcan.host.device import several_answer, unreversed
 from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.sdo import expedited_payload
 from blinkcan.protocol.sdo_client import SdoError
 
 
@@ -33,6 +38,17 @@ class Found:
     software_version: str | None = None
     heard: bool = False  # a boot-up or heartbeat was seen during the scan
     model: str | None = None
+    #: devices that answered the 1000h read: more than one share the node id (a mistake)
+    answers: int = 1
+
+    @property
+    def shared(self) -> bool:
+        """More than one device answers at this node id."""
+        return self.answers > 1
+
+    def describe_shared(self) -> str:
+        """"two devices answer at node 15h ..." (for a shared node id)."""
+        return several_answer(self.answers, self.node_id)
 
 
 def _text(channel: SdoClient, index: int) -> str | None:
@@ -40,6 +56,13 @@ def _text(channel: SdoClient, index: int) -> str | None:
         return channel.upload(index, 0).decode("ascii", "replace")
     except SdoError:
         return None
+
+
+def _expedited_value(reply: bytes) -> int | None:
+    """The value of an expedited upload response (None for an abort or a segmented one)."""
+    if reply[0] >> 5 != 2 or not reply[0] & 0x02:
+        return None
+    return int.from_bytes(expedited_payload(reply[0], reply), "little")
 
 
 def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
@@ -57,8 +80,19 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
 
         def probe(node: int) -> Found | None:
             channel = host.sdo(node, timeout=timeout, retries=0)
+            replies = channel.channel.answers(0x1000, 0, timeout)
+            if not replies or replies[0][0] == 0x80:
+                return None  # nothing, or a device without 1000h: not CANopen
+            if len(replies) > 1:  # their identity reads would be taken for one another
+                types = {_expedited_value(reply) for reply in replies}
+                device_type = min(t if t is not None else 0 for t in types)
+                same = identify(device_type) if len(types) == 1 else None
+                return Found(node, same.kind if same else None, device_type,
+                             heard=node in heard, answers=len(replies))
+            value = _expedited_value(replies[0])
             try:
-                device_type = int.from_bytes(channel.upload(0x1000, 0), "little")
+                device_type = value if value is not None else int.from_bytes(
+                    channel.upload(0x1000, 0), "little")
             except SdoError:
                 return None
             try:

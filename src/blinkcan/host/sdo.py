@@ -17,6 +17,10 @@ reply may still come and would complete the next request to the same object. Wha
    An SDO server answers in order and never reorders (a busy one drops), so once that answer
    is in, nothing older can arrive. Replies discarded are counted in ``late_replies``.
 3. A reply that comes while no request is outstanding is discarded and counted too.
+
+Two devices at one node id (a wiring mistake) answer every request twice, and the second reply
+completes the next request: "reply for another object". :meth:`SdoChannel.answers` tells: it
+sends one read and gathers every reply to it for a while (host/device.py decides what it means).
 """
 
 from __future__ import annotations
@@ -65,11 +69,15 @@ class SdoChannel:
         self._accept: Callable[[bytes], bool] | None = None
         self._out_of_step = False
         self._request_id = SDO_RX + node_id
+        self._gathered: list[bytes] | None = None  # replies :meth:`answers` gathers
         host.subscribe_fast(SDO_TX + node_id, self._on_reply)
 
     def _on_reply(self, frame: Frame, now: float) -> None:
         data = frame.data
         with self._state_lock:
+            if self._gathered is not None:
+                self._gathered.append(data)
+                return
             if not self._awaiting or (self._accept is not None and not self._accept(data)):
                 self.late_replies += 1
                 log.debug("node %02Xh: SDO reply %s discarded (no request awaits it)",
@@ -88,6 +96,25 @@ class SdoChannel:
             yield
         finally:
             restore()
+
+    def answers(self, index: int, subindex: int, window: float) -> list[bytes]:
+        """Send one read of ``index``/``subindex`` and return every reply to it (an upload
+        response or an abort for that object) heard within ``window`` seconds: one device
+        answers once. Other replies heard meanwhile (late ones) are dropped."""
+        if self.host.in_handler:
+            raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
+        mux = multiplexer(index, subindex)
+        with self._lock:
+            with self._state_lock:
+                self._gathered = []
+            try:
+                self.host.send(Frame(self._request_id, b"\x40" + mux + b"\x00\x00\x00\x00"))
+                self.host.sleep(window)
+            finally:
+                with self._state_lock:
+                    gathered, self._gathered = self._gathered, None
+        return [data for data in gathered if len(data) == 8 and data[1:4] == mux
+                and (data[0] >> 5 == 2 or data[0] == 0x80)]
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:

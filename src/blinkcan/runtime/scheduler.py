@@ -466,6 +466,8 @@ class SimulatedScheduler(Scheduler):
     def step(self, until: float) -> bool:
         """Run the next event due by ``until``; False when there is none (the clock stays).
         An exception the event's handlers raised is raised here once they are done."""
+        if until - until and until != math.inf:  # NaN or -inf (+inf: no end)
+            check_time("until", until, infinite=True)
         due = self._heap.next_due()
         if due is None or due > until:
             return False

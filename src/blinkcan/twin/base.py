@@ -418,6 +418,7 @@ class CanopenTwin:
 
     def reset_node(self, now: float) -> list[Frame]:
         """Reset node: live state lost, boot as at power-on (CiA 301)."""
+        check_time("now", now)
         self._lose_live_state()
         return self._boot(now, application=True)
 

@@ -381,6 +381,7 @@ class KeypadTwin(CanopenTwin):
         return self._in_protocol(super().power_on(now), now)
 
     def reset_node(self, now: float) -> list[Frame]:
+        check_time("now", now)
         self._choose_protocol()
         return self._in_protocol(super().reset_node(now), now)
 
@@ -451,7 +452,7 @@ class KeypadTwin(CanopenTwin):
 
     def displayed_leds(self, now: float | None = None) -> tuple[int, int]:
         """(on word, blink word) the keys show: the startup show, DEMO mode, or the objects."""
-        now = self.last_time if now is None else now
+        now = self.last_time if now is None else check_time("now", now)
         if self._j1939:
             return self._j1939_keypad.displayed_leds(now)
         return displayed_words(self._show, self._demo, self._words["led_on"],

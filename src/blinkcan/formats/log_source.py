@@ -1,0 +1,149 @@
+"""Opening a user's log: what its path is, and its lines with a bounded length.
+
+Nothing in a log is trusted, not even what its path names:
+
+- A regular file is read as its name says. ``-`` (standard input), a FIFO or a character
+  device is read as a stream, front to back and once, in the format its name says, else as
+  the candump log ``candump -L can0`` pipes out (``candump -L can0 | blinkcan decode -``); a
+  stream cannot be a format that needs to seek (.blf, .db, .mf4, compressed). A directory, a
+  block device or a socket is refused naming what it is; a path that is not there says so
+  (a dangling symlink names its missing target).
+- A text log is read in chunks and split into lines of at most :data:`MAX_LINE` bytes: a
+  longer line (a binary file, ``/dev/zero``, gigabytes without a newline) ends the reading
+  with ``line N is over MAX_LINE bytes: not a FORMAT log``. Memory stays bounded by one chunk
+  whatever the file holds, and an endless stream of zeros ends within one line.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import stat
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import BinaryIO, TextIO
+
+#: the longest line of a text log: a CAN FD candump line is under 200 bytes, an ASC one 400
+MAX_LINE = 4096
+_CHUNK = 1 << 16
+#: what a line-length error calls a format's log
+_KIND = {".log": "candump", ".asc": "ASC", ".trc": "TRC", ".csv": "CSV"}
+#: formats read front to back, which a stream can carry
+STREAMABLE = frozenset({".log", ".asc", ".trc", ".csv", ".pcap", ".cap"})
+_REFUSED = ((stat.S_ISDIR, "a directory"), (stat.S_ISBLK, "a block device"),
+            (stat.S_ISSOCK, "a socket"))
+
+
+class LogError(ValueError):
+    """A file that cannot be read or written as a CAN log."""
+
+
+class LineTooLongError(ValueError):
+    """A line of a text log over :data:`MAX_LINE` bytes; the message says which."""
+
+
+@dataclass(frozen=True)
+class LogSource:
+    """A log path checked: ``suffix`` is the format it is read in (by its name; ``.log``,
+    candump, for a stream whose name says none), ``stream`` whether it is read once as it
+    comes (standard input, a FIFO, a character device)."""
+
+    path: Path
+    suffix: str
+    stream: bool
+
+    @property
+    def kind(self) -> str:
+        """"candump", "ASC", ...: what a line-length error says the file is not."""
+        return _KIND.get(self.suffix, self.suffix)
+
+    @property
+    def stdin(self) -> bool:
+        return str(self.path) == "-"
+
+    def __str__(self) -> str:
+        return "standard input" if self.stdin else str(self.path)
+
+
+def log_source(path: str | os.PathLike[str]) -> LogSource:
+    """``path`` checked (see the module docstring); :class:`LogError` names what is wrong."""
+    source = Path(path)
+    suffix = source.suffix.lower()
+    if str(path) == "-":
+        return LogSource(source, ".log", stream=True)
+    try:
+        mode = source.stat().st_mode
+    except FileNotFoundError:
+        if source.is_symlink():
+            raise LogError(f"no such file: {source} (a symlink to {os.readlink(source)}, "
+                           "which is not there)") from None
+        raise LogError(f"no such file: {source}") from None
+    except OSError as error:
+        raise LogError(f"cannot read {source}: {error.strerror}") from None
+    if stat.S_ISREG(mode):
+        return LogSource(source, suffix, stream=False)
+    for test, what in _REFUSED:
+        if test(mode):
+            raise LogError(f"{source} is {what}, not a log file")
+    kind = "a FIFO" if stat.S_ISFIFO(mode) else "a character device"
+    if suffix in STREAMABLE:
+        return LogSource(source, suffix, stream=True)
+    if suffix in (".blf", ".db", ".mf4", ".gz"):
+        raise LogError(f"{source} is {kind}: a {suffix} log is read from a regular file only "
+                       "(streams carry candump, .asc, .trc, .csv and .pcap)")
+    return LogSource(source, ".log", stream=True)
+
+
+@contextlib.contextmanager
+def open_text(source: LogSource, encoding: str | None = None) -> Iterator[TextIO]:
+    """The source as text (``encoding`` None: the locale's, as python-can reads)."""
+    if source.stdin:
+        yield sys.stdin
+        return
+    try:
+        stream = source.path.open(encoding=encoding)
+    except OSError as error:
+        raise LogError(f"cannot read {source}: {error.strerror}") from None
+    with stream:
+        yield stream
+
+
+@contextlib.contextmanager
+def open_binary(source: LogSource) -> Iterator[BinaryIO]:
+    if source.stdin:
+        yield sys.stdin.buffer
+        return
+    try:
+        stream = source.path.open("rb")
+    except OSError as error:
+        raise LogError(f"cannot read {source}: {error.strerror}") from None
+    with stream:
+        yield stream
+
+
+def bounded_lines(stream: TextIO, kind: str) -> Iterator[str]:
+    """The lines of ``stream`` (without their newline), each at most :data:`MAX_LINE` long;
+    a longer one raises :class:`LineTooLongError` ("not a ``kind`` log")."""
+    for lines in bounded_line_blocks(stream, kind):
+        yield from lines
+
+
+def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
+    """:func:`bounded_lines` a chunk at a time: for loops that want no call per line."""
+    read = stream.read
+    rest = ""
+    number = 0  # lines yielded so far
+    while chunk := read(_CHUNK):
+        lines = (rest + chunk).split("\n") if rest else chunk.split("\n")
+        rest = lines.pop()
+        if len(rest) > MAX_LINE or (lines and max(map(len, lines)) > MAX_LINE):
+            long = next((n for n, line in enumerate(lines) if len(line) > MAX_LINE),
+                        len(lines))
+            raise LineTooLongError(f"line {number + long + 1} is over {MAX_LINE} bytes: "
+                                   f"not a {kind} log")
+        number += len(lines)
+        yield lines
+    if rest:
+        yield [rest]

@@ -1,0 +1,32 @@
+"""A candump log without newlines refused at its first line in bounded memory by the fleet's
+reader too (issue 18 item 6: every reader of a user's log bounds its lines)."""
+
+from __future__ import annotations
+
+import tracemalloc
+from pathlib import Path
+
+import pytest
+
+from blinkcan.fleet.sources import read_items
+from blinkcan.formats.log_source import MAX_LINE
+from tests.formats.test_log_sources import CANDUMP, _no_newline
+
+
+def test_a_candump_log_without_newlines_is_refused_in_bounded_memory(tmp_path: Path) -> None:
+    path = _no_newline(tmp_path / "huge.log", 24 << 20)
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match=f"^line 1 is over {MAX_LINE} bytes: "
+                                             "not a candump log$"):
+            list(read_items(path))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 2 << 20, f"{peak:,} bytes to refuse a 24 MB line"
+
+
+def test_each_frame_keeps_its_channel(tmp_path: Path) -> None:
+    path = tmp_path / "two.log"
+    path.write_text(CANDUMP.replace("can0", "can1", 1))
+    assert [channel for _, _, channel in read_items(path)] == ["can1", "can0"]
