@@ -7,6 +7,7 @@ import argparse
 from benchmarks import (
     decode_log,
     emulator_capacity,
+    fleet_parquet,
     j1939_decode,
     sdo_roundtrip,
     sdo_twin,
@@ -24,6 +25,7 @@ def main() -> None:
     decode_log.main(smoke=args.smoke)
     simulated_time.main(smoke=args.smoke)
     j1939_decode.main(smoke=args.smoke)
+    fleet_parquet.main(smoke=args.smoke)
 
 
 main()

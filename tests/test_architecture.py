@@ -6,8 +6,14 @@
     on an object whose class lives elsewhere. Twins extend through public hooks instead.
 (b) Import cycles between blinkcan modules, counting every import: at the top, inside a
     function, under ``if TYPE_CHECKING:``, and ``import_module("...")`` with a literal name.
+(c) Behaviour switched on a model outside ``devices/``: a comparison with a registered kind
+    string (``kind == "keypad"``, ``device in ("keypad", "keybox")``), and a key or pin count
+    written as a number (``range(1, 13)``, ``check_range("key", key, 1, 12)``,
+    ``1 <= key <= 12``) where it is one of a registered face's counts. Every such place reads
+    the model's description (its face, features, commands) instead.
 
-Both are 0 for ``twin/``. ``python -m tests.test_architecture`` prints them for the package.
+(a) and (b) are 0 for ``twin/``, (c) for the whole package. ``python -m
+tests.test_architecture`` prints them for the package.
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import blinkcan
+from blinkcan.devices.registry import default_descriptions, models
 
 PACKAGE = Path(blinkcan.__file__).parent
 
@@ -242,6 +249,66 @@ def private_uses() -> list[PrivateUse]:
     return sorted(found, key=lambda use: (use.module, use.line, use.name))
 
 
+# -- (c) kind strings and counts outside devices/ ----------------------------------------------
+
+def _kinds() -> frozenset[str]:
+    return frozenset(model.kind for model in models())
+
+
+def _counts() -> frozenset[int]:
+    """Every registered face's key and pin count, and one more (a ``range`` stop)."""
+    faces = [description.face for description in default_descriptions()]
+    counts = {count for face in faces for count in (face.keys, face.pins) if count}
+    return frozenset(counts | {count + 1 for count in counts})
+
+
+def _literal(node: ast.expr) -> object:
+    return node.value if isinstance(node, ast.Constant) else None
+
+
+@dataclass(frozen=True)
+class ModelSwitch:
+    module: str
+    line: int
+    what: str
+
+    def __str__(self) -> str:
+        return f"{self.module}:{self.line} {self.what}"
+
+
+def _switches_in(tree: ast.AST, module: str, kinds: frozenset[str],
+                 counts: frozenset[int]) -> list[ModelSwitch]:
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            operands = [node.left, *node.comparators]
+            strings = {_literal(element) for operand in operands for element in (
+                operand.elts if isinstance(operand, (ast.Tuple, ast.List, ast.Set))
+                else [operand])}
+            if strings & kinds:
+                found.append(ModelSwitch(module, node.lineno, "compares a kind string"))
+            numbers = [_literal(operand) for operand in operands]
+            if (len(numbers) == 3 and numbers[0] in (0, 1) and numbers[2] in counts
+                    and not isinstance(numbers[2], bool)):
+                found.append(ModelSwitch(module, node.lineno, f"bounds by {numbers[2]}"))
+        elif isinstance(node, ast.Call):
+            name = getattr(node.func, "id", getattr(node.func, "attr", None))
+            arguments = [_literal(argument) for argument in node.args]
+            if (name == "range" and len(arguments) >= 2 and arguments[0] in (0, 1)
+                    and arguments[1] in counts) or (
+                    name == "check_range" and len(arguments) == 4 and arguments[2] in (0, 1)
+                    and arguments[3] in counts):
+                found.append(ModelSwitch(module, node.lineno, f"counts to {arguments[-1]}"))
+    return found
+
+
+def model_switches() -> list[ModelSwitch]:
+    kinds, counts = _kinds(), _counts()
+    return [switch for module, source in _sources().items()
+            if not module.startswith("blinkcan.devices")
+            for switch in _switches_in(source.tree, module, kinds, counts)]
+
+
 # -- the assertions -------------------------------------------------------------------------------
 
 def _in_twin(module: str) -> bool:
@@ -273,15 +340,30 @@ def test_the_counts_see_what_they_count() -> None:
     assert _imported_modules(cyclic) == {"blinkcan.twin.keypad", "blinkcan.twin.pkp3500"}
 
 
+def test_no_kind_string_or_count_switches_behaviour_outside_devices() -> None:
+    assert [str(switch) for switch in model_switches()] == []
+
+
+def test_the_model_switch_count_sees_what_it_counts() -> None:
+    tree = ast.parse("if kind == 'keypad': pass\nif d in ('keybox',): pass\n"
+                     "for key in range(1, 13): pass\ncheck_range('key', key, 1, 12)\n"
+                     "ok = 1 <= key <= 12\nfine = range(1, 8)\n")
+    found = _switches_in(tree, "m", frozenset({"keypad", "keybox"}), frozenset({12, 13}))
+    assert [switch.line for switch in found] == [1, 2, 3, 4, 5]
+
+
 def report() -> str:
-    """Both counts for the whole package, one finding a line."""
+    """The counts for the whole package, one finding a line."""
     uses = private_uses()
     cycles = import_cycles()
+    switches = model_switches()
     return "\n".join([
         f"(a) private attributes of another module's class used: {len(uses)}",
         *(f"    {use}" for use in uses),
         f"(b) import cycles (strongly connected groups of modules): {len(cycles)}",
         *(f"    {' <-> '.join(cycle)}" for cycle in cycles),
+        f"(c) kind strings and key/pin counts outside devices/: {len(switches)}",
+        *(f"    {switch}" for switch in switches),
     ]) + "\n"
 
 

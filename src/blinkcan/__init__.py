@@ -11,11 +11,13 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
+from blinkcan.errors import BlinkcanError
+
 if TYPE_CHECKING:
     from blinkcan.host import Keybox, Keypad, scan
     from blinkcan.protocol import Frame
 
-__all__ = ["Frame", "Keybox", "Keypad", "__version__", "scan"]
+__all__ = ["BlinkcanError", "Frame", "Keybox", "Keypad", "__version__", "scan"]
 __version__ = "0.1.0"
 
 #: public name -> the module that defines it, imported when the name is first used

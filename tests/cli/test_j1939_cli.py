@@ -61,11 +61,12 @@ def test_a_bad_j1939_address_is_one_line() -> None:
 
 def test_emulate_builds_keypads_in_j1939_mode() -> None:
     twins = build_twins(("keypad@1.5",), None, None, "firmware", (), "j1939")
-    assert _name(twins[0]) == "keypad 21h (rev 1.5, J1939)"
+    assert _name(twins[0]) == "PKP-2600-SI keypad 21h (J1939), generation 2 (manual rev 1.5)"
     twins[0].power_on(0.0)
     assert twins[0].snapshot()["protocol"] == "j1939"
-    assert _name(build_twins(("keypad",), None, None, "firmware")[0]) == "keypad 15h (rev 1.1)"
-    with pytest.raises(click.UsageError, match="only the PKP-2600-SI"):
+    assert _name(build_twins(("keypad",), None, None, "firmware")[0]) \
+        == "PKP-2600-SI keypad 15h, generation 1 (manual rev 1.1)"
+    with pytest.raises(click.UsageError, match="only PKP-2600-SI keypad can"):
         build_twins(("keybox",), None, None, "firmware", (), "j1939")
 
 

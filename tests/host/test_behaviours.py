@@ -70,3 +70,25 @@ def test_keybox_restores_outputs_after_a_reboot_only_when_asked(rig: Rig) -> Non
     rig.emulator.power_cycle(rig.keybox)
     rig.wait_until(lambda: rig.emulator.snapshot(rig.keybox)["nmt_state"] == "operational")
     assert plain.state(8) == "off"
+
+
+def test_behaviours_take_every_key_with_an_led_of_the_model() -> None:
+    # issue 19: Toggle(pkp3500_keypad, 14) raised "key 14 outside 1..12"
+    from blinkcan.testing import Rig
+    from blinkcan.twin import KeypadTwin
+
+    with Rig() as bench:
+        twin = bench.add(KeypadTwin(node_id=0x15, model="pkp-3500-mt"))
+        keypad = Keypad(bench.bus, 0x15, model="pkp-3500-mt")
+        bench.advance(10)  # past the start-up LED show
+        toggle = Toggle(keypad, 14)
+        bench.act(lambda now: twin.press(14, now))
+        bench.act(lambda now: twin.release(14, now))
+        bench.settle()
+        assert toggle.state == 1
+        assert twin.snapshot()["keys"][13]["colour"] == "green"
+        with pytest.raises(ValueError, match="key 11 has no LED"):
+            Toggle(keypad, 11)  # the encoder's push key (its LED bit is a hole)
+        with pytest.raises(ValueError, match=r"1\.\.15"):
+            Toggle(keypad, 16)
+        keypad.close()

@@ -9,7 +9,7 @@ and the bus sees no command."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
@@ -18,16 +18,20 @@ import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
-from blinkcan.devices.registry import model
+from blinkcan.devices.model import Face, Model
+from blinkcan.devices.registry import identify, model, models
 from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
-from blinkcan.host.device import check_one_device
+from blinkcan.host.device import NoDeviceError, check_one_device
+from blinkcan.host.registry import driver_class
 from blinkcan.protocol.j1939 import ADDRESS_MAX
-from blinkcan.protocol.sdo_client import SdoProtocolError
+from blinkcan.protocol.sdo_client import SdoProtocolError, SdoTimeoutError
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
 #: ``blinkcan keypad --protocol j1939 --address 0x21``: kept in the context's meta
 _J1939_ADDRESS = "blinkcan.j1939_address"
+#: ``blinkcan keypad --model pkp-3500-mt``: kept in the context's meta
+_MODEL = "blinkcan.model"
 
 
 def _j1939_address() -> int | None:
@@ -36,20 +40,49 @@ def _j1939_address() -> int | None:
     return None if context is None else context.meta.get(_J1939_ADDRESS)
 
 
+def _chosen_model() -> str | None:
+    """The model named with ``--model``, else None (found from the device)."""
+    context = click.get_current_context(silent=True)
+    return None if context is None else context.meta.get(_MODEL)
+
+
+def _model_at(bus: Any, node_id: int, kind: str) -> Model:
+    """The registered model of ``kind`` whose model id (100Bh) the device at ``node_id``
+    reports; the kind's first model when it reports none of them (its driver's identity check
+    then says what answered instead)."""
+    first = model(kind)
+    host = HostBus.attach(bus)
+    try:
+        raw = host.sdo(node_id, 0.5, 1).upload(0x100B, 0)
+    except SdoTimeoutError as error:
+        raise NoDeviceError(f"no device answers at node {node_id:02X}h ({error})") from None
+    except SdoError:
+        return first
+    finally:
+        host.release()
+    found = identify(model_id=raw.decode("ascii", "replace"))
+    if found is None:
+        return first
+    answering = model(found.model)
+    base = driver_class(first.name)
+    return answering if issubclass(driver_class(answering.name), base) else first
+
+
 @contextmanager
-def _device(target: Target, start: bool = False) -> Iterator[Keypad | Keybox]:
+def _device(target: Target, start: bool = False) -> Iterator[Any]:
+    """The driver of the device at the target's node id: the model its 100Bh names (or
+    ``--model``), driven by that model's driver class from the registry."""
     kind, node_id = target
     address = _j1939_address()
     bus = cli_bus()
     try:
         try:
-            if kind == "keypad" and address is not None:
-                device: Keypad | Keybox = Keypad(bus, node_id, protocol="j1939",
-                                                 address=address)
-            elif kind == "keypad":
-                device = Keypad(bus, node_id, start=start)
+            if address is not None:  # J1939 mode answers no SDO: the kind's first model
+                device = driver_class(kind)(bus, node_id, protocol="j1939", address=address)
             else:
-                device = Keybox(bus, node_id, start=start)
+                chosen = _chosen_model()
+                found = model(chosen) if chosen else _model_at(bus, node_id, kind)
+                device = driver_class(found.name)(bus, node_id, start=start)
         except (IdentityError, SdoError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
         try:
@@ -113,12 +146,48 @@ node_id_option = click.option("--node-id", type=NODE_ID, default=None, expose_va
                               callback=_set_node_id, help="The device's node id.")
 
 
-def _group(kind: str, title: str) -> click.Group:
-    default = model(kind).default_node_id
+def _models_of(kind: str) -> list[Model]:
+    return [found for found in models() if found.kind == kind]
 
-    @click.group(kind, help=f"One-shot control of {title}.")
+
+def _spans(numbers: Iterable[int]) -> str:
+    """[1, 2, 3, 5] -> "1-3, 5"."""
+    spans: list[list[int]] = []
+    for number in sorted(numbers):
+        if spans and number == spans[-1][-1] + 1:
+            spans[-1].append(number)
+        else:
+            spans.append([number])
+    return ", ".join(f"{s[0]}-{s[-1]}" if len(s) > 1 else f"{s[0]}" for s in spans)
+
+
+def _per_model(kind: str, numbers: Callable[[Face], Iterable[int]]) -> str:
+    """What each model of ``kind`` has, from its face: "1-12 (PKP-2600-SI keypad), ..."."""
+    return ", ".join(f"{_spans(numbers(found.description().face))} "
+                     f"({found.description().title})" for found in _models_of(kind)
+                     if tuple(numbers(found.description().face)))
+
+
+def _set_model(ctx: click.Context, param: click.Parameter, value: str | None) -> None:
+    if value is not None:
+        ctx.meta[_MODEL] = value
+
+
+def _group(kind: str) -> click.Group:
+    """The command group of one kind of device, its models and their names from the
+    registry."""
+    default = model(kind).default_node_id
+    kinds = _models_of(kind)
+    titles = ", ".join(found.description().title for found in kinds)
+    names = [name for found in kinds for name in found.names]
+
+    @click.group(kind, help=f"One-shot control of a {kind}. Models: {titles}; which one is "
+                            "read from the device (100Bh) unless --model names it.")
     @click.option("--node-id", type=NODE_ID, default=default,
                   help=f"The {kind}'s node id (default {default:02X}h).")
+    @click.option("--model", type=click.Choice(names, case_sensitive=False), default=None,
+                  expose_value=False, callback=_set_model,
+                  help="Drive the device as this model (default: the one it says it is).")
     @bus_options
     @click.pass_context
     def group(ctx: click.Context, node_id: int) -> None:
@@ -127,7 +196,7 @@ def _group(kind: str, title: str) -> click.Group:
     return group
 
 
-keypad = _group("keypad", "a PKP-2600-SI keypad")
+keypad = _group("keypad")
 
 
 class J1939Address(click.ParamType):  # type: ignore[type-arg]
@@ -169,7 +238,7 @@ keypad.params += [
                  expose_value=False, callback=_set_address,
                  help=f"J1939 source address of the keypad (default {DEFAULT_ADDRESS:02X}h)."),
 ]
-keybox = _group("keybox", "a Keybox")
+keybox = _group("keybox")
 
 
 for group in (keypad, keybox):
@@ -246,7 +315,7 @@ def _blink_words(colour: str, blink: str | None) -> str:
     return f"{colour} alternating with {blink}"
 
 
-@keypad.command("led")
+@keypad.command("led", epilog=f"Keys with an LED: {_per_model('keypad', lambda f: f.led_keys)}.")
 @click.argument("key", type=int)
 @click.argument("colour")
 @click.option("--blink", is_flag=False, flag_value="", default=None, metavar="[COLOUR]",
@@ -256,7 +325,7 @@ def _blink_words(colour: str, blink: str | None) -> str:
 @node_id_option
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
-    """Light KEY (1-12) in COLOUR (off, red, green, blue, yellow/amber, cyan, magenta,
+    """Light KEY in COLOUR (off, red, green, blue, yellow/amber, cyan, magenta,
     white). Starts the keypad; the other keys keep what they show (read from the keypad first).
 
     \b
@@ -316,19 +385,21 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
         _done(target, done.format(pin=pin))
 
 
-_pin_command("on", "on", "Output PIN (1-13) HIGH.", "output {pin} HIGH")
+_pin_command("on", "on", f"Output PIN HIGH; pins {_per_model('keybox', lambda f: f.pin_numbers)}.",
+             "output {pin} HIGH")
 _pin_command("off", "off", "Output PIN OFF.", "output {pin} OFF")
 _pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} RESET (now OFF)")
 
 
-@keybox.command("pwm")
+@keybox.command("pwm", epilog=f"PWM pins: {_per_model('keybox', lambda f: f.pwm_pins)}.")
 @click.argument("pins")
 @click.argument("duty")
 @bus_options
 @node_id_option
 @click.pass_obj
 def pwm(target: Target, pins: str, duty: str) -> None:
-    """PWM on PINS (12, 13 or 12,13) at DUTY 0-10 tenths, or 0%-100% in steps of 10.
+    """PWM on PINS (one or several, comma-separated) at DUTY 0-10 tenths, or 0%-100% in
+    steps of 10.
     Pins not named leave PWM.
 
     \b

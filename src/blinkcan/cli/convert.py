@@ -14,6 +14,7 @@ import click
 from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
 from blinkcan.cli.targets import check_target, writing
+from blinkcan.errors import BlinkcanError
 from blinkcan.formats.logs import FrameWriter, LogError, read_messages
 
 
@@ -40,7 +41,7 @@ def convert(source: str, target: str, force: bool) -> None:
         click.echo(line, err=True)
 
 
-class _StopError(Exception):
+class _StopError(BlinkcanError):
     """SIGTERM (or SIGINT) asked the recording to stop."""
 
 

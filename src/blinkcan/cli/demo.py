@@ -44,7 +44,8 @@ class Controller:
         self._work: queue.SimpleQueue[tuple[str, int, int] | threading.Event] = queue.SimpleQueue()
         self.toggles = {
             key: Toggle(keypad, key, on="green", on_change=functools.partial(self._pressed, key))
-            for key in range(1, 13)
+            for key in keypad.description.face.led_keys
+            if key in keybox.description.face.pin_numbers  # key N toggles output N
         }
         keybox.on_fault(self._on_fault)
         self._worker = threading.Thread(target=self._run, name="demo-controller", daemon=True)

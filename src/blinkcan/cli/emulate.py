@@ -25,7 +25,7 @@ from blinkcan.cli.bus_options import (
     parse_node_id,
 )
 from blinkcan.decode import Decoder
-from blinkcan.devices.registry import parse_spec
+from blinkcan.devices.registry import models, parse_spec
 from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
@@ -54,9 +54,11 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
         if protocol != "canopen":  # spec/pkp-2600-si-j1939.md: the PKP-2600-SI's J1939 mode
-            if "j1939" not in found.description().features:
-                raise click.UsageError(f"--protocol {protocol}: only the PKP-2600-SI keypad has "
-                                       f"a J1939 mode, not {found.name}")
+            if protocol not in found.description().features:
+                having = ", ".join(m.description().title for m in models()
+                                   if protocol in m.description().features)
+                raise click.UsageError(f"--protocol {protocol}: only {having} can run it, "
+                                       f"not {found.description().title}")
             options["protocol"] = protocol
         try:
             twins.append(build_twin(model, node, quirks, nvm, **options))
@@ -157,13 +159,13 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
 
 
 def _name(twin: CanopenTwin) -> str:
-    """"keypad 15h (rev 1.1)", "keypad 21h (rev 1.1, J1939)", "keybox 0Ch"."""
-    if twin.description.kind != "keypad":
-        return f"{twin.description.kind} {twin.node_id:02X}h"
+    """"PKP-2600-SI keypad 15h, generation 1 (manual rev 1.1)", "Keybox 0Ch, manual rev 1.0",
+    "PKP-2600-SI keypad 21h (J1939), ...": the model's own title and edition."""
+    description = twin.description
+    where = f"{twin.node_id:02X}h"
     if isinstance(twin, KeypadTwin) and twin.protocol == "j1939":
-        address = twin.j1939.settings["source_address"]
-        return f"keypad {address:02X}h (rev {twin.description.generation}, J1939)"
-    return f"keypad {twin.node_id:02X}h (rev {twin.description.generation})"
+        where = f"{twin.j1939.settings['source_address']:02X}h (J1939)"
+    return f"{description.title} {where}, {description.edition}"
 
 
 @contextlib.contextmanager

@@ -44,8 +44,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
              "a request for address claimed, to all."),
     "monitor": ("blinkcan.cli.monitor:command", "Watch a bus live: events, keypad keys and "
                 "LEDs, Keybox outputs."),
-    "keypad": ("blinkcan.cli.control:keypad", "One-shot control of a PKP-2600-SI keypad."),
-    "keybox": ("blinkcan.cli.control:keybox", "One-shot control of a Keybox."),
+    "keypad": ("blinkcan.cli.control:keypad", "One-shot control of a keypad."),
+    "keybox": ("blinkcan.cli.control:keybox", "One-shot control of a keybox."),
     "nmt": ("blinkcan.cli.nmt:command",
             "NMT commands (CiA 301) to a node, or to all of them with NODE = all."),
     "query": ("blinkcan.cli.query:command", "Run SQL on the dataset `blinkcan decode --parquet "

@@ -32,10 +32,10 @@ def render(view: BusView, log: EventLog) -> Group:
     parts: list[object] = []
     for node in sorted(view.nodes.values(), key=lambda n: n.node_id):
         title = f"{node.device or 'node'} {node.node_id:02X}h, {node.state}"
-        if node.device == "keypad":
+        if node.face.keys:  # what the model's face has: keys with LEDs, outputs
             keys = ((k, a, b, k in node.held) for k, a, b in node.key_phases())
             parts.append(keypad_panel(keys, title, node.face.grid))
-        elif node.device == "keybox":
+        if node.face.pins:
             pins = ((pin, state, False, node.pwm.get(pin)) for pin, state in node.outputs.items())
             parts.append(keybox_panel(pins, title))
         if node.other:  # what the model sends besides keys and outputs: knobs, inputs...

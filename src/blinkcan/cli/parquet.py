@@ -31,7 +31,8 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
     progress = Progress(TextColumn("{task.completed:,.0f}/{task.total:,.0f} files"),
                         BarColumn(), TextColumn("{task.fields[frames]:,} frames"),
                         TextColumn("{task.fields[rate]:,.0f} frames/s"), TimeElapsedColumn(),
-                        console=console, transient=True, disable=not sys.stderr.isatty())
+                        console=console, transient=True, disable=not sys.stderr.isatty(),
+                        auto_refresh=False)  # no thread: -j forks the workers
     task = progress.add_task("decode", total=total, frames=0, rate=0.0)
     start = time.monotonic()
     frames = 0
@@ -39,7 +40,7 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
 
     def show() -> None:
         rate = frames / max(time.monotonic() - start, 1e-9)
-        progress.update(task, frames=frames, rate=rate)
+        progress.update(task, frames=frames, rate=rate, refresh=True)
 
     def on_frames(count: int) -> None:  # one process: live counts
         nonlocal frames

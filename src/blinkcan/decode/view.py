@@ -175,7 +175,7 @@ class BusView:
                 view.other[str(fields.get("pdo"))] = event.text
         elif event.kind in (Kind.SDO_WRITE, Kind.SDO_VALUE):
             self._object(view, event.kind, fields)
-        elif event.kind is Kind.J1939 and view.device == "keypad":
+        elif event.kind is Kind.J1939 and view.face.keys:  # a keypad in J1939 mode
             _follow_j1939(view, fields)
 
     @staticmethod
@@ -204,7 +204,8 @@ class BusView:
     @staticmethod
     def _object(view: NodeView, kind: Kind, fields: dict[str, object]) -> None:
         index, sub, value = fields.get("index"), fields.get("subindex"), fields.get("value")
-        if view.device != "keybox" or not isinstance(value, int) or not isinstance(sub, int):
+        # the output objects (KBX §19, §22): only a model whose face has output pins
+        if not view.face.pins or not isinstance(value, int) or not isinstance(sub, int):
             return
         if fields.get("object") == "pwm":  # KBX §22: byte 0 the PWM pins, byte 1 the duty
             level = value >> 8

@@ -220,6 +220,7 @@ def command(name: str) -> J1939Command:
 # -- messages from the keypad (§6, §11, §18, §19) ----------------------------------------------
 
 KEY_MESSAGE = 0x01  # §6 key contact state: 04 1B 01 <key> <state> <identifier> FF FF
+KEYS = 12  # §6: the key messages name keys 1..12
 SOFTWARE_REVISION_REPLY = 0x2A  # §11: 04 1B 2A <4 ASCII> 00
 HEARTBEAT = 0xF9  # §18: 04 1B F9 <counter> <K8..K1> <0000 K12..K9> FF <identifier>
 KEY_RELEASED, KEY_PRESSED = 0x00, 0x01

@@ -202,9 +202,10 @@ def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] 
         node, model, details = rows(event)
         partition = (model or UNKNOWN, date)
         text, can_id, extended, data = str(event), frame.can_id, frame.extended, frame.data
-        append(partition, [(micros, channel, can_id, extended, node, kind, key, pin, state,
-                             colour, int64_or_none(value), text, data)
-                            for kind, key, pin, state, colour, value in details])
+        for kind, key, pin, state, colour, value in details:
+            append(partition, (micros, channel, can_id, extended, node, kind, key, pin, state,
+                               colour, value if value is None else int64_or_none(value), text,
+                               data))
         frames += 1
         if progress is not None and not frames % PROGRESS_EVERY:
             progress(PROGRESS_EVERY)

@@ -43,28 +43,33 @@ class PartitionWriter:
         self._writers: dict[tuple[str, str], tuple[Any, pq.ParquetWriter]] = {}
         self._buffered = 0
         self._days: dict[int, str] = {}
+        self._day = (0.0, 0.0, UNKNOWN)  # the day of the last time: [start, end) and its date
         #: rows written so far
         self.rows = 0
 
     def time_and_date(self, seconds: float) -> tuple[int | None, str]:
         """(microseconds since the epoch, the UTC date) of a log time; (None, "unknown")
         for one no timestamp carries (not finite, before year 1 or after 9999)."""
+        start, end, today = self._day
+        if start <= seconds < end:  # a log's times are mostly of one day
+            return round(seconds * 1_000_000), today
         if not (math.isfinite(seconds) and _EARLIEST_S <= seconds < _LATEST_S):
             return None, UNKNOWN
         day = int(seconds // _DAY_S)
         date = self._days.get(day)
         if date is None:
             date = self._days[day] = datetime.date.fromordinal(_EPOCH_ORDINAL + day).isoformat()
+        self._day = (day * _DAY_S, (day + 1) * _DAY_S, date)
         return round(seconds * 1_000_000), date
 
-    def append(self, partition: tuple[str, str], rows: list[tuple[Any, ...]]) -> None:
-        """Rows of one partition: the values of the schema's columns but ``source``, in its
+    def append(self, partition: tuple[str, str], row: tuple[Any, ...]) -> None:
+        """A row of the partition: the values of the schema's columns but ``source``, in its
         order."""
         buffer = self._buffers.get(partition)
         if buffer is None:
             buffer = self._buffers[partition] = []
-        buffer += rows
-        self._buffered += len(rows)
+        buffer.append(row)
+        self._buffered += 1
         if self._buffered >= self._rows_per_group:
             self.flush()
 

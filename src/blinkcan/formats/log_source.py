@@ -25,6 +25,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO, TextIO
 
+from blinkcan.errors import BlinkcanError
+
 #: the longest line of a text log: a CAN FD candump line is under 200 bytes, an ASC one 400
 MAX_LINE = 4096
 _CHUNK = 1 << 16
@@ -36,11 +38,11 @@ _REFUSED = ((stat.S_ISDIR, "a directory"), (stat.S_ISBLK, "a block device"),
             (stat.S_ISSOCK, "a socket"))
 
 
-class LogError(ValueError):
+class LogError(BlinkcanError, ValueError):
     """A file that cannot be read or written as a CAN log."""
 
 
-class LineTooLongError(ValueError):
+class LineTooLongError(BlinkcanError, ValueError):
     """A line of a text log over :data:`MAX_LINE` bytes; the message says which."""
 
 

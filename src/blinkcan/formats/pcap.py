@@ -22,6 +22,7 @@ from typing import BinaryIO
 
 import can
 
+from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.frame import Frame
 
 LINKTYPE_CAN_SOCKETCAN = 227
@@ -38,7 +39,7 @@ CANFD_BRS, CANFD_ESI, CANFD_FDF = 0x01, 0x02, 0x04
 CAN_ERR_DLC = 8
 
 
-class PcapError(ValueError):
+class PcapError(BlinkcanError, ValueError):
     """A file that is not a SocketCAN pcap capture."""
 
 

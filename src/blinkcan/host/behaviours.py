@@ -20,7 +20,11 @@ from blinkcan.protocol.cob import check_range
 class _KeyBehaviour:
     def __init__(self, keypad: Keypad, key: int, colours: Sequence[str],
                  on_change: Callable[[int], object] | None) -> None:
-        check_range("key", key, 1, 12)
+        face = keypad.description.face  # the model's keys, e.g. 15 on a PKP-3500-MT
+        check_range("key", key, 1, face.keys)
+        if key not in face.led_keys:
+            raise ValueError(f"key {key} has no LED to show its state; keys with one: "
+                             f"{', '.join(map(str, face.led_keys))}")
         for colour in colours:
             led_colour(colour)  # ValueError naming the valid colours
         self.keypad = keypad

@@ -41,6 +41,7 @@ from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry, Value
 from blinkcan.devices.registry import identify
+from blinkcan.errors import BlinkcanError
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.events import EventSource
 from blinkcan.host.sdo import SdoClient
@@ -80,7 +81,7 @@ class Identity:
     serial_number: str | None = None  # the keypad's 2200h; the Keybox documents none
 
 
-class IdentityError(Exception):
+class IdentityError(BlinkcanError):
     """The device at a node id is not the one the driver drives."""
 
 

@@ -21,6 +21,7 @@ from blinkcan.devices.keypad_j1939 import (
     HEADER,
     KEY_MESSAGE,
     KEY_PRESSED,
+    KEYS,
     PGN_COMMAND,
     PRIORITY,
     SOFTWARE_REVISION_REPLY,
@@ -139,7 +140,7 @@ class J1939KeypadLink:
         if ident.pgn != PGN_COMMAND or ident.source != self.address or len(data) != 8 or \
                 data[:2] != HEADER:
             return
-        if data[2] == KEY_MESSAGE and 1 <= data[3] <= 12:  # §6
+        if data[2] == KEY_MESSAGE and 1 <= data[3] <= KEYS:  # §6
             self._on_key(data[3], data[4] == KEY_PRESSED, now)
         elif data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF:  # §11
             self._revision = data[3:7].rstrip(b"\x00").decode("ascii", "replace")

@@ -124,7 +124,8 @@ class Keypad(Device):
             host.release()
         model_id = raw.decode("ascii", "replace")
         found = identify(model_id=model_id)
-        if found is None or found.kind != "keypad":
+        # a keypad is a model whose driver is this class or one built on it (the registry's)
+        if found is None or not issubclass(driver_class(found.model), cls):
             what = found.title if found is not None else f"{model_id!r}"
             raise WrongDeviceError(f"node {node_id:02X}h is a {what}, not a keypad")
         return cls(bus, node_id, model=found.model, **options)
@@ -213,8 +214,10 @@ class Keypad(Device):
     def watch_host(self, period: float) -> None:
         """Generation 2 only: the keypad switches its LEDs off when the controller's
         heartbeat stops (rev 1.5 §26)."""
-        if self.detect_generation() != "1.5":
-            raise ValueError("this keypad (manual 1.1) has no consumer heartbeat (1016h)")
+        self.detect_generation()  # the description of the generation found
+        if self.description.consumer_heartbeat is None:
+            raise ValueError(f"this {self.description.title} ({self.description.edition}) "
+                             "has no consumer heartbeat (1016h)")
         super().watch_host(period)
 
     def set_consumer_heartbeat(self, node_id: int, period: float) -> None:
@@ -225,8 +228,10 @@ class Keypad(Device):
         """Generation 2: LED PDOs applied at the next SYNC and the key state sent every n-th
         SYNC (rev 1.5 §36/§37/§44a); run a SYNC producer (``host.produce_sync``). With
         ``leds=False`` and ``key_state_every=None`` the keypad is event-driven again."""
-        if self.detect_generation() != "1.5":
-            raise ValueError("this keypad (manual 1.1) has no synchronous PDOs")
+        self.detect_generation()  # the description of the generation found
+        if "sync" not in self.description.features:  # errata G3
+            raise ValueError(f"this {self.description.title} ({self.description.edition}) "
+                             "has no synchronous PDOs")
         led_type = 0x00 if leds else 0xFE
         self.write("rpdo1_transmission_type", led_type)
         self.write("rpdo2_transmission_type", led_type)
@@ -419,7 +424,9 @@ class Keypad(Device):
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
         # a rev 1.1-style frame would undo a colour set before; send the colour along.
-        colour = (self._backlight_colour or 0) if self.detect_generation() == "1.5" else 0
+        self.detect_generation()  # the description of the generation found
+        colour = ((self._backlight_colour or 0)
+                  if "backlight-colour-pdo" in self.description.features else 0)
         return self._pdo_frame("backlight_brightness", {"level": level, "colour": colour})
 
     def set_default_backlight_colour(self, colour: str) -> None:

@@ -11,6 +11,7 @@ A reply for another object, a wrong toggle bit or an unknown command is an error
 
 from __future__ import annotations
 
+from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.sdo import (
     EXPEDITED_DOWNLOAD_COMMAND,
@@ -25,7 +26,7 @@ from blinkcan.protocol.sdo import (
 QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowledges with 43h
 
 
-class SdoError(Exception):
+class SdoError(BlinkcanError):
     """An SDO transfer failed; names the node, object and sub-index."""
 
     def __init__(self, message: str, node_id: int | None = None, index: int = 0,

@@ -39,6 +39,7 @@ from collections.abc import Callable, Hashable
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Protocol, TypeVar
 
+from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.cob import check_time
 
 log = logging.getLogger(__name__)
@@ -117,7 +118,7 @@ def guarded(callback: Callable[..., object], *args: object) -> None:
         log.exception("a blinkcan handler raised; the loop goes on")
 
 
-class StuckDeadlineError(RuntimeError):
+class StuckDeadlineError(BlinkcanError, RuntimeError):
     """A simulation would spin: a twin names a deadline that ``advance()`` at that time does
     not consume, so virtual time could never move past it."""
 

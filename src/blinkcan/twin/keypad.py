@@ -123,7 +123,8 @@ class KeypadTwin(CanopenTwin):
         self._demo: DemoMode | None = None
         self._make_demo: Callable[[float], DemoMode] = DemoMode
         self._j1939 = False
-        self._generation2 = "sync" in description.features  # G1-G3 (rev 1.5, PKP-3500-MT)
+        #: errata G3: SYNC-driven LED RPDOs and key-state TPDO (rev 1.5 §10, PKP-3500-MT)
+        self._synchronous = "sync" in description.features
         #: the LED picture (PKP §11 word: red 0-11, green 12-23, blue 24-35), on and blink
         self._words = {"led_on": 0, "led_blink": 0}
         self._held: dict[str, int] = {}  # RPDO words waiting for the next SYNC (errata G3)
@@ -144,10 +145,14 @@ class KeypadTwin(CanopenTwin):
             self.on_write(view, self._led_view_hook(view), keeps_value=False)
         for prefix in self._words:
             self.on_rpdo(prefix, self._led_rpdo(prefix))
-        if self._generation2:
+        # the behaviours the description's features switch on (errata G1-G3)
+        features = self.description.features
+        if "node-id-at-once" in features:  # G1
             self.on_write("node_id", self._on_node_id)
-            self.on_write("tpdo1_transmission_type", self._on_tpdo_type)
+        if "backlight-colour-pdo" in features:  # G2: rev 1.5 §15
             self.on_rpdo("backlight_brightness", self._on_backlight_pdo)
+        if self._synchronous:  # G3
+            self.on_write("tpdo1_transmission_type", self._on_tpdo_type)
             self.on_frame(SYNC, self._on_sync)  # rev 1.5 §10
         self.on_extended(self._on_extended)
         self.on_boot(self._on_boot)
@@ -267,10 +272,10 @@ class KeypadTwin(CanopenTwin):
 
     def _rpdo_synchronous(self, name: str) -> bool:
         entry = {"led_on": "rpdo1_transmission_type", "led_blink": "rpdo2_transmission_type"}
-        return self._generation2 and self.objects.get_int(entry[name]) <= 0xF0
+        return self._synchronous and self.objects.get_int(entry[name]) <= 0xF0
 
     def _tpdo_synchronous(self) -> bool:
-        return self._generation2 and self.objects.get_int("tpdo1_transmission_type") <= 0xF0
+        return self._synchronous and self.objects.get_int("tpdo1_transmission_type") <= 0xF0
 
     def _on_tpdo_type(self, value: int, now: float) -> None:
         self._syncs = 0  # errata G3: every n-th SYNC counted from the first after the write

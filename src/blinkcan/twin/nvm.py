@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Protocol
 
 from blinkcan.devices.objects import ObjectTable, Ranges, Value
+from blinkcan.errors import BlinkcanError
 
 if sys.platform != "win32":
     import fcntl
@@ -51,7 +52,7 @@ VERSION = 1
 _MKSTEMP_SUFFIX = re.compile(r"[a-z0-9_]{8}")
 
 
-class NvmError(ValueError):
+class NvmError(BlinkcanError, ValueError):
     """A non-volatile memory file that cannot be used; the message names the file."""
 
 

@@ -37,16 +37,17 @@ from blinkcan.web.guard import REQUEST_TIMEOUT_S, BodyError, Guard, json_body
 MAX_UPDATES_PER_S = 30
 FRAMES_KEPT = 20
 
-#: action -> (device kinds, argument, what it does with (twin, value, now))
-ACTIONS: dict[str, tuple[tuple[str, ...], str | None, Callable[[Any, Any, float], object]]] = {
-    "press": (("keypad",), "key", lambda t, v, now: t.press(v, now)),
-    "release": (("keypad",), "key", lambda t, v, now: t.release(v, now)),
-    "blow_fuse": (("keybox",), "pin", lambda t, v, now: t.blow_fuse(v, now)),
-    "replace_fuse": (("keybox",), "pin", lambda t, v, now: t.replace_fuse(v, now)),
-    "input_high": (("keybox",), "pin", lambda t, v, now: t.set_input(v, True, now)),
-    "input_low": (("keybox",), "pin", lambda t, v, now: t.set_input(v, False, now)),
-    "power_off": (("keypad", "keybox"), None, lambda t, v, now: t.power_off()),
-    "power_on": (("keypad", "keybox"), None, lambda t, v, now: t.power_on(now)),
+#: action -> (the part of the face it acts on, what it does with (twin, value, now)); a device
+#: has the action when its face has that part ("key": keys, "pin": pins; None: every device)
+ACTIONS: dict[str, tuple[str | None, Callable[[Any, Any, float], object]]] = {
+    "press": ("key", lambda t, v, now: t.press(v, now)),
+    "release": ("key", lambda t, v, now: t.release(v, now)),
+    "blow_fuse": ("pin", lambda t, v, now: t.blow_fuse(v, now)),
+    "replace_fuse": ("pin", lambda t, v, now: t.replace_fuse(v, now)),
+    "input_high": ("pin", lambda t, v, now: t.set_input(v, True, now)),
+    "input_low": ("pin", lambda t, v, now: t.set_input(v, False, now)),
+    "power_off": (None, lambda t, v, now: t.power_off()),
+    "power_on": (None, lambda t, v, now: t.power_on(now)),
 }
 #: argument -> how many of it a model's face has
 _COUNTS: dict[str, Callable[[Face], int]] = {"key": lambda f: f.keys, "pin": lambda f: f.pins}
@@ -133,7 +134,6 @@ class Panel:
         if not isinstance(request, dict):
             raise ValueError("send a JSON object: {node, action, key|pin}")
         twin = self.twin(request.get("node"))
-        kind = twin.description.kind
         action = request.get("action")
         if action in FACE_ACTIONS:
             arguments = _face_arguments(twin.description.face, action, request)
@@ -143,13 +143,14 @@ class Panel:
         if action not in ACTIONS:
             known = ", ".join([*ACTIONS, *FACE_ACTIONS])
             raise ValueError(f"unknown action {action!r}; known: {known}")
-        kinds, argument, perform = ACTIONS[action]
-        if kind not in kinds:
-            raise ValueError(f"a {kind} has no action {action!r}")
+        argument, perform = ACTIONS[action]
         value = None
         if argument is not None:
-            value = request.get(argument)
             low, high = 1, _COUNTS[argument](twin.description.face)
+            if high < low:
+                raise ValueError(f"a {twin.description.title} has no action {action!r} "
+                                 f"(it has no {argument}s)")
+            value = request.get(argument)
             if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
                 raise ValueError(f"{argument} must be {low}..{high}, not {value!r}")
         self.emulator.run(lambda now: perform(twin, value, now))

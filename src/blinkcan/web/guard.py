@@ -29,6 +29,8 @@ from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 from uvicorn.protocols.http.h11_impl import H11Protocol
 
+from blinkcan.errors import BlinkcanError
+
 REQUEST_TIMEOUT_S = 10.0
 MAX_BODY_BYTES = 16 * 1024
 _LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "[::1]", "::1"})
@@ -105,7 +107,7 @@ class Guard:
         await self.app(scope, receive, send)
 
 
-class BodyError(ValueError):
+class BodyError(BlinkcanError, ValueError):
     """A request body the panel refuses; ``status`` is the HTTP status to answer with."""
 
     def __init__(self, status: int, reason: str) -> None:

@@ -1,0 +1,12 @@
+"""The one root of blinkcan's errors: ``except blinkcan.BlinkcanError`` catches every error
+blinkcan raises on its own account (as python-can's ``CanError`` and cantools' ``Error``).
+
+Errors callers already catch by a built-in class keep it as a second base (``NvmError`` is a
+``ValueError`` too), so both ``except`` clauses work. Imports nothing: every layer may use it.
+"""
+
+from __future__ import annotations
+
+
+class BlinkcanError(Exception):
+    """Base class of every error blinkcan defines."""

@@ -1,0 +1,70 @@
+"""Events into rows: what changed is a row per key or pin, a repeat is one "unchanged" row,
+a boot-up starts the picture again; times no timestamp carries have no date."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from fsspec.implementations.memory import MemoryFileSystem
+
+from blinkcan.decode import Decoder
+from blinkcan.devices.registry import describe_device
+from blinkcan.fleet.rows import Detail, EventRows
+from blinkcan.fleet.writer import PartitionWriter
+from blinkcan.protocol import Frame
+from blinkcan.protocol.cob import HEARTBEAT
+
+
+def _rows(frames: list[Frame]) -> list[list[Detail]]:
+    keypad, keybox = describe_device("keypad"), describe_device("keybox")
+    decoder = Decoder({keypad.default_node_id: keypad, keybox.default_node_id: keybox})
+    rows = EventRows(decoder)
+    return [rows.rows(decoder.decode(frame, 1.0)).details for frame in frames]
+
+
+def test_led_rows_say_which_keys_changed_colour() -> None:
+    keypad = describe_device("keypad")
+    layout, node = keypad.pdo("led_on"), keypad.default_node_id
+    red_1_3 = Frame(layout.cob_id(node), layout.encode({"red": 0b101, "green": 0b001, "blue": 0}))
+    red_3 = Frame(layout.cob_id(node), layout.encode({"red": 0b100, "green": 0, "blue": 0}))
+    boot = Frame(HEARTBEAT + node, b"\x00")
+    assert _rows([red_1_3, red_1_3, red_3, boot, red_3]) == [
+        [Detail("led", key=1, state="on", colour="yellow"),
+         Detail("led", key=3, state="on", colour="red")],
+        [Detail("led", state="unchanged")],
+        [Detail("led", key=1, state="on", colour="off")],
+        [Detail("heartbeat", state="boot-up")],
+        [Detail("led", key=3, state="on", colour="red")],  # dark again after the boot-up
+    ]
+
+
+def test_output_and_fault_rows_say_which_pins_changed() -> None:
+    keybox = describe_device("keybox")
+    outputs, faults, node = keybox.pdo("outputs"), keybox.pdo("faults"), keybox.default_node_id
+    high_4 = Frame(outputs.cob_id(node), outputs.encode({"off": 0, "high": 0b1000}))
+    off_wins = Frame(outputs.cob_id(node), outputs.encode({"off": 0b1000, "high": 0b1000}))
+    fault_4 = Frame(faults.cob_id(node), faults.encode({"faults": 0b1000}))
+    none = Frame(faults.cob_id(node), faults.encode({"faults": 0}))
+    assert _rows([high_4, high_4, off_wins, fault_4, fault_4, none]) == [
+        [Detail("output", pin=4, state="high")],
+        [Detail("output", state="unchanged")],
+        [Detail("output", pin=4, state="off")],  # KBX §17: OFF wins
+        [Detail("fault", pin=4, state="fault")],
+        [Detail("fault", state="unchanged", value=1)],  # the periodic message (KBX §25)
+        [Detail("fault", pin=4, state="cleared")],
+    ]
+
+
+@pytest.mark.parametrize(("seconds", "expected"), [
+    (1_780_271_999.999999, (1_780_271_999_999_999, "2026-05-31")),
+    (1_780_272_000.0, (1_780_272_000_000_000, "2026-06-01")),
+    (-1.0, (-1_000_000, "1969-12-31")),
+    (math.nan, (None, "unknown")),
+    (math.inf, (None, "unknown")),
+    (1e12, (None, "unknown")),  # after year 9999
+])
+def test_times_and_their_dates(seconds: float, expected: tuple[int | None, str]) -> None:
+    writer = PartitionWriter(MemoryFileSystem(), "/x", "x.parquet", "source")
+    writer.time_and_date(1_780_271_000.0)  # a day seen before: the fast path
+    assert writer.time_and_date(seconds) == expected
