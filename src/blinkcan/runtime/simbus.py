@@ -129,13 +129,15 @@ class SimulatedBus(can.BusABC):
         self._received: collections.deque[TimedFrame] = collections.deque(maxlen=100_000)
         self._listeners: list[FrameHandler] = []
         self._detach = network.attach(self._on_frame)
-        #: the HostBus serving this endpoint (shared by every driver on it)
-        self.host: Any = None
 
     def add_frame_listener(self, handler: FrameHandler) -> Callable[[], None]:
         """Call ``handler(frame, now)`` for every frame this endpoint receives."""
         self._listeners.append(handler)
         return lambda: self._listeners.remove(handler) if handler in self._listeners else None
+
+    def frame_listeners(self) -> list[FrameHandler]:
+        """The handlers :meth:`add_frame_listener` attached."""
+        return list(self._listeners)
 
     def _on_frame(self, frame: Frame, now: float) -> None:
         self._received.append(_timed(TimedFrame, (now, frame)))
