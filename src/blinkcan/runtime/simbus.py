@@ -54,12 +54,10 @@ from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
-from blinkcan.runtime.virtual_waits import install_virtual_waits
+from blinkcan.runtime.virtual_waits import RECV_FOREVER, install_virtual_waits
 
 log = logging.getLogger(__name__)
 FrameHandler = Callable[[Frame, float], None]
-#: virtual seconds ``recv()`` without a timeout waits at most
-RECV_FOREVER = 60.0
 #: wall seconds between two looks of a parked notifier thread at whether its notifier stopped
 _PARKED_POLL = 0.005
 #: a wire rule: for a frame, None (unchanged), "drop", or extra delay in seconds
