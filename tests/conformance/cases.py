@@ -60,8 +60,6 @@ CASES = _cases()
 KNOWN_FAILURES: dict[str, tuple[Callable[[Case], bool], str]] = {
     "heartbeat": (lambda case: case.protocol == "j1939",
                   "issue 20 item 5: over J1939 the driver has no heartbeat or health events"),
-    "cli-info": (lambda case: case.protocol == "j1939",
-                 "issue 20 item 2: keypad --protocol j1939 info asks a CANopen SDO"),
 }
 
 

@@ -122,7 +122,19 @@ def _done(target: Target, what: str) -> None:
     click.echo(f"{kind} {node_id:02X}h: {what}")
 
 
-def _info(device: Keypad | Keybox) -> None:
+def _info(device: Any) -> None:
+    link = getattr(device, "j1939", None)
+    if link is not None:  # J1939 mode answers no SDO: what it tells over J1939 (§11)
+        try:
+            revision = link.software_revision()
+        except TimeoutError:
+            raise click.ClickException(f"no keypad heard at {link.address:02X}h "
+                                       "(no software revision reply)") from None
+        for name, value in (("model", device.description.model), ("protocol", "j1939"),
+                            ("source_address", f"{link.address:02X}h"),
+                            ("software_revision", revision)):
+            click.echo(f"{name:<17} {value}")
+        return
     identity = device.identity()
     for name in ("node_id", "model", "model_id", "device_name", "hardware_version",
                  "software_version", "serial_number"):
