@@ -91,3 +91,37 @@ def test_scan_lists_j1939_keypads_beside_canopen_devices() -> None:
     assert "30h" in row
     assert "V2.6" in row
     assert "claimed" in row
+
+
+def test_one_led_command_leaves_the_other_keys_alone(
+        bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    """Issue 20 item 1: each run names one key and changes it only (§7a)."""
+    channel, emulator, twin = bench
+    bus = ["-i", "virtual", "-c", channel]
+    run("keypad", "--protocol", "j1939", *bus, "led", "5", "green")
+    run("keypad", "--protocol", "j1939", *bus, "led", "3", "red")
+    commanded = [key["colour"] for key in emulator.snapshot(twin)["commanded"]]
+    assert commanded[2] == "red"
+    assert commanded[4] == "green"
+
+
+def test_info_over_j1939(bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    """Issue 20 item 2: the software revision (§11), address and claim, not a CANopen SDO."""
+    channel, _emulator, _twin = bench
+    output = run("keypad", "--protocol", "j1939", "-i", "virtual", "-c", channel, "info")
+    assert "address           21h (J1939)" in output
+    assert "software_version  V2.6" in output
+    assert "claim             not claimed" in output
+    assert "SDO" not in output
+    assert "1000h" not in output
+
+
+def test_no_keypad_at_the_address_is_one_line(
+        bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    """Issue 20 item 3: J1939 commands are unacknowledged; the CLI hears the keypad first."""
+    channel, emulator, twin = bench
+    result = CliRunner().invoke(cli, ["keypad", "--address", "0x30", "-i", "virtual", "-c",
+                                      channel, "led", "3", "red"])
+    assert result.exit_code == 1
+    assert result.output == "Error: no keypad heard at 30h\n"
+    assert emulator.snapshot(twin)["commanded"][2]["colour"] == "off"

@@ -10,8 +10,9 @@ import can
 import pytest
 
 from blinkcan import Keypad
-from blinkcan.host import KeyEvent
-from blinkcan.host.j1939_keypad import look_of, scan_j1939
+from blinkcan.devices.registry import models
+from blinkcan.host import KeyEvent, NoDeviceError
+from blinkcan.host.j1939_keypad import KeypadGoneError, look_of, scan_j1939
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.testing import Rig, frames_of
@@ -31,12 +32,12 @@ def colours(twin: KeypadTwin) -> list[tuple[str, list[str]]]:
 def test_leds_brightness_and_backlight_over_j1939(rig: Rig) -> None:
     twin = rig.add(KeypadTwin(protocol="j1939"))
     keypad = Keypad(rig.bus, protocol="j1939", address=0x21)
-    keypad.set_led(3, "red")
     rig.settle()
-    sent = frames_of(rig.frames)  # the first time, the whole picture (§7a)
-    assert len(sent) == 12
-    assert sent[2] == Frame(0x18EF2100, bytes.fromhex("041B0103010100FF"), extended=True)
-    assert sent[0] == Frame(0x18EF2100, bytes.fromhex("041B0101000000FF"), extended=True)
+    before = len(rig.frames)
+    keypad.set_led(3, "red")
+    rig.settle()  # the key named, nothing else (§7a): the other keys keep what they show
+    assert frames_of(rig.frames[before:]) == [
+        Frame(0x18EF2100, bytes.fromhex("041B0103010100FF"), extended=True)]
     before = len(rig.frames)
     keypad.set_led(11, "red", blink="green")
     keypad.set_led(2, "off", blink="blue")
@@ -90,7 +91,10 @@ def test_settings_go_as_j1939_commands(rig: Rig) -> None:
     assert keypad.j1939 is not None
     assert keypad.j1939.software_revision() == "V2.6"  # §11
     with pytest.raises(ValueError, match="CANopen setting"):
-        keypad.write("producer_heartbeat_time", 100)
+        keypad.write("node_id", 0x16)
+    keypad.write("producer_heartbeat_time", 100)  # §18: the J1939 heartbeat, x 10 ms
+    rig.settle()
+    assert twin.snapshot()["j1939"]["heartbeat_ms"] == 100
     keypad.close()
 
 
@@ -182,3 +186,174 @@ def wait(condition: Callable[[], object], timeout: float = 3.0) -> None:
     while not condition():
         assert time.monotonic() < end, "condition not met in time"
         time.sleep(0.01)
+
+
+# -- issue 20: every model whose description declares "j1939", from the registry -------------
+
+J1939_MODELS = [pytest.param(m.name, g, id=f"{m.name}@{g}") for m in models()
+                for g in m.generations if "j1939" in m.description(g).features]
+CLAIM_ON = "041B7401FFFFFFFF"  # §20 address claim at boot
+HEARTBEAT_100_MS = "041B75010AFFFFFF"  # §18
+
+
+def configured(rig: Rig, twin: KeypadTwin, *commands: str) -> KeypadTwin:
+    """``twin`` with the J1939 ``commands`` (hex) stored, then powered on again."""
+    for data in commands:
+        rig.act(lambda now, data=data: twin.receive(  # type: ignore[misc]
+            Frame(0x18EF2100, bytes.fromhex(data), extended=True), now))
+    rig.power_cycle(twin)
+    rig.advance(2.0)  # the startup show and the claim are over
+    return twin
+
+
+def j1939_pair(rig: Rig, model: str, generation: str, claim: bool = False
+               ) -> tuple[KeypadTwin, Keypad]:
+    """A keypad twin of ``model`` in J1939 mode (with address claim and a 100 ms heartbeat
+    when ``claim``) and a driver of it."""
+    twin = rig.add(KeypadTwin(model=model, manual=generation, protocol="j1939"))
+    rig.settle()
+    if claim:
+        configured(rig, twin, CLAIM_ON, HEARTBEAT_100_MS)
+    keypad = Keypad(rig.bus, model=model, generation=generation, protocol="j1939")
+    rig.settle()
+    return twin, keypad
+
+
+def commands_to(rig: Rig, start: int, address: int) -> list[Frame]:
+    return [f for f in frames_of(rig.frames[start:])
+            if f.extended and f.can_id & 0xFFFF00 == (0xEF00 | address) << 8]
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+def test_set_led_changes_the_key_it_names_and_nothing_else(rig: Rig, model: str,
+                                                            generation: str) -> None:
+    """Issue 20 item 1: §7a single-LED commands for single LEDs; no picture of all keys."""
+    twin, first = j1939_pair(rig, model, generation)
+    first.set_led(5, "green")
+    first.close()
+    second = Keypad(rig.bus, model=model, generation=generation, protocol="j1939")
+    before = len(rig.frames)
+    second.set_led(3, "red")
+    rig.settle()
+    assert commands_to(rig, before, 0x21) == [
+        Frame(0x18EF2100, bytes.fromhex("041B0103010100FF"), extended=True)]
+    assert [k["colour"] for k in twin.snapshot()["commanded"]][2:5] == ["red", "off", "green"]
+    before = len(rig.frames)
+    second.clear_leds()  # a full picture when the caller asks for one
+    rig.settle()
+    assert len(commands_to(rig, before, 0x21)) == len(second.description.face.led_keys)
+    second.close()
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+def test_no_keypad_at_the_address_is_no_device(rig: Rig, model: str, generation: str) -> None:
+    """Issue 20 item 3: J1939 commands are unacknowledged, so the driver hears the keypad
+    first (§11 revision, §20 claim) and sends no command to an empty address."""
+    rig.add(KeypadTwin(model=model, manual=generation, protocol="j1939"))
+    rig.settle()
+    before = len(rig.frames)
+    with pytest.raises(NoDeviceError, match="no keypad heard at 30h"):
+        Keypad(rig.bus, model=model, generation=generation, protocol="j1939", address=0x30)
+    rig.settle()
+    assert not [f for f in commands_to(rig, before, 0x30) if f.data[2] != 0x2A]
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+def test_identity_over_j1939(rig: Rig, model: str, generation: str) -> None:
+    """Issue 20 item 2: revision (§11), NAME, address, claim (§20), heartbeat (§18); no SDO."""
+    twin, keypad = j1939_pair(rig, model, generation, claim=True)
+    rig.advance(0.3)
+    before = len(rig.frames)
+    identity = keypad.identity()
+    assert (identity.address, identity.software_version, identity.claim) == (0x21, "V2.6",
+                                                                           "claimed")
+    assert identity.name == twin.snapshot()["j1939"]["name"]
+    assert identity.heartbeat is not None
+    assert "keys held: none" in identity.heartbeat
+    assert not [f for f in frames_of(rig.frames[before:]) if not f.extended]  # no SDO
+    keypad.close()
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+def test_the_driver_follows_its_keypad_by_name_after_a_claim(rig: Rig, model: str,
+                                                             generation: str) -> None:
+    """Issue 20 items 5 and 6 (J-5): a lower NAME claims 21h, the keypad claims 22h; the
+    driver says so, sends its commands to 22h and never to the other node."""
+    twin, keypad = j1939_pair(rig, model, generation, claim=True)
+    events: list[tuple[str, int]] = []
+    keypad.on_health(lambda e: events.append((e.kind, e.node_id)))
+    keys: list[KeyEvent] = []
+    keypad.on_key(keys.append)
+    lower = bytes(8)  # the lowest NAME there is: it wins 21h
+    rig.act(lambda now: [Frame(0x18EEFF21, lower, extended=True)])
+    rig.settle()
+    assert twin.snapshot()["j1939"]["source_address"] == 0x22
+    assert events[:2] == [("address lost", 0x21), ("moved", 0x22)]
+    before = len(rig.frames)
+    keypad.set_led(4, "blue")
+    rig.settle()
+    assert commands_to(rig, before, 0x21) == []
+    assert [f.can_id for f in commands_to(rig, before, 0x22)] == [0x18EF2200]
+    assert twin.snapshot()["commanded"][3]["colour"] == "blue"
+    rig.tap(twin, 2)
+    assert [(e.key, e.action) for e in keys] == [(2, "press"), (2, "release")]
+    keypad.close()
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+def test_a_keypad_that_cannot_claim_is_gone(rig: Rig, model: str, generation: str) -> None:
+    """Issue 20 item 6: the address went to another node and the keypad has none (J-5
+    "cannot claim"): the driver raises instead of commanding the other node."""
+    twin, keypad = j1939_pair(rig, model, generation, claim=True)
+    rig.act(lambda now: [Frame(0x18EEFF21, bytes(8), extended=True)])
+    rig.act(lambda now: [Frame(0x18EEFF22, bytes(8), extended=True)])
+    rig.settle()
+    # the keypad moved to 22h, then lost that too; the driver never sends to a taken address
+    name = twin.snapshot()["j1939"]["name"].replace(" ", "")
+    rig.act(lambda now: [Frame(0x18EEFFFE, bytes.fromhex(name), extended=True)])
+    rig.settle()
+    before = len(rig.frames)
+    with pytest.raises(KeypadGoneError, match="lost its address"):
+        keypad.set_led(4, "blue")
+    rig.settle()
+    assert commands_to(rig, before, 0x21) == commands_to(rig, before, 0x22) == []
+    keypad.close()
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+@pytest.mark.parametrize("told_by", ["claim", "heartbeat"])
+def test_leds_are_restored_after_a_power_cycle(rig: Rig, model: str, generation: str,
+                                               told_by: str) -> None:
+    """Issue 20 items 5 and 7: the keypad's claim (§20) or heartbeat counter from 00h (§18)
+    says it powered on: "boot-up", and the LEDs the driver commanded come back."""
+    twin = rig.add(KeypadTwin(model=model, manual=generation, protocol="j1939"))
+    rig.settle()
+    configured(rig, twin, CLAIM_ON if told_by == "claim" else HEARTBEAT_100_MS)
+    keypad = Keypad(rig.bus, model=model, generation=generation, protocol="j1939")
+    keypad.monitor_heartbeat(0.1) if told_by == "heartbeat" else None
+    events: list[str] = []
+    keypad.on_health(lambda e: events.append(e.kind))
+    keypad.set_led(5, "green")
+    rig.advance(0.5)
+    rig.power_cycle(twin, off_time=0.5)
+    rig.advance(2.0)  # the startup show is over
+    commanded = [k["colour"] for k in twin.snapshot()["commanded"]]
+    assert commanded[4] == "green"
+    assert commanded.count("off") == len(commanded) - 1
+    assert "boot-up" in events
+    if told_by == "heartbeat":
+        assert events.index("lost") < events.index("back")
+    keypad.close()
+
+
+def test_a_claim_answering_a_request_is_no_power_on(rig: Rig) -> None:
+    """J1939-81: claims that answer a Request for Address Claimed (a scan) are not a boot."""
+    twin = configured(rig, rig.add(KeypadTwin(protocol="j1939")), CLAIM_ON)
+    keypad = Keypad(rig.bus, protocol="j1939")
+    events: list[str] = []
+    keypad.on_health(lambda e: events.append(e.kind))
+    scan_j1939(keypad.host, listen=0.1)
+    rig.settle()
+    assert events == []
+    assert twin.snapshot()["j1939"]["address_claim"] == "claimed"
+    keypad.close()

@@ -23,6 +23,7 @@ from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.registry import identify, model, models
 from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
 from blinkcan.host.device import NoDeviceError, check_one_device
+from blinkcan.host.j1939_keypad import J1939Identity
 from blinkcan.host.registry import driver_class
 from blinkcan.protocol.j1939 import ADDRESS_MAX
 from blinkcan.protocol.sdo_client import SdoProtocolError, SdoTimeoutError
@@ -88,7 +89,7 @@ def _device(target: Target, start: bool = False) -> Iterator[Any]:
             raise click.ClickException(_explained(error, bus, node_id)) from None
         try:
             yield device
-        except (SdoError, ValueError) as error:
+        except (IdentityError, SdoError, TimeoutError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
         finally:
             device.close()
@@ -136,6 +137,12 @@ def _info(device: Any) -> None:
             click.echo(f"{name:<17} {value}")
         return
     identity = device.identity()
+    if isinstance(identity, J1939Identity):  # §11, §18, §20: what J1939 tells
+        click.echo(f"{'address':<17} {identity.address:02X}h (J1939)")
+        for name in ("model", "software_version", "name", "claim", "heartbeat"):
+            value = getattr(identity, name)
+            click.echo(f"{name:<17} {'not heard' if value is None else value}")
+        return
     for name in ("node_id", "model", "model_id", "device_name", "hardware_version",
                  "software_version", "serial_number"):
         value = getattr(identity, name)

@@ -19,6 +19,7 @@ from blinkcan.devices.colours import Channel
 from blinkcan.devices.keypad_j1939 import (
     DEFAULT_HOST_ADDRESS,
     HEADER,
+    HEARTBEAT,
     KEY_MESSAGE,
     KEY_PRESSED,
     KEYS,
@@ -31,11 +32,15 @@ from blinkcan.devices.keypad_j1939 import (
     command,
 )
 from blinkcan.host.bus import HostBus
+from blinkcan.host.device import BOOT_UP, NoDeviceError
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import (
     ADDRESS_MAX,
+    CLAIM_TIMEOUT_S,
     GLOBAL_ADDRESS,
+    NULL_ADDRESS,
     PGN_ADDRESS_CLAIMED,
+    PGN_REQUEST,
     compose_id,
     parse_id,
     request_frame,
@@ -72,13 +77,46 @@ def look_of(on: int, blink: int) -> LedLook:
     return LedLook(LedState.ALTERNATE, first, second)
 
 
+#: What the link tells the driver: a heartbeat was heard (§18; the driver's watch says "lost"
+#: and "back"), the keypad powered on (device.py's "boot-up"), lost its address, moved
+HEARD = "heartbeat"
+ADDRESS_LOST = "address lost"  # another node with a lower NAME claimed the keypad's address
+MOVED = "moved"  # the keypad claimed another address (J-5): the driver follows it there
+
+
+class KeypadGoneError(NoDeviceError):
+    """The keypad lost its address to another node's claim and has not been heard at a new
+    one (J-5): the driver sends nothing, so that it never commands the other node."""
+
+
+@dataclass(frozen=True)
+class J1939Identity:
+    """What a keypad in J1939 mode tells about itself: its source address, software revision
+    (§11), NAME (§20, hex; None when it has not claimed an address), claim state, and its last
+    heartbeat (§18; None when none was heard)."""
+
+    address: int
+    model: str
+    software_version: str
+    name: str | None
+    claim: str
+    heartbeat: str | None
+
+
 class J1939KeypadLink:
     """Frames to and from the keypad at ``address``; ``on_key(key, pressed, now)`` is called
-    on the bus's loop for each key message (§6). Thread-safe: the LED looks sent change under
-    a lock, and one software revision request is outstanding at a time."""
+    on the bus's loop for each key message (§6), ``on_health(kind, address, now)`` when the
+    keypad moves, loses its address, comes back or powers on. Thread-safe: the LED looks sent
+    change under a lock, and one software revision request is outstanding at a time.
+
+    The keypad is followed by its NAME (§20, J-5): a lower NAME claiming its address makes it
+    move, and its own claim says where; until then (or after "cannot claim") nothing is sent.
+    It powered on when it claims its address unasked, or its heartbeat counter starts at 00h
+    again (§18: +1 per message, J-6 wraps FFh to 00h)."""
 
     def __init__(self, host: HostBus, address: int, on_key: Callable[[int, bool, float], None],
-                 source: int = DEFAULT_HOST_ADDRESS) -> None:
+                 source: int = DEFAULT_HOST_ADDRESS,
+                 on_health: Callable[[str, int, float], None] | None = None) -> None:
         if not 1 <= address <= ADDRESS_MAX:
             raise ValueError(f"J1939 keypad address must be 0x01..{ADDRESS_MAX:#04x}, not "
                              f"{address:#x}")
@@ -86,24 +124,58 @@ class J1939KeypadLink:
         self.address = address
         self.source = source
         self._on_key = on_key
+        self._on_health = on_health or (lambda kind, address, now: None)
         self._looks: dict[int, LedLook] = {}
         self._looks_lock = threading.RLock()
         self._revision: str | None = None
         self._revision_signal = host.signal()
         self._revision_lock = threading.Lock()
+        self._heard_signal = host.signal()
+        #: the keypad's NAME once it claimed an address (§20), else None
+        self.name: bytes | None = None
+        #: "not claimed" (address claim off, §20), "claimed", or "lost to <NAME>"
+        self.claim = "not claimed"
+        self.gone = False
+        self.heartbeat: tuple[int, int] | None = None  # (counter, keys held) of the last one
+        self._requested_claims = -1.0  # when someone last asked for claims (answers are no boot)
         self._unsubscribe = host.subscribe_extended(self._on_frame)
 
     def close(self) -> None:
         self._unsubscribe()
 
     def send(self, name: str, *values: int) -> None:
-        """Command ``name`` of devices/keypad_j1939.py (ValueError before anything is sent)."""
+        """Command ``name`` of devices/keypad_j1939.py (ValueError before anything is sent;
+        :class:`KeypadGoneError` while the keypad has no address, J-5)."""
         data = command(name).encode(*values)
+        if self.gone:
+            raise KeypadGoneError(self._gone_text())
         self.host.send(Frame(compose_id(PGN_COMMAND, self.source, self.address, PRIORITY),
                              data, extended=True))
 
+    def _gone_text(self) -> str:
+        return (f"the J1939 keypad lost its address {self.address:02X}h ({self.claim}) and "
+                "has not claimed another: nothing sent")
+
+    def confirm(self, timeout: float) -> None:
+        """Make sure a keypad is at the address before the first command (J1939 commands are
+        unacknowledged): a Request for Address Claimed and a software revision request (§11,
+        §20); its revision, heartbeat or key message answers. :class:`NoDeviceError`
+        otherwise."""
+        self._heard_signal.clear()
+        self._requested_claims = self.host.clock()
+        self.host.send(request_frame(PGN_ADDRESS_CLAIMED, self.source, self.address))
+        self.send("software_revision")
+        if not self.host.wait(self._heard_signal, timeout):
+            raise NoDeviceError(f"no keypad heard at {self.address:02X}h")
+
+    def forget_looks(self) -> None:
+        """The keypad shows nothing now (it powered on): the next show sends every look."""
+        with self._looks_lock:
+            self._looks.clear()
+
     def show(self, looks: dict[int, LedLook], force: bool = False) -> None:
-        """Send a single-LED command for every key whose look changed."""
+        """Send a single-LED command (§7a) for every key in ``looks`` whose look changed (every
+        one with ``force``); keys not in ``looks`` are not touched."""
         with self._looks_lock:
             for key, look in sorted(looks.items()):
                 if force or self._looks.get(key) != look:
@@ -116,6 +188,10 @@ class J1939KeypadLink:
             if value:
                 self.send("key_message_period", round(value / 1000 / TIME_UNIT_S))
             self.send("periodic_key_state", int(bool(value)))
+            return
+        if name == "producer_heartbeat_time":  # §18: on and period x 10 ms; 0 = off
+            period = round(value / 1000 / TIME_UNIT_S)
+            self.send("heartbeat", int(bool(value)), period if value else 0xFF)
             return
         if name not in SETTING_COMMANDS:
             raise ValueError(f"{name} is a CANopen setting; in J1939 mode use "
@@ -134,17 +210,68 @@ class J1939KeypadLink:
                                    f"{timeout} s")
             return self._revision
 
+    def identity(self, model: str, timeout: float = 0.5) -> J1939Identity:
+        revision = self.software_revision(timeout)
+        heartbeat = None
+        if self.heartbeat is not None:
+            counter, keys = self.heartbeat
+            held = [str(key) for key in range(1, KEYS + 1) if keys >> (key - 1) & 1]
+            heartbeat = f"counter {counter:02X}h, keys held: {', '.join(held) or 'none'}"
+        return J1939Identity(self.address, model, revision,
+                             self.name.hex(" ").upper() if self.name is not None else None,
+                             self.claim, heartbeat)
+
     def _on_frame(self, frame: Frame, now: float) -> None:
         ident = parse_id(frame.can_id)
         data = frame.data
-        if ident.pgn != PGN_COMMAND or ident.source != self.address or len(data) != 8 or \
-                data[:2] != HEADER:
+        if ident.pgn == PGN_REQUEST and len(data) >= 3 and \
+                int.from_bytes(data[:3], "little") == PGN_ADDRESS_CLAIMED:
+            self._requested_claims = now  # J1939-81: claims that follow answer it
+            return
+        if ident.pgn == PGN_ADDRESS_CLAIMED and len(data) == 8:
+            self._on_claim(ident.source, bytes(data), now)
+            return
+        if ident.pgn != PGN_COMMAND or ident.source != self.address or self.gone or \
+                len(data) != 8 or data[:2] != HEADER:
             return
         if data[2] == KEY_MESSAGE and 1 <= data[3] <= KEYS:  # §6
+            self._heard_signal.set()
             self._on_key(data[3], data[4] == KEY_PRESSED, now)
         elif data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF:  # §11
             self._revision = data[3:7].rstrip(b"\x00").decode("ascii", "replace")
             self._revision_signal.set()
+            self._heard_signal.set()
+        elif data[2] == HEARTBEAT:  # §18
+            self._heard_signal.set()
+            before = self.heartbeat
+            self.heartbeat = (data[3], data[4] | (data[5] & 0x0F) << 8)
+            self._on_health(HEARD, self.address, now)
+            if data[3] == 0 and before is not None and before[0] != 0xFF:  # J-6: no wrap
+                self._on_health(BOOT_UP, self.address, now)
+
+    def _on_claim(self, source: int, name: bytes, now: float) -> None:
+        """§20, J-5: follow the keypad by its NAME."""
+        if self.name is None and source == self.address:
+            self.name = name  # the first claim from its address: the keypad's NAME
+        if name != self.name:
+            if source == self.address and not self.gone:  # a lower NAME took the address
+                self.gone = True
+                self.claim = f"lost to {name.hex(' ').upper()}"
+                self._on_health(ADDRESS_LOST, self.address, now)
+            return
+        self._heard_signal.set()
+        if source == NULL_ADDRESS:  # J-5: cannot claim, silent from now on
+            if not self.gone:
+                self._on_health(ADDRESS_LOST, self.address, now)
+            self.gone, self.claim = True, "cannot claim"
+            return
+        moved = source != self.address
+        answering = now - self._requested_claims <= CLAIM_TIMEOUT_S
+        self.address, self.gone, self.claim = source, False, "claimed"
+        if moved:
+            self._on_health(MOVED, source, now)
+        elif not answering:  # a claim nobody asked for: it powered on (§20 "at start-up")
+            self._on_health(BOOT_UP, source, now)
 
 
 @dataclass(frozen=True)

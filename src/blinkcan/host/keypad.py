@@ -45,9 +45,17 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device, NoDeviceError, WrongDeviceError
+from blinkcan.host.device import (
+    BACK,
+    BOOT_UP,
+    LOST,
+    Device,
+    HealthEvent,
+    NoDeviceError,
+    WrongDeviceError,
+)
 from blinkcan.host.events import EventSource
-from blinkcan.host.j1939_keypad import J1939KeypadLink, look_of
+from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
 from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
@@ -91,8 +99,12 @@ class Keypad(Device):
     ``long_press``: seconds a key is held before a "long press" event. ``restore``: re-send the
     LED picture after a boot-up or a watchdog trip. ``verify``: confirm that this model answers
     at ``node_id`` first (False only for a keypad that cannot answer SDO).
-    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md);
-    it answers no SDO, so nothing is confirmed then.
+    ``protocol="j1939"`` drives a keypad in J1939 mode at ``address`` (spec/pkp-2600-si-j1939.md):
+    ``verify`` then asks for its software revision and address claim (§11, §20) and raises
+    :class:`NoDeviceError` ("no keypad heard at 21h") when nothing answers. The driver follows
+    the keypad by its NAME when a claim moves it (J-5), raises
+    :class:`~blinkcan.host.j1939_keypad.KeypadGoneError` rather than command the node that took
+    its address, and restores the LEDs when its claim or heartbeat says it powered on.
     """
 
     # the model's description carries its keys, LED layout and PDOs; ``model=`` names
@@ -164,8 +176,13 @@ class Keypad(Device):
         #: the J1939 side while the keypad is in J1939 mode, else None
         self.j1939: J1939KeypadLink | None = None
         if protocol == "j1939":
-            self.confirmed = True  # J1939 keypads are not asked by SDO
+            if "j1939" not in self.description.features:
+                self.close()
+                raise ValueError(f"the {self.description.title} has no J1939 mode")
             self._use_j1939(address)
+            if verify:  # J1939 commands are unacknowledged: hear the keypad first
+                self._confirm_j1939(sdo_timeout)
+            self.confirmed = True
         else:
             self._confirm_or_close(verify)
             if verify:  # known from now on: no property reads the device later
@@ -365,9 +382,10 @@ class Keypad(Device):
             self._send_picture(force)
 
     def _send_picture(self, force: bool) -> None:
-        if self.j1939 is not None:
+        if self.j1939 is not None:  # §7a: one command per key the application named
+            named = set(self._steady) | set(self._blink)
             self.j1939.show({key: look_of(self._steady.get(key, 0), self._blink.get(key, 0))
-                             for key in range(1, self.description.face.keys + 1)}, force)
+                             for key in named}, force)
             return
         on, blink = self._pdo_frame("led_on", _masks(self._steady)), \
             self._pdo_frame("led_blink", _masks(self._blink))
@@ -493,8 +511,56 @@ class Keypad(Device):
             self._sent = None
 
     def _use_j1939(self, address: int) -> None:
-        self.j1939 = J1939KeypadLink(self.host, address, self._on_j1939_key)
+        self.j1939 = J1939KeypadLink(self.host, address, self._on_j1939_key,
+                                     on_health=self._on_j1939_health)
         self._unsubscribe.append(self.j1939.close)
+
+    def _confirm_j1939(self, timeout: float) -> None:
+        assert self.j1939 is not None
+        try:
+            self.j1939.confirm(timeout)
+        except BaseException:
+            self.close()
+            raise
+
+    def _on_j1939_health(self, kind: str, address: int, now: float) -> None:
+        """What the J1939 link heard (on the bus thread), as the health events CANopen mode
+        has: "lost"/"back" from the heartbeat (§18), "boot-up" (power-on: the LEDs are
+        restored), "address lost" and "moved" (§20, J-5)."""
+        if kind == HEARD:
+            if self.alive is False:
+                self.health.emit(HealthEvent(address, BACK, now))
+            self.alive = True
+            self._rearm()
+            return
+        self.health.emit(HealthEvent(address, kind, now))
+        if kind == BOOT_UP:
+            for timer in self._long_timers.values():
+                timer.cancel()
+            self._long_timers.clear()
+            self.pressed = frozenset()
+            if self.j1939 is not None:
+                self.j1939.forget_looks()  # it powers on with its LEDs off
+            if self.restore and self.confirmed:
+                self.host.spawn(self._restore_j1939)
+
+    def _lost(self) -> None:
+        if self.j1939 is None:
+            super()._lost()
+            return
+        self._watch = None
+        if self.alive is not False:
+            self.alive = False
+            self.health.emit(HealthEvent(self.j1939.address, LOST, self.host.clock()))
+
+    def identity(self) -> Any:
+        """The CANopen :class:`Identity` (1000h, 1018h, 100Bh, ...) or, in J1939 mode, a
+        :class:`J1939Identity`: what the keypad tells over J1939, software revision (§11),
+        NAME and claim (§20), heartbeat (§18). (Typed Any: which one depends on the protocol
+        the keypad speaks now.)"""
+        if self.j1939 is not None:
+            return self.j1939.identity(self.description.title, self.sdo.timeout)
+        return super().identity()
 
     def _restore_j1939(self) -> None:
         with self._picture_lock:

@@ -7,25 +7,61 @@ python-can's ``BusABC`` interface, so drivers and application code take it like 
 Emulator and the host drivers attach frame handlers directly and skip ``can.Message``.
 
 Fault injection lives on the wire: rules that drop or delay frames, and a bus that goes away.
+
+Other libraries on a :class:`SimulatedBus` (python-canopen's ``Network``, cantools' ``Tester``, a
+plain ``can.Notifier``) stay in simulated time:
+
+- **A ``can.Notifier`` put on the bus is driven by the simulation, not by its thread.** python-can
+  asks a bus for ``fileno()`` while it registers a notifier; the bus adopts the notifier there
+  (in the caller's thread, at a known virtual time) and from then on hands every frame it
+  receives to the notifier's listeners itself, in simulation order, at the frame's virtual
+  time (``msg.timestamp``). The notifier's own thread still starts and calls ``recv()``; a call
+  from an adopted notifier's thread is parked (it reads nothing and runs nothing) until that
+  notifier is stopped or the bus shuts down, so no second thread ever touches the simulation.
+  Why this and not a python-can interface of our own: every library takes a bus *object*
+  (``canopen.Network(bus)``, ``Tester(..., bus)``, ``Notifier(bus, ...)``), so the rig's bus
+  works as written; an interface opened by name would need a process-wide name-to-rig table
+  and would still leave the notifier's thread reading the simulation from another thread.
+  A listener runs as on a real bus: one frame at a time, and while it runs (a blocking call in
+  a listener) the notifier hears nothing more, as its real thread would not; frames that
+  arrive meanwhile are handed over when it returns. A notifier hears the frames that reach the
+  bus after it was made; ``shutdown()`` stops the notifiers still reading the bus.
+  A notifier with an asyncio loop is refused (its listeners would run outside virtual time).
+- **``send_periodic`` runs on the simulation's clock** (python-canopen's SYNC producer and RPDO
+  ``start()``, cantools' periodic messages), not on a thread.
+- The blocking waits of those libraries (an SDO reply, a heartbeat) run the simulation in
+  virtual time: :mod:`blinkcan.runtime.virtual_waits`, installed while the bus has adopted a
+  notifier and undone when it shuts down.
 """
 
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable
+import logging
+import threading
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any, NamedTuple
 
 import can
+from can.broadcastmanager import (
+    LimitedDurationCyclicSendTaskABC,
+    ModifiableCyclicTaskABC,
+    RestartableCyclicTaskABC,
+)
 
 from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
+from blinkcan.runtime.virtual_waits import install_virtual_waits
 
+log = logging.getLogger(__name__)
 FrameHandler = Callable[[Frame, float], None]
 #: virtual seconds ``recv()`` without a timeout waits at most
 RECV_FOREVER = 60.0
+#: wall seconds between two looks of a parked notifier thread at whether its notifier stopped
+_PARKED_POLL = 0.005
 #: a wire rule: for a frame, None (unchanged), "drop", or extra delay in seconds
 Rule = Callable[[Frame], "str | float | None"]
 
@@ -116,8 +152,9 @@ class SimulatedBus(can.BusABC):
     """One endpoint of a :class:`SimulatedNetwork`, with python-can's bus interface.
 
     ``recv(timeout)`` runs the simulation until a frame arrives or ``timeout`` virtual seconds
-    passed (``recv()`` with no timeout: at most :data:`RECV_FOREVER`). Do not give it to a
-    ``can.Notifier``: the simulation has no threads.
+    passed (``recv()`` with no timeout: at most :data:`RECV_FOREVER`). A ``can.Notifier`` on it
+    is driven by the simulation (see the module docstring), and ``send_periodic`` runs on the
+    virtual clock.
     """
 
     def __init__(self, network: SimulatedNetwork, channel: str = "simulated",
@@ -131,6 +168,15 @@ class SimulatedBus(can.BusABC):
         self._detach = network.attach(self._on_frame)
         #: the HostBus serving this endpoint (shared by every driver on it)
         self.host: Any = None
+        #: the can.Notifiers this bus delivers to (stopped ones are dropped on the next frame)
+        self._notifiers: list[can.Notifier] = []
+        #: every notifier adopted (their threads are recognised until they stop)
+        self._adopted: list[can.Notifier] = []
+        #: messages that came while a notifier listener was running, handed over after it
+        self._held: collections.deque[can.Message] = collections.deque()
+        self._delivering = False
+        self._closed = threading.Event()
+        self._undo_waits: list[Callable[[], None]] = []
 
     def add_frame_listener(self, handler: FrameHandler) -> Callable[[], None]:
         """Call ``handler(frame, now)`` for every frame this endpoint receives."""
@@ -138,9 +184,83 @@ class SimulatedBus(can.BusABC):
         return lambda: self._listeners.remove(handler) if handler in self._listeners else None
 
     def _on_frame(self, frame: Frame, now: float) -> None:
-        self._received.append(_timed(TimedFrame, (now, frame)))
+        notifiers = self._notifiers
+        if notifiers:
+            self._notify(frame, now)
+        else:
+            self._received.append(_timed(TimedFrame, (now, frame)))
         for listener in self._listeners:
             listener(frame, now)
+
+    # -- can.Notifier, driven by the simulation ---------------------------------------------
+
+    def fileno(self) -> int:
+        """python-can asks this while it registers a ``can.Notifier`` on the bus: the bus
+        adopts it here, then answers as a bus without a file descriptor does."""
+        self._adopt_notifiers()
+        raise NotImplementedError("a simulated bus has no file descriptor")
+
+    def _adopt_notifiers(self) -> None:
+        for notifier in can.Notifier.find_instances(self):
+            if notifier.stopped or any(notifier is known for known in self._adopted):
+                continue
+            if getattr(notifier, "_loop", None) is not None:
+                notifier.stop()
+                raise ValueError("a can.Notifier with an asyncio loop cannot run in simulated "
+                                 "time: make it without loop=")
+            self._notifiers.append(notifier)
+            self._adopted.append(notifier)
+            # the libraries that made it are imported now: their waits go virtual
+            self._undo_waits.append(install_virtual_waits())
+
+    def _notify(self, frame: Frame, now: float) -> None:
+        """Hand ``frame`` to the adopted notifiers' listeners, as their thread would."""
+        active = [notifier for notifier in self._notifiers if not notifier.stopped]
+        if len(active) != len(self._notifiers):
+            self._notifiers = active
+        message = to_message(frame, now)
+        if not active or not self._matches_filters(message):
+            if not active:
+                self._received.append(_timed(TimedFrame, (now, frame)))
+            return
+        self._held.append(message)
+        if self._delivering:
+            return  # a listener is running: its notifier's thread would be busy with it
+        self._delivering = True
+        try:
+            while self._held:
+                held = self._held.popleft()
+                for notifier in self._notifiers:
+                    if notifier.stopped:
+                        continue
+                    for listener in list(notifier.listeners):
+                        self.scheduler.guarded(listener, held, what="a can.Notifier listener")
+        finally:
+            self._delivering = False
+
+    @property
+    def delivering(self) -> bool:
+        """True while a notifier listener runs (its real thread would be busy: nothing more
+        reaches that notifier until the listener returns)."""
+        return self._delivering
+
+    def _parked(self) -> bool:
+        """Park a recv() from an adopted notifier's thread until that notifier stops (or the
+        bus shuts down); True when it was one. python-can names the thread after the bus and
+        lists it in the notifier's readers just after starting it: either tells."""
+        me = threading.current_thread()
+        if not me.name.endswith(f'for bus "{self.channel_info}"') and not any(
+                me in getattr(notifier, "_readers", ()) for notifier in self._adopted):
+            return False
+        while not self._closed.is_set():
+            mine = [notifier for notifier in self._adopted
+                    if me in getattr(notifier, "_readers", ())]
+            if all(notifier.stopped for notifier in mine or self._adopted):
+                break
+            self._closed.wait(_PARKED_POLL)
+        return True
+
+    # -- sending and receiving --------------------------------------------------------------
 
     def send_frame(self, frame: Frame) -> None:
         self.network.transmit(frame, self._on_frame)
@@ -153,7 +273,10 @@ class SimulatedBus(can.BusABC):
 
     def recv(self, timeout: float | None = None) -> can.Message | None:
         """The next frame received (filters applied), running the simulation until it comes
-        or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`)."""
+        or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`). Called by
+        the thread of a notifier the bus adopted: parked until that notifier stops, None."""
+        if self._adopted and self._parked():
+            return None
         received = self._received
         scheduler = self.scheduler
         if timeout is not None:  # NaN is refused; +inf waits as None does
@@ -173,9 +296,75 @@ class SimulatedBus(can.BusABC):
         message = self.recv(timeout)
         return message, True
 
+    def _send_periodic_internal(
+            self, msgs: Sequence[can.Message] | can.Message, period: float,
+            duration: float | None = None, autostart: bool = True,
+            modifier_callback: Callable[[can.Message], None] | None = None,
+    ) -> SimulatedCyclicTask:
+        return SimulatedCyclicTask(self, msgs, period, duration, autostart, modifier_callback)
+
     def clear_received(self) -> None:
         self._received.clear()
 
     def shutdown(self) -> None:
+        """Detach from the wire, stop the notifiers still reading this bus (their threads
+        end) and undo the virtual waits the bus installed."""
         self._detach()
+        self._closed.set()
+        notifiers, self._notifiers = self._notifiers, []
+        for notifier in notifiers:
+            if not notifier.stopped:
+                notifier.stop()
+        while self._undo_waits:
+            self._undo_waits.pop()()
         super().shutdown()
+
+
+class SimulatedCyclicTask(LimitedDurationCyclicSendTaskABC, ModifiableCyclicTaskABC,
+                          RestartableCyclicTaskABC):
+    """``bus.send_periodic`` on a simulated bus: a timer on the virtual clock. As python-can's
+    thread does: the first message at ``start()``, one every ``period`` after, until ``stop()``
+    or ``duration``; a send that fails (the bus is down) is logged and stops the task."""
+
+    def __init__(self, bus: SimulatedBus, messages: Sequence[can.Message] | can.Message,
+                 period: float, duration: float | None, autostart: bool,
+                 modifier_callback: Callable[[can.Message], None] | None) -> None:
+        check_time("period", period)
+        if period <= 0:
+            raise ValueError(f"period must be > 0 seconds, got {period}")
+        if duration is not None:
+            check_time("duration", duration, 0)
+        super().__init__(messages, period, duration)
+        self.bus = bus
+        self.modifier_callback = modifier_callback
+        self._timer: Any = None
+        self._index = 0
+        if autostart:
+            self.start()
+
+    def start(self) -> None:
+        if self._timer is not None:
+            return
+        scheduler = self.bus.scheduler
+        self.end_time = scheduler.clock() + self.duration if self.duration else None
+        self._timer = scheduler.call_every(self.period, self._send_next)
+
+    def stop(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _send_next(self) -> None:
+        if self.end_time is not None and self.bus.scheduler.clock() >= self.end_time:
+            self.stop()
+            return
+        message = self.messages[self._index]
+        try:
+            if self.modifier_callback is not None:
+                self.modifier_callback(message)
+            self.bus.send(message)
+        except can.CanError as error:
+            log.warning("periodic message %03Xh stopped: %s", message.arbitration_id, error)
+            self.stop()
+            return
+        self._index = (self._index + 1) % len(self.messages)

@@ -2,10 +2,16 @@
 
 ``Rig()`` makes a :class:`~blinkcan.runtime.scheduler.SimulatedScheduler`, a simulated wire
 and an :class:`~blinkcan.runtime.Emulator` on it. ``rig.bus`` is a python-can bus for your
-controller: give it to ``Keypad``/``Keybox`` (or send and receive on it yourself). Nothing
-sleeps: ``rig.advance(60)`` runs a minute of the devices' life in a fraction of a second, a
-driver call that waits for a reply runs the simulation until the reply (or its timeout, in
-virtual seconds), and the same scenario gives the same frames at the same times every run.
+controller, whatever it is written with: give it to ``Keypad``/``Keybox``, send and receive on
+it yourself, or hand it to another library as it is: ``canopen.Network(rig.bus).connect()``,
+a cantools ``Tester``, a ``can.Notifier`` with your listeners. The rig drives their notifier in
+your thread, in simulation order, and their blocking waits (an SDO reply, a heartbeat,
+``Tester.expect``) run the simulation in virtual time (``runtime.simbus`` and
+``runtime.virtual_waits`` say how; ``rig.close()`` stops those notifiers and puts the waits
+back). Nothing sleeps: ``rig.advance(60)`` runs a minute of the devices' life in a fraction
+of a second, a driver call that waits for a reply runs the simulation until the reply (or
+its timeout, in virtual seconds), and the same scenario gives the same frames at the same
+times every run.
 
 Fault injection is here in one place: power, fuses, inputs, keys, heartbeats, frames dropped or
 delayed, an SDO server too busy to answer, a bus that goes away. Every fault and input call

@@ -165,7 +165,7 @@ class CanopenTwin:
 
     @property
     def nmt_state(self) -> NmtState:
-        return self._nmt
+        return self._nmt_state  # not through _nmt: behaviour hooks read this on every write
 
     @property
     def _nmt(self) -> NmtState:
