@@ -58,8 +58,6 @@ CASES = _cases()
 
 #: (check, which cases) -> why it fails today (the issue item that fixes it)
 KNOWN_FAILURES: dict[str, tuple[Callable[[Case], bool], str]] = {
-    "heartbeat": (lambda case: case.protocol == "j1939",
-                  "issue 20 item 5: over J1939 the driver has no heartbeat or health events"),
 }
 
 

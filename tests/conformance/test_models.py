@@ -290,7 +290,8 @@ def test_the_cli_info_names_it(case: Case) -> None:
     with _live(case) as (bus, _, _, where):
         result = _run(case.model.kind, *where, "info", *bus)
     assert result.exit_code == 0, result.output
-    assert case.description.model in result.output
+    description = case.description
+    assert description.model in result.output or description.title in result.output
 
 
 # -- the files other tools read ------------------------------------------------------------------

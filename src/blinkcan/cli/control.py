@@ -124,18 +124,6 @@ def _done(target: Target, what: str) -> None:
 
 
 def _info(device: Any) -> None:
-    link = getattr(device, "j1939", None)
-    if link is not None:  # J1939 mode answers no SDO: what it tells over J1939 (§11)
-        try:
-            revision = link.software_revision()
-        except TimeoutError:
-            raise click.ClickException(f"no keypad heard at {link.address:02X}h "
-                                       "(no software revision reply)") from None
-        for name, value in (("model", device.description.model), ("protocol", "j1939"),
-                            ("source_address", f"{link.address:02X}h"),
-                            ("software_revision", revision)):
-            click.echo(f"{name:<17} {value}")
-        return
     identity = device.identity()
     if isinstance(identity, J1939Identity):  # §11, §18, §20: what J1939 tells
         click.echo(f"{'address':<17} {identity.address:02X}h (J1939)")
