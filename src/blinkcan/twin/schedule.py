@@ -31,9 +31,23 @@ def at(origin: float, count: int) -> float:
 
 
 
+#: the most periods a late :class:`Ticker` makes up for at one wake-up (the one due included)
+CATCH_UP_PERIODS = 4
+
+
 class Ticker:
-    """A periodic event due at ``origin + k x period`` (k = 1, 2, ...; whole ticks). After a
-    stall it starts again from the time it was late at: no drift, and no burst of catch-up."""
+    """A periodic event due at ``origin + k x period`` (k = 1, 2, ...; whole ticks).
+
+    The schedule is a device's clock and is kept however late the caller wakes: a wake-up
+    ``k`` periods late owes the ``k`` periods' events, sent late (as python-can's
+    ``send_periodic`` does) rather than dropped, and the next one stays on the schedule. Only
+    the last :data:`CATCH_UP_PERIODS` are made up for; older ones are skipped. Why the bound:
+    a real device's transmit queue holds a few frames, not a stall's worth, and a host that
+    fell far behind must not answer with a burst (46 twins x 2 timers x a 1 s stall would be
+    9,200 frames at one instant, a second of a full 1 Mbit/s bus), which would only make the
+    next wake-ups later still. A few periods absorb the usual hiccups of a real-time loop (a
+    GC pause, an OS time slice) without losing a frame.
+    """
 
     __slots__ = ("_count", "_origin", "_ticks", "due")
 
@@ -71,21 +85,44 @@ class Ticker:
             self._origin, self._count = self.due, 0
         self._ticks = period
 
-    def fire(self, now: float) -> bool:
-        """True when the event is due by ``now``; it is then due next strictly after ``now``."""
+    def overdue(self, now: float) -> int:
+        """How many of its periods are due by ``now`` (0: not due), at most
+        :data:`CATCH_UP_PERIODS`; nothing changes."""
+        return min(self._periods_due(now), CATCH_UP_PERIODS)
+
+    def fire(self, now: float) -> int:
+        """The number of events owed by ``now`` (:meth:`overdue`; 0, false, when not due);
+        the event is then due next strictly after ``now``, on the same schedule."""
         due = self.due
         if due is None or now < due:
-            return False
+            return 0
         if self._ticks <= 0:
             self.due = None
-            return True
-        self._count += self._ticks
-        following = at(self._origin, self._count)
-        if following <= now:  # late: start again from now
-            self._origin, self._count = now, self._ticks
-            following = at(now, self._ticks)
-        self.due = following
-        return True
+            return 1
+        last = self._last_due_count(now)
+        owed = min((last - self._count) // self._ticks + 1, CATCH_UP_PERIODS)
+        self._count = last + self._ticks
+        self.due = at(self._origin, self._count)  # > now: ``last`` is the last one due
+        return owed
+
+    def _periods_due(self, now: float) -> int:
+        due = self.due
+        if due is None or now < due:
+            return 0
+        if self._ticks <= 0:
+            return 1
+        return (self._last_due_count(now) - self._count) // self._ticks + 1
+
+    def _last_due_count(self, now: float) -> int:
+        """The count of the last tick of the schedule at or before ``now`` (the due one is)."""
+        step, origin = self._ticks, self._origin
+        periods = math.floor((now - at(origin, self._count)) * TICKS_PER_S / step)
+        last = self._count + step * max(0, periods)
+        while at(origin, last + step) <= now:  # the estimate rounded down
+            last += step
+        while last > self._count and at(origin, last) > now:  # ... or up
+            last -= step
+        return last
 
 
 def milliseconds(count: int) -> int:
