@@ -32,7 +32,7 @@ def at(origin: float, count: int) -> float:
 
 
 #: the most periods a late :class:`Ticker` makes up for at one wake-up (the one due included)
-CATCH_UP_PERIODS = 4
+CATCH_UP_PERIODS = 32
 
 
 class Ticker:
@@ -41,12 +41,13 @@ class Ticker:
     The schedule is a device's clock and is kept however late the caller wakes: a wake-up
     ``k`` periods late owes the ``k`` periods' events, sent late (as python-can's
     ``send_periodic`` does) rather than dropped, and the next one stays on the schedule. Only
-    the last :data:`CATCH_UP_PERIODS` are made up for; older ones are skipped. Why the bound:
-    a real device's transmit queue holds a few frames, not a stall's worth, and a host that
-    fell far behind must not answer with a burst (46 twins x 2 timers x a 1 s stall would be
-    9,200 frames at one instant, a second of a full 1 Mbit/s bus), which would only make the
-    next wake-ups later still. A few periods absorb the usual hiccups of a real-time loop (a
-    GC pause, an OS time slice) without losing a frame.
+    the last :data:`CATCH_UP_PERIODS` are made up for; older ones are skipped, the schedule
+    still kept. Why a bound, and why 32: a stall of a loaded host's real-time loop (GC, OS
+    time slices on a busy machine) lasts tens to a few hundred milliseconds, which 32 periods
+    of the devices' usual 10 ms cover, so no frame is lost (measured: at 4 or 8, frames were
+    still dropped on a loaded 2-core machine, benchmarks/emulator_capacity.py); a longer stall
+    means the host fell behind for good, and making all of it up would be an unbounded burst
+    of stale frames per timer that only makes the next wake-ups later still.
     """
 
     __slots__ = ("_count", "_origin", "_ticks", "due")
