@@ -116,6 +116,8 @@ class Emulator:
         self._routes_seen: list[object] = [None] * len(self.twins)
         self._index_dirty = True
         self._stuck_reported: set[int] = set()
+        #: frames that could not be sent since the last one that could (logged once, counted)
+        self._failing_sends = 0
         #: optional tap: ``on_frame(frame, sent, now)`` for every frame sent or received
         self.on_frame: Callable[[Frame, bool, float], object] | None = None
 
@@ -150,6 +152,10 @@ class Emulator:
             self._reader = None
         if not self.scheduler.simulated:
             self.scheduler.stop()
+        with self._lock:
+            failing, self._failing_sends = self._failing_sends, 0
+        if failing:
+            log.warning("%d frames could not be sent", failing)
 
     def __enter__(self) -> Emulator:
         return self.start()
@@ -340,11 +346,18 @@ class Emulator:
                     self._own.sent(frame, now)
                     self.bus.send(to_message(frame, now))
                 self.stats.frames_sent += 1
+                if self._failing_sends:
+                    log.warning("bus sends again after %d frames could not be sent",
+                                self._failing_sends)
+                    self._failing_sends = 0
                 if self.on_frame is not None:
                     self.on_frame(frame, True, now)
             except can.CanError as error:
                 self.stats.send_errors += 1
-                log.warning("send failed for %r: %s", frame, error)
+                self._failing_sends += 1
+                if self._failing_sends == 1:  # a shut-down bus fails every frame: log once
+                    log.warning("send failed for %r: %s (further failures are counted, "
+                                "reported when it sends again or stops)", frame, error)
             self._deliver(frame, source, now)
 
     def _reschedule(self, i: int) -> None:
