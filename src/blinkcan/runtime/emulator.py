@@ -133,8 +133,7 @@ class Emulator:
             self._detach = None
         if self._owns_port:
             self.scheduler.stop()
-        with self._lock:
-            failing, self._failing_sends = self._failing_sends, 0
+        failing, self._failing_sends = self._failing_sends, 0  # the loop is stopped
         if failing:
             log.warning("%d frames could not be sent", failing)
 
