@@ -144,6 +144,8 @@ def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame
                     except ValueError:
                         pass
                     else:
+                        if timestamp - timestamp:  # nan or inf: x - x is 0.0 for finite x
+                            _not_finite(stamp)
                         can_id, extended = plain
                         yield timestamp, new(Frame, (can_id, payload, extended))
                         continue
@@ -151,4 +153,12 @@ def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame
                 continue
             message = _python_can(line)
             if message is not None:
+                if message.timestamp - message.timestamp:
+                    _not_finite(fields[0])
                 yield message.timestamp, message
+
+
+def _not_finite(stamp: str) -> None:
+    """A candump time is seconds, a finite number (DESIGN: non-finite times are bad input);
+    raised as python-can's reader raises for a time it cannot read, so callers name the file."""
+    raise ValueError(f"time {stamp} is not a finite number of seconds")
