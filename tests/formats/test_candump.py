@@ -101,3 +101,9 @@ def test_decode_names_the_file_of_a_non_finite_time(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1] == (
         f"Error: {log}: not a readable log (time (nan) is not a finite number of seconds)")
+
+
+def test_an_identifier_over_8_hex_digits_is_refused_not_read_as_an_error_frame() -> None:
+    log = io.StringIO("(1.000000) can0 7FFFFFFFFFF#00\n")
+    with pytest.raises(ValueError, match="7FFFFFFFFFF has more than 8 hex digits"):
+        list(read_candump(log))

@@ -37,6 +37,11 @@ def _python_can(line: str) -> can.Message | None:
     """The message python-can reads from one line (None for a blank line)."""
     from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
 
+    fields = line.split()
+    if len(fields) >= 3 and len(fields[2].partition("#")[0]) > 8:
+        # candump writes 3 hex digits (11-bit) or 8 (29-bit, with the error flag): python-can
+        # would read the flag bits of a longer identifier and call the line an error frame
+        raise ValueError(f"identifier {fields[2].partition('#')[0]} has more than 8 hex digits")
     reader = CanutilsLogReader(io.StringIO(line))
     message = next(iter(reader), None)
     return restore_error_details(message, line) if message is not None else None
