@@ -139,7 +139,9 @@ def test_set_node_id_asks_once_the_device_and_a_free_id_are_found(
     taken = invoke(channel, "keypad", "set-node-id", "0x0C", answer="y\n")
     assert "node id 0Ch is taken" in error_line(taken)  # the Keybox: refused before asking
     declined = invoke(channel, "keypad", "set-node-id", "0x16", answer="n\n")
-    assert declined.exit_code != 0
+    assert declined.exit_code == 0  # "n" is an answer, not an error (issue 20 item 14)
+    assert "nothing changed" in declined.output
+    assert "Error" not in declined.output
     assert "The keypad will move to node 16h. Go on?" in declined.output
     assert keypad.objects["node_id"] == 0x15
     moved = invoke(channel, "keypad", "set-node-id", "0x16", answer="y\n")

@@ -234,7 +234,9 @@ def test_restore_defaults_asks_first(bench: Bench) -> None:
     bus, emulator, _, keybox = bench
     run("keybox", "heartbeat", "300", *bus)
     result = invoke("keybox", "restore-defaults", *bus, answer="n\n")
-    assert result.exit_code != 0
+    assert result.exit_code == 0  # "n" is an answer, not an error (issue 20 item 14)
+    assert result.output.splitlines()[-1].endswith(": nothing changed")
+    assert "Error" not in result.output
     assert emulator.snapshot(keybox)["heartbeat_ms"] == 300
     output = run("keybox", "restore-defaults", *bus, answer="y\n")
     assert output.splitlines()[-1] == (

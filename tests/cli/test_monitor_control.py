@@ -128,5 +128,6 @@ def test_set_node_id_asks_first(bench: tuple[str, Emulator, KeypadTwin, KeyboxTw
     channel, emulator, keypad, _ = bench
     result = CliRunner().invoke(cli, ["keypad", "-i", "virtual", "-c", channel, "set-node-id",
                                       "0x30"], input="n\n")
-    assert result.exit_code != 0
+    assert result.exit_code == 0  # "n" is an answer, not an error (issue 20 item 14)
+    assert result.output.splitlines()[-1].endswith(": nothing changed")
     assert emulator.snapshot(keypad)["settings"]["node_id"] == 0x15

@@ -21,6 +21,7 @@ from typing import Any
 import can
 import click
 
+from blinkcan.cli.answers import confirm
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.cli.ranges import (
     Check,
@@ -184,11 +185,6 @@ def _info(device: Any) -> None:
     click.echo(f"{'vendor_id':<17} {identity.vendor_id:08X}h")
 
 
-def _confirm(what: str, yes: bool) -> None:
-    if not yes and not click.confirm(f"{what}. Go on?"):
-        raise click.Abort()
-
-
 def _set_node_id(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
     if value is not None:
         ctx.obj = (ctx.obj[0], value)
@@ -338,7 +334,7 @@ for group in (keypad, keybox):
         with _device(target, check=check) as device:
             if new_id != target[1]:
                 device.check_free(new_id)  # before asking: a taken id is refused anyway
-            _confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
+            confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
             device.set_node_id(new_id, confirm=True)
         _done(target, f"node id {new_id:02X}h stored")
 
@@ -360,7 +356,7 @@ for group in (keypad, keybox):
 
         _arguments(target[0], check)
         with _device(target, check=check) as device:
-            _confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
+            confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
                      "reset", yes)
             device.set_bitrate(bit_rate, confirm=True)
         _done(target, f"bit rate {bit_rate} bit/s stored, in use after the next reset")
@@ -377,7 +373,7 @@ for group in (keypad, keybox):
                 edition = device.description.edition or "this firmware"
                 raise click.ClickException(f"this {device.description.title} ({edition}) "
                                            "cannot restore defaults (it has no 1011h)")
-            _confirm(f"Every stored setting of the {target[0]} (node id, bit rate, "
+            confirm(f"Every stored setting of the {target[0]} (node id, bit rate, "
                      "heartbeat...) goes back to its factory value at the next reset", yes)
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")

@@ -20,6 +20,7 @@ from typing import Any
 import click
 
 from blinkcan import __version__
+from blinkcan.cli.answers import DeclinedError
 from blinkcan.cli.bus_options import bus_options, spread_bus_kwargs
 
 log = logging.getLogger(__name__)
@@ -107,10 +108,15 @@ class BlinkcanGroup(click.Group):
             _fail(f"{error.format_message()}{hint}", error.exit_code)
         except click.ClickException as error:
             _fail(error.format_message(), error.exit_code)
-        except click.Abort:
-            _fail("aborted", 1)
+        except DeclinedError as declined:  # "n" to a question is an answer, not an error
+            click.echo(f"{declined}: nothing changed", err=True)
+            sys.exit(0)
+        except click.Abort as abort:
+            if isinstance(abort.__context__, KeyboardInterrupt):
+                _interrupted()
+            _fail("aborted (no answer to the question: --yes answers it)", 1)
         except KeyboardInterrupt:
-            _fail("interrupted", 130)
+            _interrupted()
         except OSError as error:
             _fail(_os_error(error), 1)
         except Exception as error:  # one line for the user, the trace with -vv
@@ -122,6 +128,12 @@ class BlinkcanGroup(click.Group):
 def _os_error(error: OSError) -> str:
     where = f" {error.filename}" if error.filename else ""
     return f"cannot use{where}: {error.strerror or error}"
+
+
+def _interrupted() -> None:
+    """Ctrl-C is how a user stops a command: no error, the shell's code for SIGINT."""
+    click.echo("interrupted", err=True)
+    sys.exit(130)
 
 
 def _fail(message: str, code: int) -> None:
