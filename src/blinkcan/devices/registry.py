@@ -21,6 +21,7 @@ BUILTIN_MODELS: tuple[str, ...] = (
     "blinkcan.devices.keypad:PKP_2600_SI",
     "blinkcan.devices.keybox:KEYBOX",
     "blinkcan.devices.pkp3500:PKP_3500_MT",
+    "blinkcan.devices.pkp2400:PKP_2400_SI",
 )
 
 
