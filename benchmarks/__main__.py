@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from benchmarks import (
+    canopen_time,
     decode_log,
     emulator_capacity,
     fleet_parquet,
@@ -25,6 +26,7 @@ def main() -> None:
     decode_log.main(smoke=args.smoke)
     simulated_time.main(smoke=args.smoke)
     j1939_decode.main(smoke=args.smoke)
+    canopen_time.main(smoke=args.smoke)
     fleet_parquet.main(smoke=args.smoke)
 
 

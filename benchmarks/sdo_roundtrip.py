@@ -96,32 +96,22 @@ def measure(count: int, block: int = 250) -> dict[str, tuple[float, list[float]]
 
 def transport_floor(count: int) -> float:
     """Round trips/s of a bare echo of the same shape as ours, with no SDO work: the server
-    side reads through a python-can Notifier and hands each frame to a loop thread that sends
-    the answer (as the Emulator does), the caller sends and waits through a Notifier and an
-    Event (as both SDO clients do). A floor: any SDO server and client pay at least this."""
-    import queue
-
+    side answers from a python-can Notifier's callback (the Emulator handles a frame on its
+    Notifier's thread, runtime/emulator.py), the caller sends and waits through a Notifier and
+    an Event (as both SDO clients do). A floor: any SDO server and client pay at least this."""
     channel = f"floor-{uuid.uuid4().hex}"
     caller, echo = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     arrived = threading.Event()
-    inbox: queue.SimpleQueue[can.Message | None] = queue.SimpleQueue()
 
-    def echo_loop() -> None:
-        while (message := inbox.get()) is not None:
-            echo.send(can.Message(arbitration_id=0x595, data=message.data,
-                                  is_extended_id=False))
-
-    class Forward(can.Listener):
+    class Echo(can.Listener):
         def on_message_received(self, msg: can.Message) -> None:
-            inbox.put(msg)
+            echo.send(can.Message(arbitration_id=0x595, data=msg.data, is_extended_id=False))
 
     class Waker(can.Listener):
         def on_message_received(self, msg: can.Message) -> None:
             arrived.set()
 
-    thread = threading.Thread(target=echo_loop, daemon=True)
-    thread.start()
-    echo_notifier = can.Notifier(echo, [Forward()], timeout=0.1)
+    echo_notifier = can.Notifier(echo, [Echo()], timeout=0.1)
     notifier = can.Notifier(caller, [Waker()], timeout=0.1)
     request = can.Message(arbitration_id=0x615, data=bytes(8), is_extended_id=False)
     start = time.perf_counter()
@@ -130,8 +120,6 @@ def transport_floor(count: int) -> float:
         caller.send(request)
         arrived.wait(1)
     rate = count / (time.perf_counter() - start)
-    inbox.put(None)
-    thread.join()
     notifier.stop()
     echo_notifier.stop()
     caller.shutdown()

@@ -207,7 +207,7 @@ def test_keybox_pwm(bench: Bench) -> None:
     assert run("keybox", "pwm", "12,13", "30%", *bus).strip() == (
         "keybox 0Ch: output 12 and 13 PWM at 30 %")
     assert [emulator.snapshot(keybox)["pins"][i]["pwm_percent"] for i in (11, 12)] == [30, 30]
-    assert_one_line_error(invoke("keybox", "pwm", "4", "5", *bus), "PWM is on pins (12, 13)")
+    assert_one_line_error(invoke("keybox", "pwm", "4", "5", *bus), "PWM pin 4 outside 12..13")
 
 
 def test_nmt_commands(bench: Bench) -> None:

@@ -5,11 +5,16 @@ restoring factory defaults ask for confirmation first (``--yes`` does not ask).
 Every command, PDO-only ones included (``keypad led``), first confirms which device answers at
 the node id (the drivers' identity check): nothing answering, another kind of device, or more
 than one device answering ("two devices answer at node 15h") is one line and a non-zero exit,
-and the bus sees no command."""
+and the bus sees no command.
+
+Arguments come first (``cli/ranges.py``): checked against the models that may answer before the
+bus is opened (``--model`` names one; else every registered model of the kind), then against
+the model found at the node id before any command. A question ("Go on?") comes after the device
+was found, never before."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -17,8 +22,18 @@ import can
 import click
 
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
+from blinkcan.cli.ranges import (
+    Check,
+    candidates,
+    entry_spans,
+    merged,
+    spans_of,
+    whose,
+    within,
+)
+from blinkcan.devices.colours import BacklightColour, led_colour
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
-from blinkcan.devices.model import Face, Model
+from blinkcan.devices.model import DeviceDescription, Face, Model
 from blinkcan.devices.registry import identify, model, models
 from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
 from blinkcan.host.device import NoDeviceError, check_one_device
@@ -69,10 +84,28 @@ def _model_at(bus: Any, node_id: int, kind: str) -> Model:
     return answering if issubclass(driver_class(answering.name), base) else first
 
 
+def _candidates(kind: str) -> tuple[DeviceDescription, ...]:
+    """The descriptions that may answer this command (J1939: the models that have the mode)."""
+    return candidates(kind, _chosen_model(), "j1939" if _j1939_address() is not None else None)
+
+
+def _arguments(kind: str, check: Check) -> None:
+    """``check`` against every model that may answer, before the bus: a usage error naming
+    the valid values."""
+    descriptions = _candidates(kind)
+    try:
+        check(descriptions)
+    except ValueError as error:
+        raise click.UsageError(f"{error} ({whose(descriptions)})") from None
+
+
 @contextmanager
-def _device(target: Target, start: bool = False) -> Iterator[Any]:
+def _device(target: Target, start: bool = False, check: Check | None = None
+            ) -> Iterator[Any]:
     """The driver of the device at the target's node id: the model its 100Bh names (or
-    ``--model``), driven by that model's driver class from the registry."""
+    ``--model``), driven by that model's driver class from the registry. ``check`` runs
+    against that model before anything but the identity reads is sent, then ``start`` starts
+    the device (NMT): a bad argument never reaches it."""
     kind, node_id = target
     address = _j1939_address()
     bus = cli_bus()
@@ -83,10 +116,14 @@ def _device(target: Target, start: bool = False) -> Iterator[Any]:
             else:
                 chosen = _chosen_model()
                 found = model(chosen) if chosen else _model_at(bus, node_id, kind)
-                device = driver_class(found.name)(bus, node_id, start=start)
+                device = driver_class(found.name)(bus, node_id, start=False)
         except (IdentityError, SdoError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
         try:
+            if check is not None:
+                _check_found(check, device.description, node_id)
+            if start and address is None:  # J1939 has no NMT
+                device.start()
             yield device
         except (IdentityError, SdoError, TimeoutError, ValueError) as error:
             raise click.ClickException(_explained(error, bus, node_id)) from None
@@ -94,6 +131,14 @@ def _device(target: Target, start: bool = False) -> Iterator[Any]:
             device.close()
     finally:
         bus.shutdown()
+
+
+def _check_found(check: Check, description: DeviceDescription, node_id: int) -> None:
+    try:
+        check([description])
+    except ValueError as error:
+        raise click.ClickException(f"{error} ({whose([description])} at node "
+                                   f"{node_id:02X}h)") from None
 
 
 def _explained(error: Exception, bus: can.BusABC, node_id: int) -> str:
@@ -265,7 +310,13 @@ for group in (keypad, keybox):
     @click.pass_obj
     def heartbeat(target: Target, milliseconds: int) -> None:
         """Producer heartbeat period in ms (0 = off)."""
-        with _device(target) as device:
+
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            within("heartbeat period in ms", milliseconds,
+                   entry_spans(descriptions, "producer_heartbeat_time"))
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
             device.set_heartbeat(milliseconds / 1000)
         _done(target, f"heartbeat every {milliseconds} ms" if milliseconds else "heartbeat off")
 
@@ -276,9 +327,17 @@ for group in (keypad, keybox):
     @node_id_option
     @click.pass_obj
     def set_node_id(target: Target, new_id: int, yes: bool) -> None:
-        """Store a new node id (applies at the next reset; generation 2 keypads: at once)."""
-        _confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
-        with _device(target) as device:
+        """Store a new node id (applies at the next reset; generation 2 keypads: at once).
+        Asks once the device was found and the new id is free."""
+
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            within("node id", new_id, entry_spans(descriptions, "node_id"))
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
+            if new_id != target[1]:
+                device.check_free(new_id)  # before asking: a taken id is refused anyway
+            _confirm(f"The {target[0]} will move to node {new_id:02X}h", yes)
             device.set_node_id(new_id, confirm=True)
         _done(target, f"node id {new_id:02X}h stored")
 
@@ -289,10 +348,19 @@ for group in (keypad, keybox):
     @node_id_option
     @click.pass_obj
     def set_baud(target: Target, bit_rate: int, yes: bool) -> None:
-        """Store a bit rate in bit/s, with this model's own code (applies at the next reset)."""
-        _confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next reset",
-                 yes)
-        with _device(target) as device:
+        """Store a bit rate in bit/s, with this model's own code (applies at the next reset).
+        Asks once the device was found."""
+
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            rates = sorted({rate for d in descriptions for rate in d.bitrates.values()})
+            if bit_rate not in rates:
+                raise ValueError(f"bit rate {bit_rate} bit/s is not one of "
+                                 f"{', '.join(map(str, rates))}")
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
+            _confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
+                     "reset", yes)
             device.set_bitrate(bit_rate, confirm=True)
         _done(target, f"bit rate {bit_rate} bit/s stored, in use after the next reset")
 
@@ -341,7 +409,15 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     blinkcan keypad led 3 red --blink green     (red and green alternating)
     """
     blink = colour if blink == "" else blink
-    with _device(target, start=True) as device:
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        within("key", key, merged(spans_of(d.face.led_keys) for d in descriptions))
+        for name in (colour, blink):
+            if name is not None:
+                led_colour(name)
+
+    _arguments(target[0], check)
+    with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         if device.j1939 is None:  # CANopen: the LED PDO carries every key, so read them first
             device.read_leds()
@@ -359,7 +435,15 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
     """Backlight colour and level."""
     if colour is None and level is None:
         raise click.UsageError("name a --colour, a --level or both")
-    with _device(target, start=True) as device:
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        if colour is not None:
+            BacklightColour.from_name(colour)
+        if level is not None:
+            within("backlight level", level, entry_spans(descriptions, "backlight_brightness"))
+
+    _arguments(target[0], check)
+    with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_backlight(colour, level)
     parts = ([f"colour {colour}"] if colour is not None else []) + (
@@ -374,7 +458,12 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
 @click.pass_obj
 def brightness(target: Target, level: int) -> None:
     """Indicator LED brightness 0-63."""
-    with _device(target, start=True) as device:
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        within("brightness", level, entry_spans(descriptions, "indicator_brightness"))
+
+    _arguments(target[0], check)
+    with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_brightness(level)
     _done(target, f"indicator brightness {level}")
@@ -387,7 +476,11 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
     @node_id_option
     @click.pass_obj
     def command(target: Target, pin: int) -> None:
-        with _device(target) as device:
+        def check(descriptions: Sequence[DeviceDescription]) -> None:
+            within("pin", pin, merged(spans_of(d.face.pin_numbers) for d in descriptions))
+
+        _arguments(target[0], check)
+        with _device(target, check=check) as device:
             getattr(device, action)(pin)
         _done(target, done.format(pin=pin))
 
@@ -414,18 +507,30 @@ def pwm(target: Target, pins: str, duty: str) -> None:
     blinkcan keybox pwm 12,13 30%
     """
     chosen = [parse_int(pin) for pin in pins.split(",") if pin.strip()]
-    if duty.strip().endswith("%"):
-        percent = parse_int(duty.strip()[:-1])
-        if percent % 10:
-            raise click.BadParameter(f"{duty} is not a step of 10 %", param_hint="DUTY")
-        tenths = percent // 10
-    else:
-        tenths = parse_int(duty)
-    with _device(target) as device:
+    levels = max((d.face.pwm_duty_max for d in _candidates(target[0])), default=0)
+    step = 100 // levels if levels else 100  # KBX §22: 0Ah = 100 %, steps of 10 %
+    percent = duty.strip().endswith("%")
+    level = parse_int(duty.strip()[:-1]) if percent else parse_int(duty)
+    if percent and level % step:
+        raise click.BadParameter(f"{duty} is not a step of {step} %", param_hint="DUTY")
+    tenths = level // step if percent else level
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        allowed = merged(spans_of(d.face.pwm_pins) for d in descriptions)
+        for pin in chosen:
+            within("PWM pin", pin, allowed)
+        top = max((d.face.pwm_duty_max for d in descriptions), default=0)
+        if percent:
+            within("PWM duty in %", level, ((0, top * step),))
+        else:
+            within("PWM duty", level, ((0, top),))
+
+    _arguments(target[0], check)
+    with _device(target, check=check) as device:
         assert isinstance(device, Keybox)
         device.set_pwm(chosen, tenths)
     names = " and ".join(str(pin) for pin in chosen)
-    _done(target, f"output {names} PWM at {tenths * 10} %")
+    _done(target, f"output {names} PWM at {tenths * step} %")
 
 
 @keybox.command("states")

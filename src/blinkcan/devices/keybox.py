@@ -162,7 +162,8 @@ def _pdos() -> tuple[PdoLayout, ...]:
 
 
 #: KBX §5/§6: 13 outputs, PWM on 12 and 13, Ch2 and Ch5 may be built low-side
-FACE = Face(pins=PIN_COUNT, pwm_pins=PWM_PINS, low_side_capable=LOW_SIDE_CAPABLE)
+FACE = Face(pins=PIN_COUNT, pwm_pins=PWM_PINS, pwm_duty_max=PWM_LEVEL_MAX,
+            low_side_capable=LOW_SIDE_CAPABLE)
 
 
 def describe_keybox(quirks: Quirks = "firmware", factory_node_id: int = DEFAULT_NODE_ID

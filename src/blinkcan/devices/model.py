@@ -63,6 +63,8 @@ class Face:
     digital_inputs: int = 0
     pins: int = 0
     pwm_pins: tuple[int, ...] = ()
+    #: the highest PWM duty level, 100 %: duty goes 0..pwm_duty_max in equal steps
+    pwm_duty_max: int = 0
     low_side_capable: tuple[int, ...] = ()
 
     @property

@@ -24,8 +24,6 @@ from blinkcan.devices.registry import describe_device
 KINDS = ("key", "led", "output", "fault", "heartbeat", "nmt", "sdo", "j1939", "pdo", "sync",
          "remote", "error", "undecoded")
 _CHANNEL_BITS = (("red", 1), ("green", 2), ("blue", 4))
-_SIMPLE = {Kind.SYNC: "sync", Kind.REMOTE: "remote", Kind.ERROR: "error",
-           Kind.FRAME: "undecoded"}
 _LED_STATES = {"led_on": "on", "led_blink": "blink"}
 _COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))
 
@@ -39,6 +37,12 @@ class Detail(NamedTuple):
     state: str | None = None
     colour: str | None = None
     value: int | None = None
+
+
+#: the rows of events that carry nothing but their kind (shared: rows are never changed)
+_SIMPLE = {kind: [Detail(name)] for kind, name in ((Kind.SYNC, "sync"), (Kind.REMOTE, "remote"),
+                                                   (Kind.ERROR, "error"),
+                                                   (Kind.FRAME, "undecoded"))}
 
 
 class Rowed(NamedTuple):
@@ -63,6 +67,7 @@ class EventRows:
         self._outputs: dict[int, dict[int, str]] = {}  # node -> pin -> "high" / "off"
         self._faults: dict[int, frozenset[int]] = {}  # node -> pins in FAULT
         self._models: dict[str, str] = {}
+        self._heartbeats: dict[object, list[Detail]] = {}  # state -> its row (shared)
         self._pdo: dict[str, Callable[[int, dict[str, Any]], list[Detail]]] = {
             "key_state": self._keys, "led_on": self._led_picture,
             "led_blink": self._led_picture, "outputs": self._output_states,
@@ -72,6 +77,9 @@ class EventRows:
     def rows(self, event: Event) -> Rowed:
         kind = event.kind
         node = event.node_id
+        simple = _SIMPLE.get(kind)
+        if simple is not None:  # most of a fleet's log: other ECUs' frames
+            return Rowed(node, self._model_of(node), simple)
         if kind is Kind.J1939:
             return Rowed(node, self._model_named(event.device), [self._j1939(event.fields)])
         if kind is Kind.NMT:
@@ -86,13 +94,14 @@ class EventRows:
                 return Rowed(node, model, follow(node, event.fields))
             return Rowed(node, model, [Detail("pdo", state=name, value=_only_int(event.fields))])
         if kind is Kind.HEARTBEAT:
-            return Rowed(node, model, [Detail("heartbeat", state=event.fields.get("state"))])
+            state = event.fields.get("state")
+            details = self._heartbeats.get(state)
+            if details is None:
+                details = self._heartbeats[state] = [Detail("heartbeat", state=state)]
+            return Rowed(node, model, details)
         if kind is Kind.BOOT_UP:
             self._reboot(node)
             return Rowed(node, model, [Detail("heartbeat", state="boot-up")])
-        simple = _SIMPLE.get(kind)
-        if simple is not None:
-            return Rowed(node, model, [Detail(simple)])
         # SDO services: the kind of step as the state, the value where it is a number
         return Rowed(node, model, [Detail("sdo", state=kind.value,
                                           value=_int_value(event.fields.get("value")))])

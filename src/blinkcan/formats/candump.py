@@ -89,6 +89,9 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message]:
 _IDENTS_KEPT = 4096
 
 
+_UNSEEN = (-1, False)  # an identifier text not parsed yet (no identifier is -1)
+
+
 def _plain_id(ident: str) -> tuple[int, bool] | None:
     """(id, extended) of a data frame's identifier text, None where python-can's own rules
     decide (bad digits; over 7FFh in 3 digits; an error flag or more in 8)."""
@@ -127,21 +130,22 @@ def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame
             if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
                 stamp = fields[0]
                 ident, _, data = fields[2].partition("#")
-                if ident in idents:
-                    plain = idents[ident]
-                else:
+                plain = idents.get(ident, _UNSEEN)
+                if plain is _UNSEEN:
                     if len(idents) >= _IDENTS_KEPT:
                         idents.clear()
                     plain = idents[ident] = _plain_id(ident)
-                if plain is not None and stamp[:1] == "(" and len(data) <= 16 \
-                        and not len(data) & 1 and data[:1] not in _NOT_DATA:
+                size = len(data)
+                if plain is not None and stamp[0] == "(" and size <= 16 and not size & 1 \
+                        and data[:1] not in _NOT_DATA:
                     try:
                         payload = fromhex(data)
                         timestamp = float(stamp[1:-1])
                     except ValueError:
                         pass
                     else:
-                        yield timestamp, new(Frame, (plain[0], payload, plain[1]))
+                        can_id, extended = plain
+                        yield timestamp, new(Frame, (can_id, payload, extended))
                         continue
             if not fields:
                 continue

@@ -399,14 +399,14 @@ class Device:
             raise ValueError("changing the node id moves the device on the bus at its next "
                              "reset: pass confirm=True")
         if node_id != self.node_id:
-            self._check_free(node_id)
+            self.check_free(node_id)
         if "node-id-at-once" in self.description.features and node_id != self.node_id:
             with self.sdo.channel.replies_also_from(node_id):
                 self.write("node_id", node_id)
             return
         self.write("node_id", node_id)
 
-    def _check_free(self, node_id: int) -> None:
+    def check_free(self, node_id: int) -> None:
         """ValueError when a device already answers at ``node_id``: two devices on one node id
         would answer each other's SDO requests (one 1000h read, 0.2 s)."""
         try:
