@@ -68,5 +68,6 @@ def test_decoder_and_dbc_name_the_key_and_led_frames(name: str) -> None:
     database = cantools.database.load_string(dbc_text(description, 0x15))
     assert isinstance(database, cantools.database.can.Database)
     decoded = database.get_message_by_frame_id(led_frame.can_id).decode(led_frame.data)
-    assert [signal for signal, value in decoded.items() if value] == [f"green_{last}"] or \
-        decoded.get("green") == 1 << (last - 1)
+    assert isinstance(decoded, dict)
+    assert [signal for signal, value in decoded.items() if value] == [f"green_{last}"]
+    assert f"green_{last + 1}" not in decoded  # padding bits are no LED

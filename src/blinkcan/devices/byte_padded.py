@@ -77,14 +77,15 @@ class BytePaddedKeypad:
         """215h/315h: one ``mask_bits`` word per colour, red first, bit 0 = LED 1."""
         return PdoLayout(name, label, cob_base, Direction.RX, 8, tuple(
             PdoSignal(colour, f"{label} {colour}", shift * self.mask_bits, self.mask_bits,
-                      None, item="LED")
+                      None, item="LED", items=self.keys)
             for shift, colour in enumerate(COLOURS)
         ), min_length=3 * self.mask_bits // 8)
 
     def pdos(self, base: tuple[PdoLayout, ...]) -> tuple[PdoLayout, ...]:
         own = {
             "key_state": PdoLayout("key_state", "Keys state", TPDO1, Direction.TX, 5, (
-                PdoSignal("keys", "Keys pressed", 0, self.key_bits, "keys_pressed", item="key"),
+                PdoSignal("keys", "Keys pressed", 0, self.key_bits, "keys_pressed", item="key",
+                          items=self.keys),
                 PdoSignal("tick", "Tick timer", 32, 8, None),  # errata P8, as the 2600
             ), min_length=1),
             "led_on": self.led_pdo("led_on", "Set LED on", RPDO1),
