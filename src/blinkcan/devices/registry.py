@@ -23,6 +23,7 @@ BUILTIN_MODELS: tuple[str, ...] = (
     "blinkcan.devices.pkp3500:PKP_3500_MT",
     "blinkcan.devices.pkp2400:PKP_2400_SI",
     "blinkcan.devices.pkp2500:PKP_2500_SI",
+    "blinkcan.devices.pkp3500si:PKP_3500_SI",
 )
 
 
