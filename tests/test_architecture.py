@@ -12,7 +12,11 @@
     ``1 <= key <= 12``) where it is one of a registered face's counts. Every such place reads
     the model's description (its face, features, commands) instead.
 
-(a) and (b) are 0 for ``twin/``, (c) for the whole package. ``python -m
+(d) ``isinstance(..., SimulatedBus)`` outside the simulated port (``runtime/simport.py``): the
+    transport is a Port (``runtime/port.py``); HostBus and the Emulator never ask which.
+
+(a) and (b) are 0 for ``twin/``, (b) also for ``runtime/`` and ``host/``, (c) and (d) for the
+whole package. ``python -m
 tests.test_architecture`` prints them for the package.
 """
 
@@ -309,6 +313,29 @@ def model_switches() -> list[ModelSwitch]:
             for switch in _switches_in(source.tree, module, kinds, counts)]
 
 
+# -- (d) asking whether a bus is the simulated one ------------------------------------------------
+
+SIMULATED_PORT = "blinkcan.runtime.simport"
+
+
+def _simulated_bus_checks_in(tree: ast.AST, module: str) -> list[ModelSwitch]:
+    found = []
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance"
+                and len(node.args) == 2):
+            kinds = node.args[1]
+            names = kinds.elts if isinstance(kinds, ast.Tuple) else [kinds]
+            if any(getattr(name, "id", getattr(name, "attr", None)) == "SimulatedBus"
+                   for name in names):
+                found.append(ModelSwitch(module, node.lineno, "asks for a SimulatedBus"))
+    return found
+
+
+def simulated_bus_checks() -> list[ModelSwitch]:
+    return [check for module, source in _sources().items() if module != SIMULATED_PORT
+            for check in _simulated_bus_checks_in(source.tree, module)]
+
+
 # -- the assertions -------------------------------------------------------------------------------
 
 def _in_twin(module: str) -> bool:
@@ -323,6 +350,27 @@ def test_no_twin_module_uses_another_modules_private_state() -> None:
 def test_no_import_cycle_touches_twin() -> None:
     cycles = [cycle for cycle in import_cycles() if any(map(_in_twin, cycle))]
     assert cycles == []
+
+
+def _in_transport(module: str) -> bool:
+    return module.startswith(("blinkcan.runtime.", "blinkcan.host.")) or module in (
+        "blinkcan.runtime", "blinkcan.host")
+
+
+def test_no_import_cycle_touches_runtime_or_host() -> None:
+    cycles = [cycle for cycle in import_cycles() if any(map(_in_transport, cycle))]
+    assert cycles == []
+
+
+def test_only_the_simulated_port_asks_for_a_simulated_bus() -> None:
+    assert [str(check) for check in simulated_bus_checks()] == []
+
+
+def test_the_simulated_bus_count_sees_what_it_counts() -> None:
+    tree = ast.parse("if isinstance(bus, SimulatedBus): pass\n"
+                     "x = isinstance(bus, (can.BusABC, simbus.SimulatedBus))\n"
+                     "y = isinstance(bus, can.BusABC)\n")
+    assert [check.line for check in _simulated_bus_checks_in(tree, "m")] == [1, 2]
 
 
 def test_the_counts_see_what_they_count() -> None:
@@ -357,6 +405,7 @@ def report() -> str:
     uses = private_uses()
     cycles = import_cycles()
     switches = model_switches()
+    checks = simulated_bus_checks()
     return "\n".join([
         f"(a) private attributes of another module's class used: {len(uses)}",
         *(f"    {use}" for use in uses),
@@ -364,6 +413,8 @@ def report() -> str:
         *(f"    {' <-> '.join(cycle)}" for cycle in cycles),
         f"(c) kind strings and key/pin counts outside devices/: {len(switches)}",
         *(f"    {switch}" for switch in switches),
+        f"(d) isinstance(..., SimulatedBus) outside {SIMULATED_PORT}: {len(checks)}",
+        *(f"    {check}" for check in checks),
     ]) + "\n"
 
 

@@ -5,19 +5,18 @@ it is found again through the notifier that reads the bus (python-can's
 ``Notifier.find_instances``), so any number of drivers work on one bus, and a notifier that
 already reads it (a python-canopen ``Network``'s, the application's) is joined, never doubled.
 
-Handlers and timers run on the bus's scheduler (``runtime.scheduler``), one at a time, so
-drivers need no locks for their state: a thread of its own on real buses, the simulation
-itself on a ``SimulatedBus`` (``blinkcan.testing.Rig``). SDO replies take a fast path: they are
-handed to the waiting caller straight from the reader. An exception in a handler is logged
-with its traceback and the loop goes on; in simulated time it is raised again from the call
-that ran the simulation (``Scheduler.guarded``), so a test sees it.
+The bus is a transport port (``runtime.port``: python-can's or the simulated one, never asked
+which). Handlers and timers run on the port's scheduler (``runtime.scheduler``), one at a
+time, so drivers need no locks for their state: a thread of its own on real buses, the
+simulation itself in virtual time (``blinkcan.testing.Rig``). SDO replies take a fast path:
+they are handed to the waiting caller straight from the port's reader. An exception in a
+handler is logged with its traceback and the loop goes on; in simulated time it is raised
+again from the call that ran the simulation (``Scheduler.guarded``), so a test sees it.
 
-The bus is read the way every blinkcan reader reads (``runtime.canbus.BusReader``): a frame
+A python-can bus is read the way every blinkcan reader reads (``runtime.canport``): a frame
 it cannot decode is counted and dropped, a failing bus (unplugged adapter) is reported once and
 read with a back-off instead of a busy loop, and a shut-down bus stops the reader and fails
-waiting SDO calls at once.
-Frames this program sent are never taken for received ones, also on python-can's
-``udp_multicast``, which echoes them (``runtime.canbus.OwnFrames``).
+waiting SDO calls at once; frames this program sent are never taken for received ones.
 """
 
 from __future__ import annotations
@@ -33,14 +32,9 @@ import can
 from blinkcan.host.sdo import SdoChannel, SdoClient
 from blinkcan.protocol.cob import SYNC
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
-from blinkcan.runtime.scheduler import (
-    RealTimeScheduler,
-    Scheduler,
-    Signal,
-    Timer,
-)
-from blinkcan.runtime.simbus import SimulatedBus
+from blinkcan.runtime.canbus import ReadStats
+from blinkcan.runtime.port import Port, port_for
+from blinkcan.runtime.scheduler import Scheduler, Signal, Timer
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -49,78 +43,77 @@ Handler = Callable[[Frame, float], None]
 __all__ = ["Handler", "HostBus", "Timer"]
 
 
-class _Listener(can.Listener):
-    def __init__(self, owner: HostBus) -> None:
-        self.owner = owner
-
-    def on_message_received(self, msg: can.Message) -> None:
-        self.owner._from_reader(msg)
-
-
 class HostBus:
-    """Runs the host side of ``bus``; pass ``network`` to share a python-canopen Network's bus.
+    """Runs the host side of ``bus`` (a python-can bus, or a :class:`Port`); pass ``network``
+    to share a python-canopen Network's bus.
 
     Drivers get theirs with :meth:`attach` (shared per bus, stopped when the last driver
-    closes); a ``HostBus`` you make and start yourself stays yours to stop.
+    closes); a ``HostBus`` you make and start yourself stays yours to stop. A port given
+    stays the caller's: :meth:`stop` leaves its scheduler running.
     """
 
     #: drivers attach and release one at a time, process-wide (rare, and never two hosts
     #: for one bus: two SDO channels to one node would take each other's replies)
     _attaching = threading.RLock()
 
-    def __init__(self, bus: can.BusABC | None = None, *, notifier: can.Notifier | None = None,
-                 network: Any = None, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, bus: can.BusABC | Port | None = None, *,
+                 notifier: can.Notifier | None = None, network: Any = None,
+                 clock: Callable[[], float] = time.monotonic) -> None:
         if network is not None:
             bus, notifier = network.bus, network.notifier
         if bus is None:
-            raise TypeError("HostBus needs a python-can bus or a connected canopen Network")
-        self.bus = bus
-        self.simulated = isinstance(bus, SimulatedBus)
-        self.scheduler: Scheduler = (bus.scheduler if isinstance(bus, SimulatedBus)
-                                     else RealTimeScheduler("blinkcan-host", clock))
-        self._given_notifier = notifier
-        self._reader: BusReader | None = None
-        self._listener = _Listener(self)
+            raise TypeError("HostBus needs a python-can bus, a port or a connected canopen "
+                            "Network")
+        #: the python-can bus given (None when made on a port)
+        self.bus: can.BusABC | None = None
+        self._owns_port = isinstance(bus, can.BusABC)
+        if isinstance(bus, can.BusABC):
+            self.bus = bus
+            bus = port_for(bus, notifier=notifier, clock=clock, name="blinkcan-host")
+        self.port: Port = bus
+        self.scheduler: Scheduler = bus.scheduler
+        self.simulated = self.scheduler.simulated
         self._handlers: dict[int, list[Handler]] = {}
         self._fast: dict[int, Handler] = {}
         self._extended: list[Handler] = []
         self._sdo: dict[int, SdoChannel] = {}
         self._sdo_lock = threading.Lock()
-        self._own = OwnFrames(bus)
         self._detach: Callable[[], None] | None = None
         self._started = False
         self._users = 0
         self._auto = False
         #: what reading the bus met: frames it could not decode, failures, a shut-down
-        self.reading = ReadStats()
+        self.reading: ReadStats = bus.reading
 
     # -- sharing ----------------------------------------------------------------------------
 
     @classmethod
-    def attach(cls, bus: HostBus | can.BusABC) -> HostBus:
+    def attach(cls, bus: HostBus | can.BusABC | Port) -> HostBus:
         """The running ``HostBus`` of ``bus``, shared by every driver on it; call
         :meth:`release` when done."""
         with cls._attaching:
             if isinstance(bus, HostBus):
                 bus._users += 1
                 return bus.start()
-            found = cls._find(bus)
+            port = port_for(bus, name="blinkcan-host") if isinstance(bus, can.BusABC) else bus
+            found = cls._find(port)
             if found is not None:
                 found._users += 1
                 return found
-            host = cls(bus)
+            host = cls(port)
+            if isinstance(bus, can.BusABC):
+                host.bus, host._owns_port = bus, True
             host._auto = True
             host._users = 1
             return host.start()
 
     @staticmethod
-    def _find(bus: can.BusABC) -> HostBus | None:
-        if isinstance(bus, SimulatedBus):
-            found = bus.host
-            return found if isinstance(found, HostBus) and found._started else None
-        for listener in BusReader.listeners_of(bus):
-            if isinstance(listener, _Listener) and listener.owner._started:
-                return listener.owner
+    def _find(port: Port) -> HostBus | None:
+        """The started ``HostBus`` that a port of the same bus feeds, if any."""
+        for handler in port.listeners():
+            owner = getattr(handler, "__self__", None)
+            if isinstance(owner, HostBus) and owner._started:
+                return owner
         return None
 
     def release(self) -> None:
@@ -138,13 +131,7 @@ class HostBus:
             return self
         self._started = True
         self.scheduler.start()
-        bus = self.bus
-        if isinstance(bus, SimulatedBus):
-            bus.host = self
-            self._detach = bus.add_frame_listener(self._from_simulation)
-            return self
-        self._reader = BusReader(bus, self._listener, self._given_notifier,
-                                 stats=self.reading, on_closed=self._bus_closed)
+        self._detach = self.port.listen(self._on_frame, self._bus_closed)
         return self
 
     def stop(self) -> None:
@@ -154,12 +141,8 @@ class HostBus:
         if self._detach is not None:
             self._detach()
             self._detach = None
-            if isinstance(self.bus, SimulatedBus) and self.bus.host is self:
-                self.bus.host = None
-        if self._reader is not None:
-            self._reader.stop()
-            self._reader = None
-        self.scheduler.stop()
+        if self._owns_port:
+            self.scheduler.stop()
 
     def __enter__(self) -> HostBus:
         return self.start()
@@ -223,13 +206,7 @@ class HostBus:
     # -- frames -------------------------------------------------------------------------------
 
     def send(self, frame: Frame) -> None:
-        bus = self.bus
-        if isinstance(bus, SimulatedBus):
-            bus.send_frame(frame)
-            return
-        now = self.scheduler.clock()
-        self._own.sent(frame, now)
-        bus.send(to_message(frame, now))
+        self.port.send(frame)
 
     def subscribe(self, can_id: int, handler: Handler) -> Callable[[], None]:
         """Call ``handler(frame, now)`` on this bus's loop for every frame with ``can_id``;
@@ -256,25 +233,20 @@ class HostBus:
 
         return restore
 
-    def _from_reader(self, message: can.Message) -> None:
-        frame = to_frame(message)
-        if frame is None:
-            return
-        now = self.scheduler.clock()
-        if self._own.active and self._own.is_echo(frame, now):
-            return
-        fast = self._fast.get(frame.can_id)
-        if fast is not None and not frame.extended:
-            fast(frame, now)
-        if frame.extended or frame.can_id in self._handlers:
-            self.scheduler.post(lambda: self._dispatch(frame, now))
-
-    def _from_simulation(self, frame: Frame, now: float) -> None:
-        fast = self._fast.get(frame.can_id)
-        if fast is not None and not frame.extended:
-            fast(frame, now)
-        if frame.extended or frame.can_id in self._handlers:
-            self._dispatch(frame, now)
+    def _on_frame(self, frame: Frame, now: float) -> None:
+        """A frame from the port, in its receiving context: an SDO reply straight to its
+        waiting caller, the rest to the handlers on this bus's loop."""
+        extended = frame.extended
+        if not extended:
+            fast = self._fast.get(frame.can_id)
+            if fast is not None:
+                fast(frame, now)
+        if extended or frame.can_id in self._handlers:
+            scheduler = self.scheduler
+            if scheduler.in_loop:
+                self._dispatch(frame, now)
+            else:
+                scheduler.post(lambda: self._dispatch(frame, now))
 
     def _dispatch(self, frame: Frame, now: float) -> None:
         handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())
@@ -285,7 +257,7 @@ class HostBus:
         """On the reader thread, once the bus was shut down: waiting SDO calls return now
         (and fail: the bus is closed)."""
         for channel in list(self._sdo.values()):
-            channel._signal.set()
+            channel.wake()
 
     # -- services -----------------------------------------------------------------------------
 

@@ -29,7 +29,7 @@ import contextlib
 import logging
 import threading
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import SDO_RX, SDO_TX
@@ -41,9 +41,7 @@ from blinkcan.protocol.sdo_client import (
     SdoTimeoutError,
     UploadTransfer,
 )
-
-if TYPE_CHECKING:
-    from blinkcan.host.bus import HostBus
+from blinkcan.runtime.scheduler import Signal
 
 log = logging.getLogger(__name__)
 
@@ -51,10 +49,31 @@ log = logging.getLogger(__name__)
 _RESYNC_MUX = multiplexer(0x1000, 0)
 
 
+class SdoHost(Protocol):
+    """What an SDO channel needs of the host side of its bus (``host.bus.HostBus``)."""
+
+    @property
+    def in_handler(self) -> bool: ...
+
+    @property
+    def closed(self) -> bool: ...
+
+    def signal(self) -> Signal: ...
+
+    def send(self, frame: Frame) -> None: ...
+
+    def wait(self, signal: Signal, timeout: float) -> bool: ...
+
+    def sleep(self, seconds: float) -> None: ...
+
+    def subscribe_fast(self, can_id: int, handler: Callable[[Frame, float], None]
+                       ) -> Callable[[], None]: ...
+
+
 class SdoChannel:
     """The client side of one node's SDO server."""
 
-    def __init__(self, host: HostBus, node_id: int, timeout: float = 0.5, retries: int = 1
+    def __init__(self, host: SdoHost, node_id: int, timeout: float = 0.5, retries: int = 1
                  ) -> None:
         self.host = host
         self.node_id = node_id
@@ -71,6 +90,10 @@ class SdoChannel:
         self._request_id = SDO_RX + node_id
         self._gathered: list[bytes] | None = None  # replies :meth:`answers` gathers
         host.subscribe_fast(SDO_TX + node_id, self._on_reply)
+
+    def wake(self) -> None:
+        """Wake the request waiting for its reply: the bus was shut down (it then fails)."""
+        self._signal.set()
 
     def _on_reply(self, frame: Frame, now: float) -> None:
         data = frame.data

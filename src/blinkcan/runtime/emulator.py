@@ -1,16 +1,16 @@
 """Run twins on a bus: the only place where twins meet threads and clocks.
 
-The emulator runs on a scheduler (``runtime.scheduler``). On a python-can bus that is a
-real-time scheduler: a ``Notifier`` reads the bus and hands each frame to the twins at once, on
-its own thread; the scheduler's thread runs the timers and the actions of other threads. A lock
-makes them take turns, so twins are only ever called one at a time. (Handing frames over to the
-scheduler's thread instead would add a thread switch to every request; see the benchmarks.)
-On a ``SimulatedBus`` the emulator runs in the simulation's virtual time instead: frames and
-timers are events of the simulated scheduler, with no thread at all (``blinkcan.testing``).
+The emulator runs on a transport port (``runtime.port``: python-can's or the simulated one,
+never asked which) and its scheduler (``runtime.scheduler``). Twins are only ever called on
+the scheduler's loop, one call at a time, so nothing needs a lock: on a python-can bus the
+reader thread posts each frame to the loop (a thread of its own, in real time); on a simulated
+bus the simulation itself is the loop, in virtual time, with no thread at all
+(``blinkcan.testing``).
 Rules:
 - Frames a twin sends go on the bus and, because a bus does not echo its own frames, are also
   delivered to the other twins of this emulator that listen to that COB-ID.
-- Timers come from ``twin.next_deadline()``, kept in a heap; lateness is recorded.
+- Timers come from ``twin.next_deadline()``: one scheduler timer per twin; lateness is
+  recorded.
 - With ``response_delay`` > 0 a twin's reply leaves that long after the request, and an SDO
   request that reaches a twin still busy answering the previous one is dropped, as real keypads
   do (errata.md, field reports).
@@ -20,37 +20,30 @@ Rules:
   twin's next deadline is later than ``now``. A twin that breaks this would make the loop spin
   at that instant; in simulated time that is a ``StuckDeadlineError`` naming the twin and the
   time, in real time it is logged and the twin is asked again a little later.
-- The bus is read as every blinkcan reader reads it (``runtime.canbus.BusReader``): a frame
+- The bus is read as every blinkcan reader reads it (the port's: ``runtime.canport``): a frame
   it cannot decode is counted and dropped, a failing bus is read with a back-off, a shut-down
-  bus stops the reader; each is logged once.
-- Frames the emulator sent never come back to it as received ones, also on python-can's
-  ``udp_multicast``, which echoes them (``runtime.canbus.OwnFrames``).
+  bus stops the reader; each is logged once. Frames the emulator sent never come back to it as
+  received ones, also on python-can's ``udp_multicast``, which echoes them.
 """
 
 from __future__ import annotations
 
-import heapq
 import itertools
 import logging
-import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, TypeVar
 
 import can
 
 from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
-from blinkcan.runtime.scheduler import (
-    RealTimeScheduler,
-    Scheduler,
-    StuckDeadlineError,
-    Timer,
-)
-from blinkcan.runtime.simbus import SimulatedBus
+from blinkcan.runtime.canbus import ReadStats
+from blinkcan.runtime.port import Port, port_for
+from blinkcan.runtime.scheduler import Scheduler, StuckDeadlineError, Timer
 from blinkcan.twin.base import CanopenTwin
 
 log = logging.getLogger(__name__)
@@ -72,45 +65,40 @@ class EmulatorStats:
     lateness: deque[float] = field(default_factory=lambda: deque(maxlen=200_000))
 
 
-class _Listener(can.Listener):
-    def __init__(self, emulator: Emulator) -> None:
-        self._emulator = emulator
-
-    def on_message_received(self, msg: can.Message) -> None:
-        self._emulator._from_reader(msg)
-
-
 class Emulator:
-    """Drives ``twins`` on ``bus``. Powers the twins on at :meth:`start`."""
+    """Drives ``twins`` on ``bus`` (a python-can bus, or a :class:`Port`). Powers the twins
+    on at :meth:`start`. A port given stays the caller's: :meth:`stop` leaves its scheduler
+    running."""
 
     def __init__(
         self,
-        bus: can.BusABC,
+        bus: can.BusABC | Port,
         twins: Iterable[CanopenTwin],
         response_delay: float = 0.0,
         notifier: can.Notifier | None = None,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         check_time("response_delay", response_delay, 0)
-        self.bus = bus
+        #: the python-can bus given (None when made on a port)
+        self.bus: can.BusABC | None = None
+        self._owns_port = isinstance(bus, can.BusABC)
+        if isinstance(bus, can.BusABC):
+            self.bus = bus
+            bus = port_for(bus, notifier=notifier, clock=clock, name="blinkcan-emulator")
+        self.port: Port = bus
         self.twins: list[CanopenTwin] = list(twins)
         self.response_delay = response_delay
-        self.stats = EmulatorStats()
-        self.scheduler: Scheduler = (bus.scheduler if isinstance(bus, SimulatedBus)
-                                     else RealTimeScheduler("blinkcan-emulator", clock))
+        self.stats = EmulatorStats(reading=bus.reading)
+        self.scheduler: Scheduler = bus.scheduler
         self._clock = self.scheduler.clock
-        self._given_notifier = notifier
-        self._reader: BusReader | None = None
         self._detach: Callable[[], None] | None = None
-        self._listener = _Listener(self)
-        self._own = OwnFrames(bus)
-        self._lock = threading.RLock()
-        self._planned: tuple[float, Timer] | None = None
         self._running = False
-        self._timers: list[tuple[float, int, int]] = []  # (deadline, seq, twin index)
+        #: per twin: the deadline it named and the scheduler timer waiting for it
         self._deadline: list[float | None] = [None] * len(self.twins)
-        self._delayed: list[tuple[float, int, int, list[Frame]]] = []
+        self._timers: list[Timer | None] = [None] * len(self.twins)
         self._busy_until: list[float] = [0.0] * len(self.twins)
+        #: replies held back by ``response_delay``: their timers, by number
+        self._delayed: dict[int, Timer] = {}
         self._seq = itertools.count()
         self._index: dict[int, tuple[int, ...]] = {}
         self._routes_seen: list[object] = [None] * len(self.twins)
@@ -126,12 +114,7 @@ class Emulator:
             raise RuntimeError("emulator already started")
         self._running = True
         self.scheduler.start()
-        bus = self.bus
-        if isinstance(bus, SimulatedBus):
-            self._detach = bus.add_frame_listener(self._from_simulation)
-        else:
-            self._reader = BusReader(bus, self._listener, self._given_notifier,
-                                     stats=self.stats.reading)
+        self._detach = self.port.listen(self._on_frame)
         self.run(self._power_on_all)
         return self
 
@@ -139,16 +122,14 @@ class Emulator:
         if not self._running:
             return
         self._running = False
-        if self._planned is not None:
-            self._planned[1].cancel()
-            self._planned = None
+        for timer in [*self._timers, *self._delayed.values()]:
+            if timer is not None:
+                timer.cancel()
+        self._delayed.clear()
         if self._detach is not None:
             self._detach()
             self._detach = None
-        if self._reader is not None:
-            self._reader.stop()
-            self._reader = None
-        if not self.scheduler.simulated:
+        if self._owns_port:
             self.scheduler.stop()
 
     def __enter__(self) -> Emulator:
@@ -164,33 +145,29 @@ class Emulator:
         it returns is sent, as if the device had sent it."""
         if not self._running:
             raise RuntimeError("emulator not started")
-
-        def perform() -> T:
-            with self._lock:
-                result = self._perform(action)
-                self._arm()
-                return result
-
-        return self.scheduler.run(perform, timeout)
+        return self.scheduler.run(partial(self._perform, action), timeout)
 
     def add(self, twin: CanopenTwin) -> CanopenTwin:
         """One more twin on this bus; powered on at once when the emulator runs."""
-        with self._lock:
+
+        def add_on_loop(now: float) -> list[Frame]:
             self.twins.append(twin)
             self._deadline.append(None)
+            self._timers.append(None)
             self._busy_until.append(0.0)
             self._routes_seen.append(None)
             self._index_dirty = True
-            index = len(self.twins) - 1
-        if self._running:
-
-            def power_on(now: float) -> list[Frame]:
+            if self._running:
+                index = len(self.twins) - 1
                 frames = self._call(index, twin.power_on, now)
                 self._reschedule(index)
                 self._emit(index, frames, now)
-                return []
+            return []
 
-            self.run(power_on)
+        if self._running:
+            self.run(add_on_loop)
+        else:
+            add_on_loop(self._clock())
         return twin
 
     @property
@@ -229,50 +206,21 @@ class Emulator:
             self._emit(i, frames, now)
         return []
 
-    def _from_reader(self, message: can.Message) -> None:
-        """A frame from the bus, on the notifier's thread: straight to the twins."""
-        frame = to_frame(message)
-        if frame is None:
-            return
-        with self._lock:
-            now = self._clock()
-            if self._own.active and self._own.is_echo(frame, now):
-                return
+    def _on_frame(self, frame: Frame, now: float) -> None:
+        """A frame from the port, in its receiving context: on the loop, to the twins."""
+        scheduler = self.scheduler
+        if scheduler.in_loop:
             self._received(frame, now)
-
-    def _from_simulation(self, frame: Frame, now: float) -> None:
-        with self._lock:
-            self._received(frame, now)
+        else:
+            scheduler.post(partial(self._received, frame, now))
 
     def _received(self, frame: Frame, now: float) -> None:
+        if not self._running:
+            return
         self.stats.frames_received += 1
         if self.on_frame is not None:
             self.on_frame(frame, False, now)
         self._deliver(frame, None, now)
-        self._arm()
-
-    def _arm(self) -> None:
-        """Keep one scheduler timer at the earliest twin deadline or delayed reply."""
-        if not self._running:
-            return
-        wake = self._next_wakeup()
-        planned = self._planned
-        if planned is not None:
-            if wake is not None and planned[0] <= wake:
-                return  # the planned tick comes first; it re-arms
-            planned[1].cancel()
-            self._planned = None
-        if wake is not None:
-            self._planned = (wake, self.scheduler.call_at(wake, self._tick))
-
-    def _tick(self) -> None:
-        with self._lock:
-            self._planned = None
-            if self._running:
-                try:
-                    self._run_timers(self._clock())
-                finally:
-                    self._arm()
 
     def _perform(self, action: Callable[[float], T]) -> T:
         now = self._clock()
@@ -306,12 +254,17 @@ class Emulator:
                 replies = self._call(i, twin.receive, frame, now)
                 self._reschedule(i)
                 if replies:
-                    due = now + self.response_delay
-                    heapq.heappush(self._delayed, (due, next(self._seq), i, replies))
+                    key = next(self._seq)
+                    self._delayed[key] = self.scheduler.call_at(
+                        now + self.response_delay, partial(self._reply_due, key, i, replies))
             else:
                 replies = self._call(i, twin.receive, frame, now)
                 self._reschedule(i)
                 self._emit(i, replies, now)
+
+    def _reply_due(self, key: int, i: int, replies: list[Frame]) -> None:
+        if self._delayed.pop(key, None) is not None and self._running:
+            self._emit(i, replies, self._clock())
 
     def _targets(self, frame: Frame) -> Iterable[int]:
         if frame.extended:
@@ -332,13 +285,10 @@ class Emulator:
         self._index = {can_id: tuple(ids) for can_id, ids in index.items()}
 
     def _emit(self, source: int, frames: list[Frame], now: float) -> None:
+        send = self.port.send
         for frame in frames:
             try:
-                if isinstance(self.bus, SimulatedBus):
-                    self.bus.send_frame(frame)
-                else:
-                    self._own.sent(frame, now)
-                    self.bus.send(to_message(frame, now))
+                send(frame)
                 self.stats.frames_sent += 1
                 if self.on_frame is not None:
                     self.on_frame(frame, True, now)
@@ -355,40 +305,34 @@ class Emulator:
             self._index_dirty = True
         deadline = twin.next_deadline()
         if deadline != self._deadline[i]:
-            self._deadline[i] = deadline
-            if deadline is not None:
-                heapq.heappush(self._timers, (deadline, next(self._seq), i))
+            self._plan(i, deadline)
 
-    def _next_wakeup(self) -> float | None:
-        timers, delayed = self._timers, self._delayed
-        while timers and timers[0][0] != self._deadline[timers[0][2]]:
-            heapq.heappop(timers)  # stale entry
-        candidates = [heap[0][0] for heap in (timers, delayed) if heap]
-        return min(candidates) if candidates else None
+    def _plan(self, i: int, deadline: float | None) -> None:
+        """Twin ``i``'s one timer waits for ``deadline`` (None: no timer)."""
+        self._deadline[i] = deadline
+        timer = self._timers[i]
+        if timer is not None:
+            timer.cancel()
+        self._timers[i] = (None if deadline is None or not self._running else
+                           self.scheduler.call_at(deadline, partial(self._due, i, deadline)))
 
-    def _run_timers(self, now: float) -> None:
-        delayed = self._delayed
-        while delayed and delayed[0][0] <= now:
-            _due, _, i, frames = heapq.heappop(delayed)
+    def _due(self, i: int, deadline: float) -> None:
+        """Twin ``i``'s deadline came: ``advance`` it."""
+        if deadline != self._deadline[i] or not self._running:
+            return
+        self._deadline[i] = None
+        self._timers[i] = None
+        now = self._clock()
+        frames = self._call(i, self.twins[i].advance, now)
+        self._reschedule(i)
+        following = self._deadline[i]
+        stuck = following is not None and following <= now
+        if stuck:  # advance(now) left it due: asking again would spin
+            self._plan(i, None)
+        if frames:
+            self.stats.lateness.append(now - deadline)
             self._emit(i, frames, now)
-        timers = self._timers
-        lateness = self.stats.lateness
-        stuck: list[int] = []
-        while timers and timers[0][0] <= now:
-            deadline, _, i = heapq.heappop(timers)
-            if deadline != self._deadline[i]:
-                continue
-            self._deadline[i] = None
-            frames = self._call(i, self.twins[i].advance, now)
-            self._reschedule(i)
-            following = self._deadline[i]
-            if following is not None and following <= now:
-                stuck.append(i)  # advance(now) left it due: asking again would spin
-                self._deadline[i] = None
-            if frames:
-                lateness.append(now - deadline)
-                self._emit(i, frames, now)
-        for i in stuck:
+        if stuck:
             self._stuck(i, now)
 
     def _stuck(self, i: int, now: float) -> None:
@@ -401,9 +345,7 @@ class Emulator:
         if i not in self._stuck_reported:  # once per twin: it is asked again every retry
             self._stuck_reported.add(i)
             log.error("%s; asking it again every %g s", message, _STUCK_RETRY_S)
-        retry = now + _STUCK_RETRY_S
-        self._deadline[i] = retry
-        heapq.heappush(self._timers, (retry, next(self._seq), i))
+        self._plan(i, now + _STUCK_RETRY_S)
 
     def _name(self, i: int) -> str:
         twin = self.twins[i]

@@ -54,12 +54,10 @@ from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
-from blinkcan.runtime.virtual_waits import install_virtual_waits
+from blinkcan.runtime.virtual_waits import RECV_FOREVER, install_virtual_waits
 
 log = logging.getLogger(__name__)
 FrameHandler = Callable[[Frame, float], None]
-#: virtual seconds ``recv()`` without a timeout waits at most
-RECV_FOREVER = 60.0
 #: wall seconds between two looks of a parked notifier thread at whether its notifier stopped
 _PARKED_POLL = 0.005
 #: a wire rule: for a frame, None (unchanged), "drop", or extra delay in seconds
@@ -166,8 +164,6 @@ class SimulatedBus(can.BusABC):
         self._received: collections.deque[TimedFrame] = collections.deque(maxlen=100_000)
         self._listeners: list[FrameHandler] = []
         self._detach = network.attach(self._on_frame)
-        #: the HostBus serving this endpoint (shared by every driver on it)
-        self.host: Any = None
         #: the can.Notifiers this bus delivers to (stopped ones are dropped on the next frame)
         self._notifiers: list[can.Notifier] = []
         #: every notifier adopted (their threads are recognised until they stop)
@@ -182,6 +178,10 @@ class SimulatedBus(can.BusABC):
         """Call ``handler(frame, now)`` for every frame this endpoint receives."""
         self._listeners.append(handler)
         return lambda: self._listeners.remove(handler) if handler in self._listeners else None
+
+    def frame_listeners(self) -> list[FrameHandler]:
+        """The handlers :meth:`add_frame_listener` attached."""
+        return list(self._listeners)
 
     def _on_frame(self, frame: Frame, now: float) -> None:
         notifiers = self._notifiers

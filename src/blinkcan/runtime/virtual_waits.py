@@ -12,7 +12,7 @@ real seconds. So, while a :class:`~blinkcan.runtime.simbus.SimulatedBus` has ado
 - ``canopen.nmt.NmtMaster.wait_for_heartbeat`` and ``wait_for_bootup``,
 - ``canopen.pdo.base.PdoMap.wait_for_reception``,
 - ``cantools.tester.Message._expect_input_queue`` (``Tester.expect``; ``timeout=None`` waits at
-  most :data:`~blinkcan.runtime.simbus.RECV_FOREVER` virtual seconds, as ``recv()`` does).
+  most :data:`RECV_FOREVER` virtual seconds, as ``recv()`` does).
 
 Each replacement looks at the bus of the object it is called on: a simulated bus runs its
 simulation until the awaited thing happened or the timeout passed in virtual time (the same
@@ -39,6 +39,9 @@ from typing import Any
 import can
 
 from blinkcan.runtime.scheduler import SimulatedScheduler
+
+#: virtual seconds a wait with no timeout waits at most (``SimulatedBus.recv()`` too)
+RECV_FOREVER = 60.0
 
 log = logging.getLogger(__name__)
 
@@ -187,8 +190,6 @@ def _tester_expect(original: Callable[..., Any]) -> Callable[..., Any]:
         scheduler = _scheduler(lambda: self._can_bus)
         if scheduler is None:
             return original(self, signals, timeout, discard_other_messages)
-        from blinkcan.runtime.simbus import RECV_FOREVER  # noqa: PLC0415 (it imports this)
-
         end = scheduler.clock() + (RECV_FOREVER if timeout is None else timeout)
         arrived = _Until(lambda: not self._input_queue.empty())
         while True:

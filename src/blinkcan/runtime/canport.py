@@ -1,0 +1,99 @@
+"""The python-can port: any python-can bus as a :class:`~blinkcan.runtime.port.Port`.
+
+Frames are read the way every blinkcan reader reads (``runtime.canbus.BusReader``: joins the
+notifier already on the bus, counts undecodable frames, backs off from a failing bus, stops at
+a shut-down one) and handed to the handlers on the reader thread. Frames this port sent never
+come back as received ones, also on python-can's ``udp_multicast``, which echoes them
+(``runtime.canbus.OwnFrames``). The port's scheduler runs in real time on a thread of its own.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import can
+
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
+from blinkcan.runtime.scheduler import RealTimeScheduler
+
+FrameHandler = Callable[[Frame, float], None]
+
+
+class _PortListener(can.Listener):
+    """What the port's reader feeds: a message becomes a frame, an echo of the port's own is
+    dropped, every handler gets the rest."""
+
+    def __init__(self, port: CanBusPort) -> None:
+        self.port = port
+
+    def on_message_received(self, msg: can.Message) -> None:
+        frame = to_frame(msg)
+        if frame is None:
+            return
+        port = self.port
+        now = port.scheduler.clock()
+        own = port.own
+        if own.active and own.is_echo(frame, now):
+            return
+        try:
+            for handler in port.handlers:
+                handler(frame, now)
+        except Exception as error:  # a handler's defect is not a failing bus
+            port.scheduler.failed(error, "a frame handler")
+
+
+class CanBusPort:
+    """A python-can ``bus``, read through ``notifier`` (or the one already on the bus, or a
+    notifier of its own), with a real-time scheduler named ``name`` on ``clock``."""
+
+    def __init__(self, bus: can.BusABC, *, notifier: can.Notifier | None = None,
+                 clock: Callable[[], float] = time.monotonic, name: str = "blinkcan") -> None:
+        self.bus = bus
+        self.scheduler = RealTimeScheduler(name, clock)
+        self.reading = ReadStats()
+        self.own = OwnFrames(bus)
+        #: the handlers, a tuple: the reader reads it per frame, listen and detach replace it
+        self.handlers: tuple[FrameHandler, ...] = ()
+        self._notifier = notifier
+        self._on_closed: list[Callable[[], object]] = []
+        self._reader: BusReader | None = None
+        self._listener = _PortListener(self)
+
+    def send(self, frame: Frame) -> None:
+        now = self.scheduler.clock()
+        own = self.own
+        if own.active:
+            own.sent(frame, now)
+        self.bus.send(to_message(frame, now))
+
+    def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None
+               ) -> Callable[[], None]:
+        self.handlers += (handler,)
+        if on_closed is not None:
+            self._on_closed.append(on_closed)
+        if self._reader is None:
+            self._reader = BusReader(self.bus, self._listener, self._notifier,
+                                     stats=self.reading, on_closed=self._closed)
+
+        def detach() -> None:
+            handlers = list(self.handlers)
+            if handler in handlers:
+                handlers.remove(handler)
+                self.handlers = tuple(handlers)
+            if on_closed is not None and on_closed in self._on_closed:
+                self._on_closed.remove(on_closed)
+            if not self.handlers and self._reader is not None:
+                reader, self._reader = self._reader, None
+                reader.stop()
+
+        return detach
+
+    def listeners(self) -> list[FrameHandler]:
+        return [handler for listener in BusReader.listeners_of(self.bus)
+                if isinstance(listener, _PortListener) for handler in listener.port.handlers]
+
+    def _closed(self) -> None:
+        for callback in list(self._on_closed):
+            callback()

@@ -1,0 +1,67 @@
+"""The transport: a :class:`Port` sends frames, calls a handler for the frames it receives,
+and owns the scheduler its users run on.
+
+``HostBus`` and ``Emulator`` take a Port and never ask which one it is (DESIGN.md, "Extension
+points"). Two are built in: the python-can port (``runtime.canport``: any python-can bus, read
+by a notifier thread) and the simulated port (``runtime.simport``: an endpoint of a
+``SimulatedNetwork``, in virtual time). :func:`port_for` is the one place that picks the port
+for a python-can bus object.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Protocol, runtime_checkable
+
+import can
+
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime.canbus import ReadStats
+from blinkcan.runtime.canport import CanBusPort
+from blinkcan.runtime.scheduler import Scheduler
+from blinkcan.runtime.simport import simulated_port
+
+#: ``handler(frame, now)``: a frame received, at the port's clock time ``now``
+FrameHandler = Callable[[Frame, float], None]
+
+
+@runtime_checkable
+class Port(Protocol):
+    """A transport for frames.
+
+    Handlers run in the port's receiving context: the reader thread of a real bus, the
+    simulation itself on a simulated one (then ``scheduler.in_loop`` is true there). A
+    handler must be quick; work that touches its owner's state goes to ``scheduler.post``
+    unless ``scheduler.in_loop``.
+    """
+
+    @property
+    def scheduler(self) -> Scheduler:
+        """The scheduler the port's users run their timers and handlers on."""
+
+    @property
+    def reading(self) -> ReadStats:
+        """What reading met: undecodable frames, failures, a shut-down bus."""
+
+    def send(self, frame: Frame) -> None:
+        """Put ``frame`` on the bus; ``can.CanError`` when it cannot go."""
+
+    def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None
+               ) -> Callable[[], None]:
+        """Call ``handler(frame, now)`` for every frame received from others (never the
+        port's own); ``on_closed()`` once the bus was shut down. Returns the detach."""
+
+    def listeners(self) -> list[FrameHandler]:
+        """The handlers that ports of this same bus object feed (to find a shared user)."""
+
+
+def port_for(bus: can.BusABC, *, notifier: can.Notifier | None = None,
+             clock: Callable[[], float] = time.monotonic, name: str = "blinkcan") -> Port:
+    """The port of a python-can bus object: the simulated port for a simulated endpoint,
+    else the python-can port (its own real-time scheduler named ``name`` on ``clock``; reads
+    through ``notifier`` if given, else the notifier already on the bus, else its own)."""
+    simulated = simulated_port(bus)
+    if simulated is not None:
+        return simulated
+    return CanBusPort(bus, notifier=notifier, clock=clock, name=name)

@@ -1,0 +1,43 @@
+"""The simulated port: an endpoint of a ``SimulatedNetwork`` as a
+:class:`~blinkcan.runtime.port.Port`, in the simulation's virtual time.
+
+Frames are handed to the handlers by the simulation itself, on its one thread, at the virtual
+time they arrive; the port's scheduler is the network's ``SimulatedScheduler``. A simulated
+endpoint never receives its own frames (a real controller does not either), so there is no
+echo to drop, and it never shuts down under its users.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import can
+
+from blinkcan.protocol.frame import Frame
+from blinkcan.runtime.canbus import ReadStats
+from blinkcan.runtime.simbus import FrameHandler, SimulatedBus
+
+
+class SimulatedPort:
+    """The port of the simulated endpoint ``bus``."""
+
+    def __init__(self, bus: SimulatedBus) -> None:
+        self.bus = bus
+        self.scheduler = bus.scheduler
+        self.reading = ReadStats()
+
+    def send(self, frame: Frame) -> None:
+        self.bus.send_frame(frame)
+
+    def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None
+               ) -> Callable[[], None]:
+        return self.bus.add_frame_listener(handler)
+
+    def listeners(self) -> list[FrameHandler]:
+        return self.bus.frame_listeners()
+
+
+def simulated_port(bus: can.BusABC) -> SimulatedPort | None:
+    """The simulated port of ``bus`` if it is a simulated endpoint, else None (the one
+    place that asks: everything else takes a port)."""
+    return SimulatedPort(bus) if isinstance(bus, SimulatedBus) else None
