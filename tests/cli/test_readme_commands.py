@@ -1,7 +1,7 @@
 """The examples of the README's command table run as written, with a virtual bus in place of
 the interface they name (``-i/-c`` replaced), against twins: a keypad (15h), a generation-2 keypad
-(16h) and a Keybox (0Ch). Commands that run until Ctrl-C or for a minute (demo, emulate, live
-monitor, record) have tests of their own."""
+(16h), a PKP-3500-MT (17h) and a Keybox (0Ch). Commands that run until Ctrl-C or for a minute
+(demo, emulate, live monitor, record) have tests of their own."""
 
 from __future__ import annotations
 
@@ -59,7 +59,8 @@ def test_readme_command_example_runs(example: str, tmp_path: Path,
             writer.write(timestamp, frame)
     channel = f"readme-{uuid.uuid4().hex}"
     bus = can.Bus(interface="virtual", channel=channel)
-    twins = [quiet_keypad(), KeypadTwin(node_id=0x16, manual="1.5"), KeyboxTwin()]
+    twins = [quiet_keypad(), KeypadTwin(node_id=0x16, manual="1.5"),
+             KeypadTwin(node_id=0x17, model="pkp-3500-mt"), KeyboxTwin()]
     words = shlex.split(example)[1:]
     if words[0] in ("keypad", "keybox", "nmt", "scan"):
         words = _on_virtual(words, channel)

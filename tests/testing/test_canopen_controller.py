@@ -15,6 +15,7 @@ from canopen.nmt import NmtError
 from canopen.sdo.client import SdoClient
 from canopen.sdo.exceptions import SdoCommunicationError
 
+from blinkcan import Keybox
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.shipped import shipped_eds
 from blinkcan.protocol.cob import HEARTBEAT
@@ -188,3 +189,25 @@ def test_a_real_bus_keeps_real_time_while_a_rig_is_open() -> None:
         finally:
             real.disconnect()
     assert HEARTBEAT  # the rig is closed meanwhile, nothing else to check
+
+
+def test_pythons_canopen_sync_producer_runs_on_the_virtual_clock(
+        bench: tuple[Rig, KeyboxTwin, Any]) -> None:
+    rig, _, node = bench
+    node.network.sync.start(0.1)
+    rig.advance(0.55)
+    node.network.sync.stop()
+    rig.advance(0.5)
+    assert [when for when, frame in rig.frames if frame.can_id == 0x080] == pytest.approx(
+        [0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
+
+
+def test_blinkcan_drivers_and_python_canopen_share_the_rig_bus(
+        bench: tuple[Rig, KeyboxTwin, Any]) -> None:
+    rig, _, node = bench
+    keybox = Keybox(rig.bus, 0x0C)
+    keybox.on(4)  # the driver's SDO, answered in virtual time
+    assert node.sdo["Single pin state"][4].raw == 1  # python-canopen reads what it did
+    node.sdo["Single pin state"][4].raw = 0
+    assert keybox.states()[4] == "off"
+    keybox.close()

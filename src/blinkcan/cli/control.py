@@ -34,6 +34,7 @@ from blinkcan.cli.ranges import (
 from blinkcan.devices.colours import BacklightColour, led_colour
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription, Face, Model
+from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.registry import identify, model, models
 from blinkcan.host import HostBus, IdentityError, Keybox, Keypad, SdoError, SharedNodeIdError
 from blinkcan.host.device import NoDeviceError, check_one_device
@@ -167,7 +168,7 @@ def _done(target: Target, what: str) -> None:
     click.echo(f"{kind} {node_id:02X}h: {what}")
 
 
-def _info(device: Keypad | Keybox) -> None:
+def _info(device: Any) -> None:
     identity = device.identity()
     if isinstance(identity, J1939Identity):  # §11, §18, §20: what J1939 tells
         click.echo(f"{'address':<17} {identity.address:02X}h (J1939)")
@@ -556,3 +557,126 @@ def faults(target: Target) -> None:
         assert isinstance(device, Keybox)
         found = [pin for pin, state in device.states().items() if state == "fault"]
         click.echo(", ".join(map(str, found)) if found else "no output in FAULT")
+
+
+# -- what a model's face has besides keys and outputs (the PKP-3500-MT's knobs and inputs) -------
+
+def _needs(device: Any, what: str, count: int) -> None:
+    """A one-line error when the model at the node id has none of ``what`` (its face)."""
+    if not count:
+        raise click.ClickException(f"this {device.description.title} has no {what}")
+
+
+def _led_list(text: str) -> list[int]:
+    """"1,2,16" -> [1, 2, 16]; "off" or "" -> []."""
+    if text.strip().lower() in ("", "off", "none"):
+        return []
+    return [parse_int(part) for part in text.split(",") if part.strip()]
+
+
+def _ring_leds(face: Face) -> list[int]:
+    return [led for encoder in face.encoders for led in encoder.ring_leds]
+
+
+@keypad.command("ring", epilog=f"Ring LEDs: {_per_model('keypad', _ring_leds)}.")
+@click.argument("encoder", type=int)
+@click.argument("leds", metavar="LEDS|off")
+@bus_options
+@node_id_option
+@click.pass_obj
+def ring(target: Target, encoder: int, leds: str) -> None:
+    """Light exactly LEDS (comma-separated, numbered as the face) of ENCODER's ring; the
+    other ring keeps its LEDs. ``off``: none.
+
+    \b
+    blinkcan keypad ring 1 1,2,3
+    blinkcan keypad ring 2 off
+    """
+    chosen = _led_list(leds)
+    with _device(target, start=True) as device:
+        _needs(device, "encoder rings", len(device.description.face.encoders))
+        device.read_rings()  # the other ring keeps what it shows (read from the keypad first)
+        device.set_ring(encoder, chosen)
+    shown = ", ".join(map(str, chosen)) if chosen else "off"
+    _done(target, f"ring {encoder} LEDs {shown}")
+
+
+@keypad.command("encoder")
+@click.argument("encoder", type=int)
+@click.option("--top", type=int, default=None,
+              help="Store TOP: the counter stops at TOP clockwise and at 0 (0: it wraps).")
+@click.option("--counter", type=int, default=None,
+              help="Store the counter the encoder starts from at power-on.")
+@bus_options
+@node_id_option
+@click.pass_obj
+def encoder_command(target: Target, encoder: int, top: int | None,
+                    counter: int | None) -> None:
+    """ENCODER's tick counter and TOP (read); --top and --counter store new ones first."""
+    with _device(target) as device:
+        _needs(device, "encoders", len(device.description.face.encoders))
+        if top is not None:
+            device.set_top(encoder, top)
+        if counter is not None:
+            device.set_startup_counter(encoder, counter)
+        ticks = device.read_counter(encoder)
+        stored_top = device.read(f"encoder_{encoder}_top")
+    click.echo(f"encoder {encoder}: counter {ticks}, top {stored_top}")
+
+
+@keypad.command("inputs")
+@bus_options
+@node_id_option
+@click.pass_obj
+def inputs(target: Target) -> None:
+    """The analog inputs in volts and the digital inputs' levels (read)."""
+    with _device(target) as device:
+        face = device.description.face
+        _needs(device, "inputs", face.analog_inputs + face.digital_inputs)
+        volts = {number: device.read_analog(number) for number in range(face.analog_inputs)}
+        levels = device.digital_inputs() if face.digital_inputs else {}
+    for number in sorted(set(volts) | set(levels)):
+        parts = ([f"{volts[number]:.2f} V"] if number in volts else []) + (
+            [f"digital {'high' if levels[number] else 'low'}"] if number in levels else [])
+        click.echo(f"IN{number}: {', '.join(parts)}")
+
+
+for group in (keypad, keybox):
+    @group.command("read")
+    @click.argument("name")
+    @bus_options
+    @node_id_option
+    @click.pass_obj
+    def read(target: Target, name: str) -> None:
+        """Read one object of the model's dictionary by NAME (as ``export eds`` lists them,
+        e.g. encoder_1_top)."""
+        with _device(target) as device:
+            entry = _entry(device, name)
+            value = device.read(name)
+        shown = f"{value} ({value:#x})" if isinstance(value, int) else value
+        click.echo(f"{name} ({entry.index:04X}h/{entry.subindex:02X}): {shown}")
+
+    @group.command("write")
+    @click.argument("name")
+    @click.argument("value")
+    @bus_options
+    @node_id_option
+    @click.pass_obj
+    def write(target: Target, name: str, value: str) -> None:
+        """Write one object of the model's dictionary by NAME; VALUE is checked against the
+        model's valid values first."""
+        with _device(target) as device:
+            entry = _entry(device, name)
+            number: int | str = value if entry.data_type.is_string else parse_int(value)
+            device.write(name, number)
+        _done(target, f"{name} ({entry.index:04X}h/{entry.subindex:02X}) = {value}")
+
+
+def _entry(device: Any, name: str) -> ObjectEntry:
+    table = device.description.table
+    if name not in table:
+        close = [entry.name for entry in table if name.lower() in entry.name][:8]
+        hint = f"; did you mean {', '.join(close)}" if close else ""
+        raise click.ClickException(f"the {device.description.title} has no object {name!r}"
+                                   f"{hint}")
+    return table[name]  # type: ignore[no-any-return]

@@ -25,7 +25,7 @@ from blinkcan.cli.bus_options import (
     parse_node_id,
 )
 from blinkcan.decode import Decoder
-from blinkcan.devices.registry import models, parse_spec
+from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
@@ -92,7 +92,7 @@ def _free_node_id(near: int, taken: set[int]) -> int:
     return near
 
 
-@click.command("emulate")
+@click.command("emulate", epilog=f"DEVICE: {model_names()}.")
 @click.argument("devices", nargs=-1, required=True, metavar="DEVICE[@GEN][:NODE]...")
 @click.option("--node-id", type=NODE_ID, default=None,
               help="Node id of a single device (0x15, 21, 15h).")

@@ -1,4 +1,5 @@
-"""``blinkcan export eds|dbc keypad|keybox [-o FILE]``: files for other tools."""
+"""``blinkcan export eds|dbc DEVICE [-o FILE]``: files for other tools, for any registered
+model (the help lists them from the registry)."""
 
 from __future__ import annotations
 
@@ -8,16 +9,16 @@ from blinkcan.cli.bus_options import NODE_ID
 from blinkcan.cli.control import J1939Address
 from blinkcan.cli.targets import check_target, writing
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
-from blinkcan.devices.registry import describe_device
+from blinkcan.devices.registry import describe_device, model_names, models
 from blinkcan.formats.atomic import write_atomically
 from blinkcan.formats.dbc import dbc_text
 from blinkcan.formats.dbc_j1939 import dbc_text as j1939_dbc_text
 from blinkcan.formats.eds import eds_text
 
 
-@click.command("export")
+@click.command("export", epilog=f"DEVICE: {model_names()}.")
 @click.argument("kind", type=click.Choice(["eds", "dbc"]))
-@click.argument("device", metavar="keypad|keybox")
+@click.argument("device", metavar="DEVICE")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="File (default: stdout).")
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
               show_default=True, help="EDS: the profile whose default values to write.")
@@ -44,8 +45,10 @@ def command(kind: str, device: str, output: str | None, quirks: str, node_id: in
         check_target(output, force)
     if protocol == "j1939" or address is not None:
         if kind != "dbc" or "j1939" not in description.features:
-            raise click.UsageError("J1939 mode: a DBC of the PKP-2600-SI keypad "
-                                   "(blinkcan export dbc keypad --protocol j1939)")
+            having = [m for m in models() if "j1939" in m.description().features]
+            raise click.UsageError(
+                "J1939 mode: a DBC of " + ", ".join(m.description().title for m in having)
+                + "".join(f" (blinkcan export dbc {m.name} --protocol j1939)" for m in having))
         text = j1939_dbc_text(address if address is not None else DEFAULT_ADDRESS)
     else:
         text = eds_text(description) if kind == "eds" else dbc_text(description, node_id)

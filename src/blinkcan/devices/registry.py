@@ -87,6 +87,18 @@ def model(name: str) -> Model:
                          "(optionally @generation)") from None
 
 
+def model_names() -> str:
+    """"pkp-2600-si (keypad; generations 1.1, 1.5), keybox, ...": every registered model, for
+    help texts and error messages."""
+    def one(found: Model) -> str:
+        extra = [*found.aliases]
+        if len(found.generations) > 1:
+            extra.append(f"@{'/@'.join(found.generations)}")
+        return f"{found.name} ({', '.join(extra)})" if extra else found.name
+
+    return ", ".join(one(found) for found in models())
+
+
 def parse_spec(spec: str) -> tuple[Model, str]:
     """"keypad@1.5" -> (the PKP-2600-SI, "1.5"); no generation: the model's first."""
     name, _, generation = spec.partition("@")

@@ -138,6 +138,15 @@ class Pkp3500Keypad(Keypad):
             others = (self._rings or 0) & ~sum(1 << (led - 1) for led in ring)
             self._send_rings(others | own)
 
+    def read_rings(self) -> list[int]:
+        """Take the ring LEDs the keypad shows now (SDO, MT §20c) as this driver's picture, so
+        that the next :meth:`set_ring` changes one ring and keeps the other as it is (a program
+        started against a keypad lit by someone else). Returns the LEDs lit."""
+        word = int(self.read("led_on_rings"))  # no SDO under the picture lock
+        with self._picture_lock:
+            self._rings = word
+        return item_numbers(word)
+
     def ring(self, encoder: int) -> list[int]:
         """The ring LEDs of ``encoder`` this driver last set."""
         ring = self.description.face.encoders[self._check_encoder(encoder) - 1].ring_leds
