@@ -151,6 +151,7 @@ class Keypad(Device):
             raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
         #: the registered model this driver runs (the PKP-2600-SI unless ``model`` names one)
         self._model = registry_model(model or MODEL)
+        self._model_given = model is not None
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
@@ -221,6 +222,20 @@ class Keypad(Device):
         except BaseException:
             self.close()
             raise
+
+    def _compare_identity(self, found: dict[str, Value | None]) -> None:
+        """No model named: a keypad this very class runs (its 100Bh says which) is adopted, as
+        :meth:`connect` would; any other device is refused as before."""
+        model_id = found["model_id"]
+        answered = identify(model_id=model_id) if isinstance(model_id, str) else None
+        if (not self._model_given and answered is not None
+                and answered.model != self._model.name
+                and driver_class(answered.model) is type(self)):
+            self._model = registry_model(answered.model)
+            if self._generation not in self._model.generations:
+                self._generation = None  # a generation of the model first assumed
+            self.description = self._describe(self._generation, self.node_id)
+        super()._compare_identity(found)
 
     def _probe_generation(self) -> str:
         """The model's generation with 1016h if the device answers 1016h, else the one
