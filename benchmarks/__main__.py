@@ -10,6 +10,7 @@ from benchmarks import (
     emulator_capacity,
     fleet_parquet,
     j1939_decode,
+    panel_latency,
     sdo_roundtrip,
     sdo_twin,
     simulated_time,
@@ -28,6 +29,7 @@ def main() -> None:
     j1939_decode.main(smoke=args.smoke)
     canopen_time.main(smoke=args.smoke)
     fleet_parquet.main(smoke=args.smoke)
+    panel_latency.main(smoke=args.smoke)
 
 
 main()

@@ -242,6 +242,29 @@ def test_decode_parquet_and_query_on_the_command_line(tmp_path: Path, traffic: T
     assert bad.output.startswith("Error: ")
 
 
+@pytest.mark.parametrize("sql", [
+    "COPY (SELECT * FROM events) TO '{out}/../stolen.csv'",
+    "SELECT 1; COPY (SELECT 1) TO '{out}/../stolen.csv'",
+    "EXPLAIN ANALYZE COPY (SELECT 1) TO '{out}/../stolen.csv'",
+    "ATTACH '{out}/../stolen.db'",
+    "EXPORT DATABASE '{out}/../stolen'",
+    "COPY (SELECT 1 AS a) TO '{out}/{first}'",
+])
+def test_query_only_reads(tmp_path: Path, traffic: Traffic, sql: str) -> None:
+    out = tmp_path / "lake"
+    decode_files([write_log(tmp_path / "unit.log", traffic)], str(out))
+    before = dataset_files(out)
+    first = sorted(before)[0]
+    result = CliRunner().invoke(cli, ["query", str(out), sql.format(out=out, first=first)])
+    assert result.exit_code == 1
+    assert result.output.startswith("Error: query only reads")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lake", "unit.log"]
+    assert dataset_files(out) == before
+    described = CliRunner().invoke(cli, ["query", str(out), "DESCRIBE events", "--csv"])
+    assert described.exit_code == 0, described.output
+    assert "can_id" in described.stdout
+
+
 def test_query_names_a_folder_with_no_dataset(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["query", str(tmp_path), "SELECT 1"])
     assert result.exit_code == 1

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import io
 import os
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 import can
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -75,3 +78,32 @@ def test_blank_lines_are_skipped_as_python_can_does(tmp_path: Path) -> None:
     assert _ours(path.read_text()) == _python_cans(path)
     assert [f for _, f in read_frames(path)] == [Frame(0x715, b"\x05")]
     assert [type(item).__name__ for _, item in read_log(path)] == ["Frame", "Message"]
+
+
+@pytest.mark.parametrize("line", [
+    "(nan) can0 715#00",              # the fast path: a classic data frame
+    "(inf) can0 715#R",               # python-can's path: a remote frame
+    "(-inf) can0 12345678##1AABB",    # python-can's path: a CAN FD frame
+])
+def test_a_time_that_is_not_a_finite_number_is_refused(line: str) -> None:
+    log = io.StringIO(f"(1.000000) can0 715#00\n{line}\n(2.000000) can0 715#05\n")
+    frames = read_candump(log)
+    assert next(frames)[0] == 1.0
+    with pytest.raises(ValueError, match="is not a finite number of seconds"):
+        next(frames)
+
+
+def test_decode_names_the_file_of_a_non_finite_time(tmp_path: Path) -> None:
+    log = tmp_path / "n.log"
+    log.write_text("(1.000000) can0 715#00\n(nan) can0 715#00\n")
+    result = subprocess.run([sys.executable, "-m", "blinkcan", "decode", str(log)],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines()[-1] == (
+        f"Error: {log}: not a readable log (time (nan) is not a finite number of seconds)")
+
+
+def test_an_identifier_over_8_hex_digits_is_refused_not_read_as_an_error_frame() -> None:
+    log = io.StringIO("(1.000000) can0 7FFFFFFFFFF#00\n")
+    with pytest.raises(ValueError, match="7FFFFFFFFFF has more than 8 hex digits"):
+        list(read_candump(log))

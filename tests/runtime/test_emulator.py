@@ -180,3 +180,27 @@ def test_keybox_fault_and_heartbeat_loss_on_the_bus(channel: str, host: can.BusA
             assert snapshot["heartbeat_consumer"]["state"] == "lost"
     finally:
         device_bus.shutdown()
+
+
+def test_sends_on_a_shut_down_bus_are_reported_once_with_a_count(
+        channel: str, host: can.BusABC, caplog: pytest.LogCaptureFixture) -> None:
+    twin = KeypadTwin()
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    emulator = Emulator(device_bus, [twin]).start()
+    try:
+        wait_for(host, 0x715)
+        host.send(to_message(Frame(0x615, bytes.fromhex("2B1710000A000000"))))  # 10 ms heartbeat
+        assert wait_for(host, 0x595).data[0] == 0x60
+        device_bus.shutdown()
+        deadline = time.monotonic() + 5
+        while emulator.stats.send_errors < 5:
+            assert time.monotonic() < deadline, "the heartbeat stopped being sent"
+            time.sleep(0.01)
+    finally:
+        emulator.stop()
+        device_bus.shutdown()
+    failures = emulator.stats.send_errors
+    sends = [r.getMessage() for r in caplog.records if r.name == "blinkcan.runtime.emulator"]
+    assert len(sends) == 2, sends  # the first failure, and the count at the end
+    assert "send failed" in sends[0]
+    assert f"{failures} frames could not be sent" in sends[1]

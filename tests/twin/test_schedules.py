@@ -26,8 +26,9 @@ from blinkcan.protocol import Frame
 from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, compose_id
 from blinkcan.protocol.sdo import EXPEDITED_DOWNLOAD_COMMAND
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.hooks import Periodic
 from blinkcan.twin.registry import build_twin
-from blinkcan.twin.schedule import Ticker, at
+from blinkcan.twin.schedule import CATCH_UP_PERIODS, Ticker, at
 
 #: the stored settings that start, stop or time something (written most often)
 TIMING = ("producer_heartbeat_time", "tpdo1_event_timer", "tpdo2_event_timer",
@@ -205,3 +206,38 @@ def test_periodic_deadlines_are_whole_ticks_from_their_origin() -> None:
     assert timer.due == 2.1 + 100100 / 1000
     huge = 2.0 ** 60
     assert at(huge, 1) > huge
+
+
+@pytest.mark.parametrize("late_by", [1, 2, CATCH_UP_PERIODS - 2, CATCH_UP_PERIODS - 1,
+                                     CATCH_UP_PERIODS, 3 * CATCH_UP_PERIODS])
+def test_a_ticker_woken_late_owes_the_missed_periods_and_keeps_its_schedule(late_by: int) -> None:
+    """Issue 22 item 5: a wake-up ``late_by`` periods after the due time owes the event of every
+    missed period (up to CATCH_UP_PERIODS, sent late rather than dropped), and the schedule
+    stays the device's clock: the next event is the next whole period from the origin, not a
+    period from the late wake-up."""
+    timer = Ticker()
+    timer.run(1.0, 10)  # due at 1.01, 1.02, ...
+    late = at(1.0, 10 + 10 * late_by + 3)  # 3 ticks into the period after late_by more
+    assert timer.overdue(late) == min(late_by + 1, CATCH_UP_PERIODS)
+    assert timer.fire(late) == min(late_by + 1, CATCH_UP_PERIODS)
+    assert timer.due == at(1.0, 10 * (late_by + 2))
+    assert timer.fire(timer.due) == 1
+    assert timer.fire(timer.due - 0.001) == 0
+
+
+def test_a_periodic_producer_woken_late_runs_once_per_period_owed() -> None:
+    """The twins' timers (``twin.add_timer``) produce each owed period's frames, bounded."""
+    runs: list[float] = []
+
+    def produce(now: float) -> list[Frame]:
+        runs.append(now)
+        return []
+
+    timer = Periodic(produce)
+    timer.start(0.01, 0.0)
+    timer.advance(0.025)  # 0.01 and 0.02 were due
+    assert runs == [0.025, 0.025]
+    assert timer.due == at(0.0, 30)
+    timer.advance(10.0)  # a stall of ~1000 periods: only the last few are made up for
+    assert len(runs) == 2 + CATCH_UP_PERIODS
+    assert timer.due == at(0.0, 10010)

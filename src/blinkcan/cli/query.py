@@ -30,6 +30,18 @@ def _json_value(value: Any) -> Any:
         else str(value)
 
 
+def _check_reads_only(connection: Any, sql: str) -> None:
+    """Raise unless every statement of ``sql`` is a SELECT (DESCRIBE, SHOW, SUMMARIZE, WITH,
+    VALUES are SELECTs to DuckDB): a query never writes, copies, attaches or deletes a file."""
+    import duckdb  # noqa: PLC0415 (the [fleet] extra, checked by the caller)
+
+    for statement in connection.extract_statements(sql):
+        if statement.type != duckdb.StatementType.SELECT:
+            raise click.ClickException(
+                f"query only reads: {statement.type.name} is not a SELECT (DESCRIBE, SHOW, "
+                "SUMMARIZE, WITH and VALUES are)")
+
+
 @click.command("query")
 @click.argument("dataset", metavar="OUT", type=click.Path())
 @click.argument("sql")
@@ -38,7 +50,7 @@ def _json_value(value: Any) -> Any:
 def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
     """Run SQL on the dataset `blinkcan decode --parquet OUT` wrote: its rows are the table
     `events` (columns: time, source, channel, can_id, extended, node, kind, key, pin, state,
-    colour, value, text, data, model, date)."""
+    colour, value, text, data, model, date). It only reads: every statement must be a SELECT."""
     if as_csv and as_json:
         raise click.UsageError("--csv and --json are two outputs: choose one")
     absent = fleet.missing("duckdb", "fsspec")
@@ -50,6 +62,7 @@ def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
 
     try:
         with connect(dataset) as connection:
+            _check_reads_only(connection, sql)
             result = connection.execute(sql)
             names = [column[0] for column in result.description or []]
             rows = result.fetchall()

@@ -37,6 +37,11 @@ def _python_can(line: str) -> can.Message | None:
     """The message python-can reads from one line (None for a blank line)."""
     from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
 
+    fields = line.split()
+    if len(fields) >= 3 and len(fields[2].partition("#")[0]) > 8:
+        # candump writes 3 hex digits (11-bit) or 8 (29-bit, with the error flag): python-can
+        # would read the flag bits of a longer identifier and call the line an error frame
+        raise ValueError(f"identifier {fields[2].partition('#')[0]} has more than 8 hex digits")
     reader = CanutilsLogReader(io.StringIO(line))
     message = next(iter(reader), None)
     return restore_error_details(message, line) if message is not None else None
@@ -144,6 +149,8 @@ def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame
                     except ValueError:
                         pass
                     else:
+                        if timestamp - timestamp:  # nan or inf: x - x is 0.0 for finite x
+                            _not_finite(stamp)
                         can_id, extended = plain
                         yield timestamp, new(Frame, (can_id, payload, extended))
                         continue
@@ -151,4 +158,12 @@ def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame
                 continue
             message = _python_can(line)
             if message is not None:
+                if message.timestamp - message.timestamp:
+                    _not_finite(fields[0])
                 yield message.timestamp, message
+
+
+def _not_finite(stamp: str) -> None:
+    """A candump time is seconds, a finite number (DESIGN: non-finite times are bad input);
+    raised as python-can's reader raises for a time it cannot read, so callers name the file."""
+    raise ValueError(f"time {stamp} is not a finite number of seconds")

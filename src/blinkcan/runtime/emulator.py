@@ -104,6 +104,8 @@ class Emulator:
         self._routes_seen: list[object] = [None] * len(self.twins)
         self._index_dirty = True
         self._stuck_reported: set[int] = set()
+        #: frames that could not be sent since the last one that could (logged once, counted)
+        self._failing_sends = 0
         #: optional tap: ``on_frame(frame, sent, now)`` for every frame sent or received
         self.on_frame: Callable[[Frame, bool, float], object] | None = None
 
@@ -131,6 +133,9 @@ class Emulator:
             self._detach = None
         if self._owns_port:
             self.scheduler.stop()
+        failing, self._failing_sends = self._failing_sends, 0  # the loop is stopped
+        if failing:
+            log.warning("%d frames could not be sent", failing)
 
     def __enter__(self) -> Emulator:
         return self.start()
@@ -290,11 +295,18 @@ class Emulator:
             try:
                 send(frame)
                 self.stats.frames_sent += 1
+                if self._failing_sends:
+                    log.warning("bus sends again after %d frames could not be sent",
+                                self._failing_sends)
+                    self._failing_sends = 0
                 if self.on_frame is not None:
                     self.on_frame(frame, True, now)
             except can.CanError as error:
                 self.stats.send_errors += 1
-                log.warning("send failed for %r: %s", frame, error)
+                self._failing_sends += 1
+                if self._failing_sends == 1:  # a shut-down bus fails every frame: log once
+                    log.warning("send failed for %r: %s (further failures are counted, "
+                                "reported when it sends again or stops)", frame, error)
             self._deliver(frame, source, now)
 
     def _reschedule(self, i: int) -> None:

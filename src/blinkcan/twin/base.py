@@ -261,8 +261,7 @@ class CanopenTwin:
             return []
         self._now = now
         frames: list[Frame] = []
-        if self._heartbeat.fire(now):
-            frames.append(self._heartbeat_frames[self._nmt])
+        frames += [self._heartbeat_frames[self._nmt]] * self._heartbeat.fire(now)
         deadline = self._consumer_deadline
         if deadline is not None and now >= deadline:
             frames += self._heartbeat_lost(now)

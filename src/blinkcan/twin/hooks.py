@@ -44,7 +44,8 @@ class Periodic(Ticker):
     """A periodic producer registered with a twin (``twin.add_timer``): ``produce(now)`` runs
     every ``period`` seconds from :meth:`start` until :meth:`stop`, at exact times
     (:mod:`blinkcan.twin.schedule`). ``produce`` may change :attr:`period`; the next run is
-    counted from the one that was due."""
+    counted from the one that was due. Woken late, it runs once for each period owed
+    (:meth:`~blinkcan.twin.schedule.Ticker.fire`)."""
 
     __slots__ = ("produce",)
 
@@ -68,7 +69,10 @@ class Periodic(Ticker):
         due = self.due
         if due is None or now < due:
             return []
-        frames = self.produce(now)
-        if self.due == due:  # not stopped or started again by produce
-            self.fire(now)
+        frames: list[Frame] = []
+        for _ in range(self.overdue(now)):  # late: the owed periods, late (twin/schedule.py)
+            frames += self.produce(now)
+            if self.due != due:  # stopped, started again or retimed by produce
+                return frames
+        self.fire(now)
         return frames

@@ -322,11 +322,11 @@ class J1939Keypad:
         frames: list[Frame] = []
         if self._claimer is not None:
             self._claimer.advance(now)
-        if self._heartbeat_timer.fire(now):
+        for _ in range(self._heartbeat_timer.fire(now)):  # one per period owed
             frames += self._send(heartbeat_message(self._heartbeat_counter, self._keys,
                                                    self.settings["identifier"]))
             self._heartbeat_counter = (self._heartbeat_counter + 1) & 0xFF  # J-6
-        if self._periodic_timer.fire(now):
+        for _ in range(self._periodic_timer.fire(now)):
             frames += self._all_key_messages()
         if self._show is not None and self._show.finished(now):
             self._show = None
