@@ -125,3 +125,17 @@ def test_no_keypad_at_the_address_is_one_line(
     assert result.exit_code == 1
     assert result.output == "Error: no keypad heard at 30h\n"
     assert emulator.snapshot(twin)["commanded"][2]["colour"] == "off"
+
+
+def test_j1939_colours_of_their_own(bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    """Issue 20 item 4: §7a 09h yellow/green and 08h amber from the command line, as named."""
+    channel, emulator, twin = bench
+    bus = ["-i", "virtual", "-c", channel]
+    assert run("keypad", "--protocol", "j1939", *bus, "led", "6", "yellow/green",
+               "--blink", "amber") == \
+        "keypad 21h (J1939): key 6 yellow/green alternating with amber\n"
+    assert emulator.snapshot(twin)["commanded"][5]["phases"] == ["yellow/green", "amber"]
+    result = CliRunner().invoke(cli, ["keypad", "--protocol", "j1939", *bus, "led", "6",
+                                      "purple"])
+    assert result.exit_code == 2
+    assert "yellow/green" in result.output

@@ -79,6 +79,10 @@ def write_log(path: Path, traffic: Traffic) -> Path:
 
         text = "".join(candump_lines(traffic)).encode()
         path.write_bytes(zstandard.ZstdCompressor().compress(text))
+    elif name.endswith(".gz"):  # another format, gzipped as a logger would
+        plain = write_log(path.with_name(path.name[:-3]), traffic)
+        path.write_bytes(gzip.compress(plain.read_bytes()))
+        plain.unlink()
     else:
         from blinkcan.formats.logs import FrameWriter
 

@@ -86,9 +86,7 @@ def test_a_lost_heartbeat_shows_as_a_gap(tmp_path: Path, traffic: Traffic) -> No
     assert gaps == [(0x15, 1)]
 
 
-#: .db is left out: python-can's SqliteWriter (behind FrameWriter) keeps ~1 frame in 6 of a
-#: fast burst (reported; the reader is python-can's like the others')
-FORMATS = [".log.gz", ".log.zst", ".pcap", ".blf", ".asc", ".csv", ".trc"]
+FORMATS = [".log.gz", ".log.zst", ".pcap", ".blf", ".asc", ".csv", ".trc", ".db"]
 
 
 @pytest.mark.parametrize("suffix", FORMATS)
@@ -103,6 +101,20 @@ def test_every_format_convert_reads_gives_the_same_events(tmp_path: Path, traffi
             .to_table(filter=ds.field("source") == str(source))
         rows[source] = table.sort_by([("time", "ascending")]).select(MEANING).to_pylist()
     assert rows[other] == rows[reference]
+
+
+@pytest.mark.parametrize("suffix", [".asc", ".asc.gz"])
+def test_asc_rows_keep_their_absolute_times_and_dates(tmp_path: Path, traffic: Traffic,
+                                                      suffix: str) -> None:
+    """ASC times count from the file's start date: read by blinkcan's reader, not python-can's
+    relative times (which put every row on 1970-01-01)."""
+    log = write_log(tmp_path / f"unit{suffix}", traffic)
+    decode_files([log], str(tmp_path / "lake"))
+    table = ds.dataset(tmp_path / "lake", format="parquet", partitioning="hive").to_table()
+    assert set(table.column("date").to_pylist()) == {"2026-05-31", "2026-06-01"}
+    times = sorted(t.timestamp() for t in table.column("time").to_pylist())
+    assert times[0] == pytest.approx(traffic[0][0], abs=1e-3)
+    assert times[-1] == pytest.approx(traffic[-1][0], abs=1e-3)
 
 
 def test_mf4_through_asammdf(tmp_path: Path, traffic: Traffic) -> None:

@@ -10,6 +10,9 @@ import can
 import pytest
 
 from blinkcan import Keypad
+from blinkcan.cli.render import key_cell
+from blinkcan.decode import Decoder
+from blinkcan.decode.view import BusView
 from blinkcan.devices.registry import models
 from blinkcan.host import KeyEvent, NoDeviceError
 from blinkcan.host.j1939_keypad import KeypadGoneError, look_of, scan_j1939
@@ -356,4 +359,45 @@ def test_a_claim_answering_a_request_is_no_power_on(rig: Rig) -> None:
     rig.settle()
     assert events == []
     assert twin.snapshot()["j1939"]["address_claim"] == "claimed"
+    keypad.close()
+
+
+@pytest.mark.parametrize(("model", "generation"), J1939_MODELS)
+def test_amber_and_yellow_green_are_kept_as_commanded(rig: Rig, model: str,
+                                                      generation: str) -> None:
+    """Issue 20 item 4: 04h yellow, 08h amber/orange and 09h yellow/green are three colours
+    (§7a): the driver sends each code, and the twin, the decoder, the monitor's view and its
+    key cells name each as commanded (the RGB mixture stays the twin's "rgb" view)."""
+    twin, keypad = j1939_pair(rig, model, generation)
+    before = len(rig.frames)
+    keypad.set_led(4, "yellow")
+    keypad.set_led(5, "amber")
+    keypad.set_led(6, "yellow/green", blink="orange")
+    rig.settle()
+    sent = commands_to(rig, before, 0x21)
+    assert [f.data.hex() for f in sent] == ["041b0104040100ff", "041b0105080100ff",
+                                           "041b0106090308ff"]
+    snapshot = twin.snapshot()
+    assert [(k["colour"], k["phases"]) for k in snapshot["commanded"][3:6]] == [
+        ("yellow", ["yellow", "yellow"]), ("amber", ["amber", "amber"]),
+        ("yellow/green", ["yellow/green", "amber"])]
+    assert snapshot["commanded"][4]["rgb"]["colour"] == "yellow"  # red + green, J-4
+    rig.advance(6.0)  # after the startup show the keys show what was commanded
+    assert [k["phases"][0] for k in rig.snapshot(twin)["keys"][3:6]] == [
+        "yellow", "amber", "yellow/green"]
+    decoder = Decoder()
+    view = BusView(decoder)
+    texts = []
+    for frame in sent:
+        event = decoder.decode(frame)
+        view.update(event)
+        texts.append(event.text)
+    assert any("LED 5 amber" in text for text in texts)
+    assert any("LED 6 alternates yellow/green/amber" in text for text in texts)
+    phases = {key: (a, b) for key, a, b in view.nodes[0x21].key_phases()}
+    assert [phases[4], phases[5], phases[6]] == [
+        ("yellow", "yellow"), ("amber", "amber"), ("yellow/green", "amber")]
+    assert "yel/grn" in key_cell(6, "yellow/green", "yellow/green").plain
+    with pytest.raises(ValueError, match="yellow/green"):
+        keypad.set_led(1, "purple")
     keypad.close()

@@ -170,7 +170,8 @@ def test_s7b_multiple_leds_need_management_mode_02(bench: Bench) -> None:
     """)
     assert [look(bench, k)[0] for k in range(1, 5)] == ["red", "red", "red", "off"]
     bench.replay("> 18A62100 00 00 00 00 00 96 FF FF")  # LED 11 magenta, LED 12 yellow/green
-    assert [look(bench, k)[0] for k in (1, 11, 12)] == ["red", "magenta", "yellow"]
+    # issue 20 item 4: 09h is yellow/green, not the yellow of its RGB mixture
+    assert [look(bench, k)[0] for k in (1, 11, 12)] == ["red", "magenta", "yellow/green"]
     bench.replay("> 18A72100 22 22 22 22 22 22 FF FF")  # all green (colour 2 of 11, 12 kept)
     assert [look(bench, k)[0] for k in range(1, 11)] == ["green"] * 10
     assert look(bench, 11) == ("green", ["green", "magenta"])  # two colours alternate

@@ -66,3 +66,19 @@ def test_the_panel_shows_j1939_mode_and_address(
     assert [f.data.hex() for f in frames] == ["041b010401" + "21ffff", "041b010400" + "21ffff"]
     assert {f.can_id for f in frames} == {0x18EFFF30}
     wait_until(lambda: not emulator.snapshot(twin)["keys"][3]["pressed"])
+
+
+def test_the_panel_shows_amber_and_yellow_green_as_commanded(
+        bench: tuple[Any, Emulator, KeypadTwin, can.BusABC]) -> None:
+    """Issue 20 item 4: §7a 08h amber and 09h yellow/green are not the yellow of 04h."""
+    page, emulator, twin, host = bench
+    host.send(to_message(Frame(0x18EF2100, bytes.fromhex("041B0104040100FF"), extended=True)))
+    host.send(to_message(Frame(0x18EF2100, bytes.fromhex("041B0105080100FF"), extended=True)))
+    host.send(to_message(Frame(0x18EF2100, bytes.fromhex("041B0106090100FF"), extended=True)))
+    wait_until(lambda: emulator.snapshot(twin)["commanded"][5]["colour"] == "yellow/green")
+    page.wait_for_function(  # once the startup show is over
+        "document.querySelector('[data-test=\"key-6\"]').dataset.phases === "
+        "'yellow/green,yellow/green'", timeout=10_000)
+    colours = [page.get_attribute(f'[data-test="key-{key}"]', "data-phases")
+               for key in (4, 5, 6)]
+    assert colours == ["yellow,yellow", "amber,amber", "yellow/green,yellow/green"]

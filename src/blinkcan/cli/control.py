@@ -32,7 +32,7 @@ from blinkcan.cli.ranges import (
     within,
 )
 from blinkcan.devices.colours import BacklightColour, led_colour
-from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS, colour_code
 from blinkcan.devices.model import DeviceDescription, Face, Model
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.registry import identify, model, models
@@ -402,7 +402,9 @@ def _blink_words(colour: str, blink: str | None) -> str:
 @click.pass_obj
 def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     """Light KEY in COLOUR (off, red, green, blue, yellow/amber, cyan, magenta,
-    white). Starts the keypad; the other keys keep what they show (read from the keypad first).
+    white; over J1939 also amber/orange and yellow/green, each its own colour). Starts the
+    keypad; the other keys keep what they show (read from the keypad first; over J1939 only
+    KEY's command is sent).
 
     \b
     blinkcan keypad led 3 red
@@ -413,9 +415,11 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
 
     def check(descriptions: Sequence[DeviceDescription]) -> None:
         within("key", key, merged(spans_of(d.face.led_keys) for d in descriptions))
+        # J1939 mode has colour codes of its own (§7a: amber, yellow/green)
+        known = colour_code if _j1939_address() is not None else led_colour
         for name in (colour, blink):
             if name is not None:
-                led_colour(name)
+                known(name)
 
     _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:

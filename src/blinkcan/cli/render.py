@@ -10,7 +10,11 @@ from rich.table import Table
 from rich.text import Text
 
 STYLE = {"off": "grey35", "red": "red", "green": "green", "blue": "blue", "yellow": "yellow",
-         "cyan": "cyan", "magenta": "magenta", "white": "white"}
+         "cyan": "cyan", "magenta": "magenta", "white": "white",
+         # J1939 mode's own colour codes (§7a): shown as commanded, not as their RGB mixture
+         "amber": "orange1", "yellow/green": "chartreuse2"}
+#: names longer than a cell's label
+SHORT = {"yellow/green": "yel/grn"}
 PIN_STYLE = {"off": "grey50", "high": "bold green", "fault": "bold red"}
 
 
@@ -18,12 +22,13 @@ def key_cell(key: int, phase_a: str, phase_b: str, held: bool = False) -> Text:
     """A key by the colours of its two blink phases (devices/colours.blink_phases): "[ 4
     green]" steady, "[ 4 ~red]" blinking, "[ 4 red/grn]" alternating; held keys underlined."""
     if phase_a == phase_b:
-        label, style = ("" if phase_a == "off" else phase_a), STYLE[phase_a]
+        label = "" if phase_a == "off" else SHORT.get(phase_a, phase_a)
+        style = STYLE.get(phase_a, "white")
     elif "off" in (phase_a, phase_b):
         colour = phase_b if phase_a == "off" else phase_a
-        label, style = f"~{colour}", STYLE[colour]
+        label, style = f"~{SHORT.get(colour, colour)}", STYLE.get(colour, "white")
     else:
-        label, style = f"{phase_a[:3]}/{phase_b[:3]}", STYLE[phase_a]
+        label, style = f"{phase_a[:3]}/{phase_b[:3]}", STYLE.get(phase_a, "white")
     return Text(f"[{key:>2} {label:<7}]", style=f"bold {style}" + (" underline" if held else ""))
 
 

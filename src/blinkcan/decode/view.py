@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from blinkcan.decode.decoder import Decoder, Event, Kind
 from blinkcan.devices.colours import Channel, blink_phases, channel_name
 from blinkcan.devices.keybox import PWM_LEVEL_MAX
-from blinkcan.devices.keypad_j1939 import LedLook, LedState, look_channels
+from blinkcan.devices.keypad_j1939 import LedLook, LedState, look_channels, look_phases
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import describe_device
 
@@ -46,6 +46,8 @@ class NodeView:
     other: dict[str, str] = field(default_factory=dict)
     #: pins in PWM (KBX §22, object "pwm"): pin -> duty in percent
     pwm: dict[int, int] = field(default_factory=dict)
+    #: J1939 mode: key -> (phase A, phase B) by the §7a colour names commanded ("amber")
+    named: dict[int, tuple[str, str]] = field(default_factory=dict)
 
     def know(self, face: Face) -> None:
         if face != self.face:
@@ -61,6 +63,7 @@ class NodeView:
     def reboot(self) -> None:
         """Power-on or reset: pre-operational, outputs OFF, no FAULT, LEDs dark, no key held."""
         self.state, self.leds, self.blink, self.held = "pre-operational", {}, {}, []
+        self.named = {}
         self.outputs = dict.fromkeys(self.face.pin_numbers, "off")
         self.pwm, self.asked = {}, None
 
@@ -93,6 +96,9 @@ class NodeView:
 
         found = []
         for key in self.face.key_numbers:
+            if key in self.named:  # J1939: the colour as commanded, amber is not yellow
+                found.append((key, *self.named[key]))
+                continue
             a, b = blink_phases(channels(self.leds, key), channels(self.blink, key))
             found.append((key, channel_name(a), channel_name(b)))
         return found
@@ -110,8 +116,10 @@ def _follow_j1939(view: NodeView, fields: dict[str, object]) -> None:
         view.held = list(keys)
     elif command == "single_led":
         key = int(fields["key"])  # type: ignore[call-overload]
-        on, blink = look_channels(LedLook(LedState(fields["state"]), int(fields["colour"]),  # type: ignore[call-overload]
-                                          int(fields["secondary"])))  # type: ignore[call-overload]
+        look = LedLook(LedState(fields["state"]), int(fields["colour"]),  # type: ignore[call-overload]
+                       int(fields["secondary"]))  # type: ignore[call-overload]
+        view.named[key] = look_phases(look)
+        on, blink = look_channels(look)
         for picture, channels in ((view.leds, on), (view.blink, blink)):
             for name, channel in (("red", Channel.RED), ("green", Channel.GREEN),
                                   ("blue", Channel.BLUE)):

@@ -276,11 +276,60 @@ class LedLook:
     secondary: int = COLOUR_OFF
 
 
+def colour_name(code: int) -> str:
+    """The §7a name of a colour code ("amber", "yellow/green"; unknown codes by number)."""
+    return COLOUR_CODES.get(code, f"colour {code:02X}h")
+
+
+def colour_code(name: str) -> int:
+    """The §7a code of a colour name: off, the codes 01h-09h by name ("amber", "orange",
+    "yellow/green", "white", "light blue", ...); ValueError naming the valid ones."""
+    if name.lower() == "off":
+        return COLOUR_OFF
+    try:
+        return int(BacklightColour.from_name(name))
+    except (ValueError, AttributeError):
+        raise ValueError(f"unknown J1939 LED colour {name!r}; valid: "
+                         f"{', '.join(COLOUR_CODES.values())}") from None
+
+
+def led_look(colour: str, blink: str | None = None) -> LedLook:
+    """The §7a command for ``set_led(key, colour, blink)``: steady without ``blink``; the same
+    colour (or ``colour="off"``) blinks; two colours alternate (primary, secondary)."""
+    first = colour_code(colour)
+    if blink is None:
+        return LedLook(LedState.ON if first else LedState.OFF, first)
+    second = colour_code(blink)
+    if not first and not second:
+        return LedLook(LedState.OFF)
+    if first == second or not first or not second:
+        return LedLook(LedState.BLINK, first or second)
+    return LedLook(LedState.ALTERNATE, first, second)
+
+
+def look_phases(look: LedLook) -> tuple[str, str]:
+    """The colour names one LED shows in the two blink phases (§7a: blinking starts lit)."""
+    primary = colour_name(look.colour) if look.state is not LedState.OFF else "off"
+    if look.state is LedState.BLINK:
+        return primary, "off"
+    if look.state is LedState.ALTERNATE:
+        return primary, colour_name(look.secondary)
+    return primary, primary
+
+
 def colour_channels(code: int) -> Channel:
     """A §7a colour code as the key's RGB channels (J-4: CANopen mode's colours)."""
     if 1 <= code <= 9:
         return BACKLIGHT_CHANNELS[BacklightColour(code)]
     return Channel.NONE
+
+
+def channels_colour(channels: int) -> int:
+    """The §7a code that lights ``channels`` (the lowest: red + green is 04h yellow, the
+    mixture amber and yellow/green also make on these LEDs, J-4)."""
+    if not channels & 7:
+        return COLOUR_OFF
+    return min(code for code, lit in BACKLIGHT_CHANNELS.items() if lit == Channel(channels & 7))
 
 
 def look_channels(look: LedLook) -> tuple[Channel, Channel]:

@@ -1,10 +1,12 @@
 """The frames of any log ``blinkcan convert`` reads, each with its channel, streamed.
 
-python-can's formats and pcap come through :func:`blinkcan.formats.logs.read_messages`
-(python-can opens ``.gz`` of its formats itself); candump ``.log`` (plain, ``.gz`` or ``.zst``)
-through the fast reader of ``formats/candump.py``, the channel taken from each line as the
-reader passes it. Any other ``.zst`` log is decompressed to a temporary file first (BLF and
-MF4 readers need to seek); memory stays bounded either way.
+python-can's formats and pcap come through blinkcan's reader,
+:func:`blinkcan.formats.logs.read_messages` (which mends what python-can's readers misread:
+ASC times stay absolute); candump ``.log`` (plain, ``.gz`` or ``.zst``) through the fast reader
+of ``formats/candump.py``, the channel taken from each line as the reader passes it. Any other
+``.gz`` or ``.zst`` log is decompressed to a temporary file first (BLF and MF4 readers need to
+seek; python-can's own ``.gz`` reading would bypass blinkcan's reader); memory stays bounded
+either way.
 """
 
 from __future__ import annotations
@@ -87,13 +89,18 @@ def _messages(path: Path) -> Iterator[Item]:
             yield message.timestamp, message, channel
 
 
-def _decompressed(path: Path, suffix: str) -> Iterator[Item]:
-    import zstandard  # noqa: PLC0415 (the [fleet] extra)
-
+def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[Item]:
     handle, name = tempfile.mkstemp(suffix=suffix, prefix=".blinkcan-")
     try:
-        with path.open("rb") as source, os.fdopen(handle, "wb") as target:
-            shutil.copyfileobj(zstandard.ZstdDecompressor().stream_reader(source), target)
+        with os.fdopen(handle, "wb") as target:
+            if compression == ".gz":
+                with gzip.open(path, "rb") as source:
+                    shutil.copyfileobj(source, target)
+            else:
+                import zstandard  # noqa: PLC0415 (the [fleet] extra)
+
+                with path.open("rb") as raw:
+                    shutil.copyfileobj(zstandard.ZstdDecompressor().stream_reader(raw), target)
         yield from _messages(Path(name))
     finally:
         os.unlink(name)
@@ -108,6 +115,6 @@ def read_items(path: str | os.PathLike[str]) -> Iterator[Item]:
     suffix, compression = _suffixes(source)
     if suffix == _CANDUMP:
         return _candump(source, compression)
-    if compression == ".zst":
-        return _decompressed(source, suffix)
+    if compression:
+        return _decompressed(source, suffix, compression)
     return _messages(source)

@@ -192,7 +192,9 @@ def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] 
     decoder = make_decoder(devices)
     rows = EventRows(decoder).rows
     decode = decoder.decode
-    append, time_and_date = writer.append, writer.time_and_date
+    time_and_date, columns_of = writer.time_and_date, writer.columns
+    appenders: dict[tuple[str, str], tuple[Callable[[Any], None], ...]] = {}
+    limit, buffered = writer.rows_per_group, 0
     frames = 0
     for timestamp, item, channel in read_items(path):
         event = decode(item, timestamp) if isinstance(item, Frame) else \
@@ -201,11 +203,30 @@ def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] 
         micros, date = time_and_date(timestamp)
         node, model, details = rows(event)
         partition = (model or UNKNOWN, date)
+        appends = appenders.get(partition)
+        if appends is None:  # the partition's columns' appends, bound once (columnar rows)
+            appends = appenders[partition] = tuple(c.append for c in columns_of(partition))
+        (time_, channel_, can_id_, extended_, node_, kind_, key_, pin_, state_, colour_,
+         value_, text_, data_) = appends
         text, can_id, extended, data = str(event), frame.can_id, frame.extended, frame.data
         for kind, key, pin, state, colour, value in details:
-            append(partition, (micros, channel, can_id, extended, node, kind, key, pin, state,
-                               colour, value if value is None else int64_or_none(value), text,
-                               data))
+            time_(micros)
+            channel_(channel)
+            can_id_(can_id)
+            extended_(extended)
+            node_(node)
+            kind_(kind)
+            key_(key)
+            pin_(pin)
+            state_(state)
+            colour_(colour)
+            value_(value if value is None else int64_or_none(value))
+            text_(text)
+            data_(data)
+        buffered += len(details)
+        if buffered >= limit:
+            writer.flush()
+            buffered = 0
         frames += 1
         if progress is not None and not frames % PROGRESS_EVERY:
             progress(PROGRESS_EVERY)

@@ -1,9 +1,10 @@
 """Rows into Parquet files, one per (model, date) partition, in row groups of bounded size.
 
-Rows are gathered as tuples; at ``rows_per_group`` rows in all the partitions' rows become
-Arrow arrays, column by column, and a row group each, so memory stays the same
-whatever the log's size. Files go to a folder of the caller's choice (the caller renames them
-into the dataset once the whole log is decoded).
+Rows are gathered column by column (a Python list per column and partition, appended to by
+the caller: no tuple per row, no transposing); at ``rows_per_group`` rows in all the
+partitions' columns become Arrow arrays, once per row group, and a row group each, so memory
+stays the same whatever the log's size. Files go to a folder of the caller's choice (the
+caller renames them into the dataset once the whole log is decoded).
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ class PartitionWriter:
             raise ValueError(f"rows_per_group must be 1 or more, not {rows_per_group}")
         self._fs, self._folder, self._name, self._source = fs, folder, name, source
         self._rows_per_group = rows_per_group
-        self._buffers: dict[tuple[str, str], list[tuple[Any, ...]]] = {}
+        #: partition -> its columns so far (the schema's but ``source``, in its order)
+        self._buffers: dict[tuple[str, str], list[list[Any]]] = {}
         self._writers: dict[tuple[str, str], tuple[Any, pq.ParquetWriter]] = {}
         self._buffered = 0
         self._days: dict[int, str] = {}
@@ -62,29 +64,46 @@ class PartitionWriter:
         self._day = (day * _DAY_S, (day + 1) * _DAY_S, date)
         return round(seconds * 1_000_000), date
 
-    def append(self, partition: tuple[str, str], row: tuple[Any, ...]) -> None:
-        """A row of the partition: the values of the schema's columns but ``source``, in its
-        order."""
-        buffer = self._buffers.get(partition)
-        if buffer is None:
-            buffer = self._buffers[partition] = []
-        buffer.append(row)
-        self._buffered += 1
+    @property
+    def rows_per_group(self) -> int:
+        return self._rows_per_group
+
+    def columns(self, partition: tuple[str, str]) -> list[list[Any]]:
+        """The partition's column lists (the schema's columns but ``source``, in its order),
+        for the caller to append a row to; it calls :meth:`added` with how many it appended
+        (or :meth:`flush` itself). The lists stay the same for the writer's life."""
+        columns = self._buffers.get(partition)
+        if columns is None:
+            columns = self._buffers[partition] = [[] for _ in _COLUMNS]
+        return columns
+
+    def added(self, rows: int) -> None:
+        """``rows`` rows were appended to :meth:`columns`: a row group when enough."""
+        self._buffered += rows
         if self._buffered >= self._rows_per_group:
             self.flush()
 
+    def append(self, partition: tuple[str, str], row: tuple[Any, ...]) -> None:
+        """A row of the partition: the values of the schema's columns but ``source``, in its
+        order."""
+        for column, value in zip(self.columns(partition), row, strict=True):
+            column.append(value)
+        self.added(1)
+
     def flush(self) -> None:
         """Every partition's rows so far as a row group."""
-        for partition, rows in self._buffers.items():
-            if not rows:
+        for partition, columns in self._buffers.items():
+            count = len(columns[0])
+            if not count:
                 continue
             arrays = [pa.array(values, type=SCHEMA.field(name).type)
-                      for name, values in zip(_COLUMNS, zip(*rows, strict=True), strict=True)]
+                      for name, values in zip(_COLUMNS, columns, strict=True)]
             arrays.insert(SCHEMA.get_field_index("source"),
-                          pa.array([self._source] * len(rows), type=pa.string()))
+                          pa.repeat(pa.scalar(self._source, pa.string()), count))
             self._writer(partition).write_table(pa.Table.from_arrays(arrays, schema=SCHEMA))
-            self.rows += len(rows)
-            rows.clear()
+            self.rows += count
+            for column in columns:
+                column.clear()  # the same lists: the caller's appends stay bound to them
         self._buffered = 0
 
     def _writer(self, partition: tuple[str, str]) -> pq.ParquetWriter:

@@ -11,10 +11,17 @@
 - ``.blf``: the header holds no date before 1990, yet python-can counts the times from the
   first frame: a log whose times start near 0 reads back shifted by its first time. Such a log
   counts from 0 here.
+- ``.db``: python-can's SqliteWriter hands frames to a thread that, once stopped, ends after
+  the batch it is writing and drops what is still queued (a 2,885-frame conversion kept 501).
+  :class:`SqliteLogWriter` writes the same table (python-can's SqliteReader reads it)
+  synchronously, in the caller's thread: nothing queued, every row committed by ``stop()``,
+  and a recording's rows committed at each ``flush()``.
 """
 
 from __future__ import annotations
 
+import os
+import sqlite3
 from datetime import datetime
 from typing import Any
 
@@ -22,6 +29,7 @@ import can
 from can.io.asc import ASCWriter
 from can.io.blf import BLFWriter
 from can.io.canutils import CanutilsLogWriter
+from can.io.generic import MessageWriter
 from can.io.logger import MESSAGE_WRITERS
 
 from blinkcan.formats.carried import BLF_DATED_FROM, channel_key, start_millisecond
@@ -76,6 +84,47 @@ class BlfWriter(BLFWriter):
         super().on_message_received(msg)
 
 
+class SqliteLogWriter(MessageWriter):
+    """python-can's SQLite table (``messages``: ts, arbitration_id, extended, remote, error,
+    dlc, data), written in the caller's thread (see the module docstring)."""
+
+    TABLE = "messages"
+    #: rows handed to SQLite at once
+    BATCH = 500
+
+    def __init__(self, file: str | os.PathLike[str]) -> None:  # by name, as python-can's
+        self._connection = sqlite3.connect(file)
+        self._connection.execute(  # python-can's SqliteWriter._create_db
+            f"CREATE TABLE IF NOT EXISTS {self.TABLE} (ts REAL, arbitration_id INTEGER, "
+            "extended INTEGER, remote INTEGER, error INTEGER, dlc INTEGER, data BLOB)")
+        self._connection.commit()
+        self._pending: list[tuple[float, int, bool, bool, bool, int, bytes]] = []
+        self.num_frames = 0
+
+    def on_message_received(self, msg: can.Message) -> None:
+        self._pending.append((msg.timestamp, msg.arbitration_id, msg.is_extended_id,
+                              msg.is_remote_frame, msg.is_error_frame, msg.dlc,
+                              bytes(msg.data)))
+        if len(self._pending) >= self.BATCH:
+            self._insert()
+
+    def _insert(self) -> None:
+        if self._pending:
+            self._connection.executemany(f"INSERT INTO {self.TABLE} VALUES (?, ?, ?, ?, ?, ?, ?)",
+                                         self._pending)
+            self.num_frames += len(self._pending)
+            self._pending.clear()
+
+    def commit(self) -> None:
+        """Every row received so far into the file."""
+        self._insert()
+        self._connection.commit()
+
+    def stop(self) -> None:
+        self.commit()
+        self._connection.close()
+
+
 #: the writer of each suffix: python-can's, mended as above
 WRITERS: dict[str, Any] = {**MESSAGE_WRITERS, ".log": CandumpWriter, ".asc": AscWriter,
-                           ".blf": BlfWriter}
+                           ".blf": BlfWriter, ".db": SqliteLogWriter}

@@ -237,8 +237,6 @@ class FrameWriter:
 
     SKIPPED_NAMED = 5
     FLUSH_EVERY = 1000
-    #: a recording's SQLite rows are committed by python-can's writer thread at least this often
-    SQLITE_COMMIT_SECONDS = 1.0
 
     def __init__(self, path: str | os.PathLike[str], replace: bool = False,
                  live: bool = False) -> None:
@@ -294,9 +292,6 @@ class FrameWriter:
         elif suffix in (".db", ".mf4"):  # python-can's writer (or asammdf) opens it by name
             os.close(handle)
             self._logger = _writer_class(suffix)(self._written)
-            if self.live:  # python-can's SQLite writer commits in its own thread
-                self._logger.MAX_TIME_BETWEEN_WRITES = (  # type: ignore[attr-defined]
-                    self.SQLITE_COMMIT_SECONDS)
         else:
             self._file = WholeRecords(handle, str(self.path))
             stream = self._file if suffix == ".blf" else io.TextIOWrapper(
@@ -335,10 +330,14 @@ class FrameWriter:
 
     def flush(self) -> None:
         """Hand what was written so far to the file in whole frames: a recording killed after
-        this keeps every frame written before it. BLF's frames wait in a container python-can
-        compresses when full: a recording closes the container and rewrites the file's header
-        (its start time and counts) at each flush."""
+        this keeps every frame written before it (.db: its rows committed). BLF's frames wait
+        in a container python-can compresses when full: a recording closes the container and
+        rewrites the file's header (its start time and counts) at each flush."""
         self._unflushed = 0
+        from blinkcan.formats.log_writers import SqliteLogWriter  # noqa: PLC0415
+
+        if self.live and isinstance(self._logger, SqliteLogWriter):  # .db: rows committed
+            self._logger.commit()
         if self._file is None:
             return
         from can.io.blf import BLFWriter  # noqa: PLC0415

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import can
 
-from blinkcan.devices.colours import Channel
 from blinkcan.devices.keypad_j1939 import (
     DEFAULT_HOST_ADDRESS,
     HEADER,
@@ -29,6 +28,7 @@ from blinkcan.devices.keypad_j1939 import (
     TIME_UNIT_S,
     LedLook,
     LedState,
+    channels_colour,
     command,
 )
 from blinkcan.host.bus import HostBus
@@ -46,14 +46,6 @@ from blinkcan.protocol.j1939 import (
     request_frame,
 )
 
-#: Channels of a key's LEDs -> the §7a colour code that lights them (amber and yellow/green
-#: light the same channels as yellow on these LEDs, J-4).
-COLOUR_OF_CHANNELS = {
-    Channel.NONE: 0x00, Channel.RED: 0x01, Channel.GREEN: 0x02, Channel.BLUE: 0x03,
-    Channel.RED | Channel.GREEN: 0x04, Channel.GREEN | Channel.BLUE: 0x05,
-    Channel.RED | Channel.BLUE: 0x06, Channel.RED | Channel.GREEN | Channel.BLUE: 0x07,
-}
-
 #: CANopen object names the driver writes -> the J1939 command setting the same thing
 SETTING_COMMANDS = {
     "startup_led_show": "startup_led_show",
@@ -69,7 +61,7 @@ def look_of(on: int, blink: int) -> LedLook:
     """The §7a command for one key of the driver's picture: phase A shows ``on``, phase B the
     channels ``blink`` toggles (PKP §12, the twin's model in both protocols)."""
     phase_a, phase_b = on & 7, (on ^ blink) & 7
-    first, second = COLOUR_OF_CHANNELS[Channel(phase_a)], COLOUR_OF_CHANNELS[Channel(phase_b)]
+    first, second = channels_colour(phase_a), channels_colour(phase_b)
     if phase_a == phase_b:
         return LedLook(LedState.ON if first else LedState.OFF, first)
     if not phase_b or not phase_a:

@@ -38,6 +38,9 @@ from blinkcan.devices.keypad_j1939 import (
     DEFAULT_HOST_ADDRESS,
     PGN_COMMAND,
     PRIORITY,
+    LedLook,
+    led_look,
+    look_channels,
 )
 from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import DeviceDescription
@@ -164,6 +167,8 @@ class Keypad(Device):
         self._long_timers: dict[int, Timer] = {}
         self._steady: dict[int, int] = {}  # key -> channels lit steadily / in phase A
         self._blink: dict[int, int] = {}  # key -> channels that blink
+        #: key -> the §7a look commanded in J1939 mode (its colour, e.g. amber, kept as named)
+        self._looks: dict[int, LedLook] = {}
         self._sent: tuple[Frame, Frame] | None = None
         self._batching = 0
         self._force_pending = False  # a forced re-send asked for during a batch
@@ -328,13 +333,22 @@ class Keypad(Device):
             set_led(3, "blue", blink="blue")    # blue, blinking
             set_led(3, "red", blink="green")    # red and green alternating
 
-        Colours: off, red, green, blue, yellow/amber, cyan, magenta, white.
+        Colours: off, red, green, blue, yellow/amber, cyan, magenta, white; in J1939 mode
+        the §7a codes, where amber (orange) and yellow/green are colours of their own.
         """
         face = self.description.face
         check_range("key", key, 1, face.keys)
         if key not in face.led_keys:
             raise ValueError(f"key {key} has no LED; keys with one: "
                              f"{', '.join(map(str, face.led_keys))}")
+        if self.j1939 is not None:  # §7a colour codes: amber and yellow/green are their own
+            look = led_look(colour, blink)
+            on, toggled_channels = look_channels(look)
+            with self._picture_lock:
+                self._steady[key], self._blink[key] = int(on), int(toggled_channels)
+                self._looks[key] = look
+                self._flush()
+            return
         steady = led_colour(colour)
         blinking = led_colour(blink) if blink is not None else Channel.NONE
         # the twin's phase model: phase A shows the "on" channels, phase B the on-and-not-
@@ -349,6 +363,7 @@ class Keypad(Device):
         with self._picture_lock:
             self._steady[key] = int(steady)
             self._blink[key] = toggled
+            self._looks.pop(key, None)
             self._flush()
 
     def read_leds(self) -> None:
@@ -371,6 +386,7 @@ class Keypad(Device):
         with self._picture_lock:
             self._steady = {key: channels for key, channels in steady.items() if channels}
             self._blink = {key: channels for key, channels in blinking.items() if channels}
+            self._looks = {}
             self._sent = (self._pdo_frame("led_on", _masks(self._steady)),
                           self._pdo_frame("led_blink", _masks(self._blink)))
 
@@ -411,7 +427,8 @@ class Keypad(Device):
     def _send_picture(self, force: bool) -> None:
         if self.j1939 is not None:  # §7a: one command per key the application named
             named = set(self._steady) | set(self._blink)
-            self.j1939.show({key: look_of(self._steady.get(key, 0), self._blink.get(key, 0))
+            self.j1939.show({key: self._looks.get(key) or look_of(self._steady.get(key, 0),
+                                                                  self._blink.get(key, 0))
                              for key in named}, force)
             return
         on, blink = self._pdo_frame("led_on", _masks(self._steady)), \

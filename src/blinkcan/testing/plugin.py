@@ -6,8 +6,11 @@ Fixtures:
   show what the controller commanded from the start).
 - ``keybox_twin``: a Keybox twin on the rig at node 0Ch.
 
-Marker: ``@pytest.mark.blinkcan(manual="1.5", quirks="cia301", keypad_node=0x15,
-keybox_node=0x0C, startup_show=False)`` chooses the twins a test gets.
+Marker: ``@pytest.mark.blinkcan(model="pkp-3500-mt", manual="1.5", protocol="j1939",
+quirks="cia301", keypad_node=0x15, keybox_node=0x0C, startup_show=False)`` chooses the twins a
+test gets: ``model`` is any registered keypad model (``blinkcan export --help`` lists them),
+``manual`` its firmware generation, ``protocol`` one its description declares. A name the marker
+does not know is a usage error naming the ones it does.
 
 An exception raised in a test's handlers (key, fault, health callbacks) or in work handed to
 ``host.spawn`` fails that test with its traceback: it is raised from the rig or driver call that
@@ -36,15 +39,23 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                      help="blinkcan: write golden traces instead of comparing with them")
 
 
+MARKER_OPTIONS = ("model", "manual", "protocol", "quirks", "keypad_node", "keybox_node",
+                  "startup_show")
+
+
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
-        "markers", "blinkcan(manual, quirks, keypad_node, keybox_node, startup_show): "
-        "the twins the blinkcan fixtures build")
+        "markers", f"blinkcan({', '.join(MARKER_OPTIONS)}): the twins the blinkcan fixtures build")
 
 
 def _options(request: pytest.FixtureRequest) -> dict[str, Any]:
     marker = request.node.get_closest_marker("blinkcan")
-    return dict(marker.kwargs) if marker is not None else {}
+    options = dict(marker.kwargs) if marker is not None else {}
+    unknown = sorted(set(options) - set(MARKER_OPTIONS))
+    if unknown:
+        raise pytest.UsageError(f"@pytest.mark.blinkcan does not take {', '.join(unknown)}: "
+                                f"it takes {', '.join(MARKER_OPTIONS)}")
+    return options
 
 
 @pytest.fixture
@@ -56,16 +67,23 @@ def rig() -> Iterator[Rig]:
 
 @pytest.fixture
 def keypad_twin(rig: Rig, request: pytest.FixtureRequest) -> KeypadTwin:
+    """A keypad twin on the rig, at node 15h, its start-up show off (the LEDs show what the
+    controller commands from the start). The ``blinkcan`` marker picks the model (default the
+    PKP-2600-SI), its generation (``manual``), ``protocol``, ``quirks``, ``keypad_node`` and
+    ``startup_show=True``."""
     options = _options(request)
     settings = {} if options.get("startup_show", False) else {"startup_led_show": SHOW_OFF}
     twin = KeypadTwin(node_id=options.get("keypad_node", 0x15),
                       quirks=options.get("quirks", "firmware"),
-                      manual=options.get("manual", "1.1"), settings=settings)
+                      manual=options.get("manual"), protocol=options.get("protocol", "canopen"),
+                      model=options.get("model"), settings=settings)
     return rig.add(twin)
 
 
 @pytest.fixture
 def keybox_twin(rig: Rig, request: pytest.FixtureRequest) -> KeyboxTwin:
+    """A Keybox twin on the rig, at node 0Ch (the ``blinkcan`` marker's ``keybox_node`` and
+    ``quirks`` change it)."""
     options = _options(request)
     twin = KeyboxTwin(node_id=options.get("keybox_node", 0x0C),
                       quirks=options.get("quirks", "firmware"))

@@ -44,6 +44,7 @@ from blinkcan.devices.keypad_j1939 import (
     key_message,
     led_acknowledge,
     look_channels,
+    look_phases,
     nibbles_to_look,
     software_revision_message,
     split_nibbles,
@@ -102,6 +103,8 @@ class J1939Keypad:
         self.address = self.settings["source_address"]
         self._keys = 0
         self._words = {"led_on": 0, "led_blink": 0}
+        #: key -> the §7a look commanded: its colour codes as sent (amber is not yellow)
+        self._looks: dict[int, LedLook] = {}
         self._nibbles = ([0] * _KEYS, [0] * _KEYS)
         self._live = {"led_brightness": 0, "backlight_level": 0}
         self._claimer: AddressClaimer | None = None
@@ -134,6 +137,7 @@ class J1939Keypad:
         self.address = settings["source_address"]
         self._keys = keys
         self._words = {"led_on": 0, "led_blink": 0}
+        self._looks = {}
         self._nibbles = ([0] * _KEYS, [0] * _KEYS)
         self._live = {live: settings[stored] for live, stored in POWER_ON_FROM.items()}
         steps = STARTUP_SHOWS.get(settings["startup_led_show"])  # §12
@@ -244,6 +248,7 @@ class J1939Keypad:
     def _show_look(self, key: int, look: LedLook) -> None:
         """One LED in the CANopen picture's terms (PKP §12 phases): on = phase A colour,
         blink = the channels that change in phase B."""
+        self._looks[key] = look
         on, blink = look_channels(look)
         bit = 1 << (key - 1)
         self._words["led_on"] = _clear_key(self._words["led_on"], key) | fill(bit, on)
@@ -355,11 +360,22 @@ class J1939Keypad:
         return displayed_words(self._show, self._demo, self._words["led_on"],
                                self._words["led_blink"], now)
 
+    def _commanded(self, key: int) -> dict[str, object]:
+        """One key as commanded: colour and phases by their §7a names ("amber",
+        "yellow/green"); blink_colour and alternate as CANopen mode's RGB picture (J-4), which
+        "rgb" gives whole (on these LEDs amber is red + green)."""
+        rgb = render_key(self._words["led_on"], self._words["led_blink"], key)
+        look = self._looks.get(key, LedLook(LedState.OFF))
+        phases = look_phases(look)
+        return {**rgb, "colour": phases[0], "phases": list(phases)}
+
     def snapshot(self) -> dict[str, Any]:
         now = self._now
         on, blink = self.displayed_leds(now) if self._powered else (0, 0)
+        shown_as_commanded = (on, blink) == (self._words["led_on"], self._words["led_blink"])
         keys = [{"key": key, "pressed": bool(self._keys >> (key - 1) & 1),
-                 **render_key(on, blink, key)} for key in range(1, _KEYS + 1)]
+                 **(self._commanded(key) if shown_as_commanded else render_key(on, blink, key))}
+                for key in range(1, _KEYS + 1)]
         colour = BacklightColour(self.settings["backlight_colour"])
         backlight: dict[str, object] = {"colour": colour.label,
                                         "level": self._live["backlight_level"]}
@@ -385,7 +401,9 @@ class J1939Keypad:
             "demo": self._demo.describe() if self._demo is not None else None,
             "leds": dict(self._words),
             # what the host last commanded, apart from what a show or DEMO mode displays
-            "commanded": [render_key(self._words["led_on"], self._words["led_blink"], key)
+            "commanded": [{**self._commanded(key),
+                           "rgb": render_key(self._words["led_on"], self._words["led_blink"],
+                                             key)}
                           for key in range(1, _KEYS + 1)],
             "j1939": {
                 "source_address": self.address,

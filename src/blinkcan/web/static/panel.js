@@ -1,8 +1,10 @@
 // blinkcan front panel: draws the twins' snapshot() and sends what a person does.
 "use strict";
 
+// J1939 mode names its own colour codes (amber, yellow/green: §7a), shown as commanded
 const LED = { off: "#111", red: "#ff3030", green: "#22dd44", blue: "#3a6bff", yellow: "#ffd820",
-              cyan: "#20e0e0", magenta: "#e030e0", white: "#ffffff" };
+              cyan: "#20e0e0", magenta: "#e030e0", white: "#ffffff", amber: "#ffaa00",
+              "yellow/green": "#b0e020" };
 const BACKLIGHT = { off: null, red: "#ff3030", green: "#22dd44", blue: "#3a6bff", yellow: "#ffd820",
                     cyan: "#20e0e0", magenta: "#e030e0", white: "#f0f4ff", amber: "#ffaa00",
                     yellow_green: "#b0e020" };
