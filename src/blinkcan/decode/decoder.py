@@ -693,7 +693,7 @@ def _backlight(values: dict[str, int]) -> tuple[str, dict[str, Any]]:
     if "colour" not in values:  # rev 1.1 §14
         return f"backlight brightness {level}/63", {"level": level}
     code = values["colour"]  # rev 1.5 §15: byte 1 is the colour, 00h the default one
-    colour = BacklightColour(code).label if 1 <= code <= 9 else "the default colour"
+    colour = BacklightColour(code).label if BacklightColour.is_code(code) else "the default colour"
     return f"backlight {level}/63 in {colour}", {"level": level, "colour": colour}
 
 

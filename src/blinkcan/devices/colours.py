@@ -95,6 +95,11 @@ class BacklightColour(IntEnum):
         return self.name.lower()
 
     @classmethod
+    def is_code(cls, code: int) -> bool:
+        """Whether ``code`` is a backlight colour (01h-09h, PKP §18c/d)."""
+        return code in cls._value2member_map_
+
+    @classmethod
     def from_name(cls, name: str) -> BacklightColour:
         key = name.lower().replace("/", "_").replace("-", "_").replace(" ", "_")
         key = _BACKLIGHT_ALIASES.get(key, key)

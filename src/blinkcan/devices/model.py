@@ -108,6 +108,9 @@ class DeviceDescription:
     #: entry name -> the default the EDS states instead of the table's, where a master that
     #: configures itself from the EDS must see another value than an SDO read returns
     eds_defaults: dict[str, int] = field(default_factory=dict)
+    #: what rests on what: "seen p. N: ..." (the model's own pages) or "I-n: ..." (inferred
+    #: from siblings); the EDS [Comments] and ``blinkcan info`` state it
+    evidence: tuple[str, ...] = ()
 
     def pdo(self, name: str) -> PdoLayout:
         for layout in self.pdos:

@@ -23,7 +23,9 @@ class PdoSignal:
 
     ``entry`` names the object entry the bits carry, or None for bits that are not an object
     (the keypad's tick timer, PKP §10). ``item`` says the bits are a mask of numbered things
-    (bit 0 = "key" 1, "LED" 1, "pin" 1), so the decoder and the DBC can name each one.
+    (bit 0 = "key" 1, "LED" 1, "pin" 1), so the decoder and the DBC can name each one;
+    ``items`` counts them where the mask is padded to whole bytes (the byte-padded keypads'
+    LED words, pkp-2500-si-canopen.md p. 9).
     ``scale`` and ``unit`` give the physical value (10 mV per count: 0.01, "V");
     ``sign_magnitude``: the top bit is the sign, the others the magnitude (an encoder's
     direction counter, MT §12).
@@ -38,6 +40,8 @@ class PdoSignal:
     scale: float = 1.0
     unit: str = ""
     sign_magnitude: bool = False
+    #: how many of a mask's bits are items, the rest padding it to whole bytes (0: all)
+    items: int = 0
 
     def physical(self, raw: int) -> int | float:
         """The value the bits mean: signed for sign-magnitude, scaled where a unit says so."""

@@ -21,6 +21,11 @@ BUILTIN_MODELS: tuple[str, ...] = (
     "blinkcan.devices.keypad:PKP_2600_SI",
     "blinkcan.devices.keybox:KEYBOX",
     "blinkcan.devices.pkp3500:PKP_3500_MT",
+    "blinkcan.devices.pkp2200:PKP_2200_SI",
+    "blinkcan.devices.pkp2300:PKP_2300_SI",
+    "blinkcan.devices.pkp2400:PKP_2400_SI",
+    "blinkcan.devices.pkp2500:PKP_2500_SI",
+    "blinkcan.devices.pkp3500si:PKP_3500_SI",
 )
 
 

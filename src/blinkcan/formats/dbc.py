@@ -32,7 +32,7 @@ def _signals(signal: PdoSignal, receiver: list[str]) -> list[Signal]:
     return [Signal(f"{signal.name}_{i + 1}", signal.start + i, 1, byte_order="little_endian",
                    is_signed=False, comment=f"{signal.label}: {signal.item} {i + 1}",
                    receivers=receiver)
-            for i in range(signal.length)]
+            for i in range(signal.items or signal.length)]
 
 
 def database(description: DeviceDescription, node_id: int | None = None) -> cdb.Database:

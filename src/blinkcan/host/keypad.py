@@ -32,7 +32,6 @@ from blinkcan.devices.keypad import (
     SHOW_COMPLETE,
     SHOW_FAST_FLASH,
     SHOW_OFF,
-    describe_keypad,
 )
 from blinkcan.devices.keypad_j1939 import (
     DEFAULT_ADDRESS,
@@ -47,6 +46,7 @@ from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import identify
+from blinkcan.devices.registry import model as registry_model
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import (
     BACK,
@@ -152,6 +152,9 @@ class Keypad(Device):
                  protocol: str = "canopen", address: int = DEFAULT_ADDRESS) -> None:
         if protocol not in ("canopen", "j1939"):
             raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
+        #: the registered model this driver runs (the PKP-2600-SI unless ``model`` names one)
+        self._model = registry_model(model or MODEL)
+        self._model_given = model is not None
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
@@ -213,11 +216,7 @@ class Keypad(Device):
         if self._generation is None:
             with self._generation_lock:
                 if self._generation is None:
-                    try:
-                        self.sdo.upload(0x1016, 0)
-                        found = "1.5"
-                    except SdoAbortError:
-                        found = "1.1"
+                    found = self._probe_generation()
                     self.description = self._describe(found, self.node_id)
                     self._generation = found
         return self._generation
@@ -229,9 +228,37 @@ class Keypad(Device):
             self.close()
             raise
 
+    def _compare_identity(self, found: dict[str, Value | None]) -> None:
+        """No model named: a keypad this very class runs (its 100Bh says which) is adopted, as
+        :meth:`connect` would; any other device is refused as before."""
+        model_id = found["model_id"]
+        answered = identify(model_id=model_id) if isinstance(model_id, str) else None
+        if (not self._model_given and answered is not None
+                and answered.model != self._model.name
+                and driver_class(answered.model) is type(self)):
+            self._model = registry_model(answered.model)
+            if self._generation not in self._model.generations:
+                self._generation = None  # a generation of the model first assumed
+            self.description = self._describe(self._generation, self.node_id)
+        super()._compare_identity(found)
+
+    def _probe_generation(self) -> str:
+        """The model's generation with 1016h if the device answers 1016h, else the one
+        without (pkp-rev1.1-vs-rev1.5.md); a model of one generation is not probed."""
+        generations = self._model.generations
+        if len(generations) == 1:
+            return generations[0]
+        try:
+            self.sdo.upload(0x1016, 0)
+            heard = True
+        except SdoAbortError:
+            heard = False
+        return next(g for g in generations
+                    if (self._model.description(g).consumer_heartbeat is not None) == heard)
+
     def _describe(self, generation: str | None, node_id: int) -> DeviceDescription:
         """This driver's model at ``generation`` (None: the first), CiA 301 profile."""
-        return describe_keypad(generation or "1.1", "cia301", node_id)
+        return self._model.description(generation, "cia301", node_id)
 
     def watch_host(self, period: float) -> None:
         """Generation 2 only: the keypad switches its LEDs off when the controller's

@@ -133,7 +133,7 @@ class SdoServer:
         if not isinstance(value, bytes):
             return abort_data(mux, value)
         size = len(value)
-        if 0 < size <= 4:
+        if size in EXPEDITED_UPLOAD_COMMAND:  # CiA 301: 1-4 bytes go expedited
             reply = bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
             self._replies[mux] = (value, reply)
             return reply

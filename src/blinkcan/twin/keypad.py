@@ -263,7 +263,7 @@ class KeypadTwin(CanopenTwin):
         store.set("backlight_brightness", level)
         if len(data) > 1:
             colour = signals["colour"]
-            if not 1 <= colour <= 9:
+            if not BacklightColour.is_code(colour):
                 colour = store.get_int("default_backlight_colour")
             store.set("backlight_colour", colour)
         return []

@@ -293,7 +293,7 @@ class Pkp3500Twin(KeypadTwin):
         store = self.objects
         store.set("backlight_brightness", level)
         colour = signals["colour"]
-        if len(data) > 1 and 1 <= colour <= 9:
+        if len(data) > 1 and BacklightColour.is_code(colour):
             self._temporary_colour = colour
             store.set("backlight_colour", colour)
         return []
