@@ -9,8 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 from blinkcan.cli.bus_options import parse_int
-from blinkcan.decode import Decoder, Event, Kind
-from blinkcan.decode.decoder import error_event
+from blinkcan.decode import Decoder, Event
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.logs import LogError, describe_frame, frame_kind, read_log
@@ -37,19 +36,9 @@ def assumed_text(devices: dict[int, str | DeviceDescription]) -> str:
 
 def other_event(decoder: Decoder, message: can.Message) -> Event:
     """The event of a frame that is not a classic data frame: remote, error, CAN FD."""
-    kind = frame_kind(message)
-    if kind == "error":
-        return error_event(message.timestamp, message.arbitration_id, bytes(message.data))
-    if kind == "remote":
-        return decoder.decode_remote(message.arbitration_id, message.is_extended_id,
-                                     message.dlc, message.timestamp)
-    frame = Frame.trusted(message.arbitration_id, bytes(message.data[:8]),
-                          message.is_extended_id)
-    if kind == "fd":
-        return Event(message.timestamp, frame, Kind.FRAME, f"{describe_frame(message)}, "
-                     f"{len(message.data)} bytes (CAN FD is not decoded)")
-    return Event(message.timestamp, frame, Kind.FRAME,  # e.g. a standard id over 7FFh
-                 f"{describe_frame(message)}: not a valid classic CAN frame")
+    return decoder.decode_other(frame_kind(message), message.timestamp, message.arbitration_id,
+                                message.is_extended_id, message.dlc, bytes(message.data),
+                                describe_frame(message))
 
 
 def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:

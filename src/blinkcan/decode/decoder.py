@@ -306,6 +306,21 @@ class Decoder:
                 del bodies[old]
         bodies[cache_key] = line[len(prefix):]
 
+    def decode_other(self, kind: str, time: float, can_id: int, extended: bool, dlc: int,
+                     data: bytes, description: str) -> Event:
+        """The event of a frame that is not a classic data frame, by its ``kind``
+        (formats.logs.frame_kind): an error frame, a remote frame, CAN FD (not decoded), or one
+        no classic frame can be (a standard id over 7FFh); ``description`` names the frame."""
+        if kind == "error":
+            return error_event(time, can_id, data)
+        if kind == "remote":
+            return self.decode_remote(can_id, extended, dlc, time)
+        frame = Frame.trusted(can_id, data[:8], extended)
+        if kind == "fd":
+            return Event(time, frame, Kind.FRAME,
+                         f"{description}, {len(data)} bytes (CAN FD is not decoded)")
+        return Event(time, frame, Kind.FRAME, f"{description}: not a valid classic CAN frame")
+
     def decode_remote(self, can_id: int, extended: bool, dlc: int, time: float = 0.0) -> Event:
         """A remote (RTR) frame: on 700h + node it is node guarding (CiA 301 7.2.8.3.2.1)."""
         frame = Frame.trusted(can_id, b"", extended)

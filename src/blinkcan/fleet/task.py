@@ -31,7 +31,7 @@ from fsspec import AbstractFileSystem
 from fsspec.core import url_to_fs
 
 from blinkcan import __version__
-from blinkcan.decode.decoder import Decoder, Event, Kind, error_event
+from blinkcan.decode.decoder import Decoder, Event
 from blinkcan.devices.registry import describe_device
 from blinkcan.fleet.rows import EventRows
 from blinkcan.fleet.schema import ROWS_PER_GROUP, UNKNOWN
@@ -66,17 +66,9 @@ def source_key(source: str) -> str:
 
 def _other_event(decoder: Decoder, message: can.Message) -> Event:
     """A remote, error or CAN FD frame as ``blinkcan decode`` shows it."""
-    kind = frame_kind(message)
-    if kind == "error":
-        return error_event(message.timestamp, message.arbitration_id, bytes(message.data))
-    if kind == "remote":
-        return decoder.decode_remote(message.arbitration_id, message.is_extended_id,
-                                     message.dlc, message.timestamp)
-    frame = Frame.trusted(message.arbitration_id, bytes(message.data[:8]),
-                          message.is_extended_id)
-    note = f"{len(message.data)} bytes (CAN FD is not decoded)" if kind == "fd" else \
-        "not a valid classic CAN frame"
-    return Event(message.timestamp, frame, Kind.FRAME, f"{describe_frame(message)}: {note}")
+    return decoder.decode_other(frame_kind(message), message.timestamp, message.arbitration_id,
+                                message.is_extended_id, message.dlc, bytes(message.data),
+                                describe_frame(message))
 
 
 def make_decoder(devices: Mapping[int, str] | None) -> Decoder:

@@ -33,7 +33,7 @@ from blinkcan.host.sdo import SdoChannel, SdoClient
 from blinkcan.protocol.cob import SYNC
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import ReadStats
-from blinkcan.runtime.port import Port, port_for
+from blinkcan.runtime.port import Port, port_for, take_port
 from blinkcan.runtime.scheduler import Scheduler, Signal, Timer
 
 log = logging.getLogger(__name__)
@@ -64,14 +64,12 @@ class HostBus:
         if bus is None:
             raise TypeError("HostBus needs a python-can bus, a port or a connected canopen "
                             "Network")
+        taken = take_port(bus, notifier=notifier, clock=clock, name="blinkcan-host")
         #: the python-can bus given (None when made on a port)
-        self.bus: can.BusABC | None = None
-        self._owns_port = isinstance(bus, can.BusABC)
-        if isinstance(bus, can.BusABC):
-            self.bus = bus
-            bus = port_for(bus, notifier=notifier, clock=clock, name="blinkcan-host")
-        self.port: Port = bus
-        self.scheduler: Scheduler = bus.scheduler
+        self.bus: can.BusABC | None = taken.bus
+        self._owns_port = taken.owned
+        self.port: Port = taken.port
+        self.scheduler: Scheduler = self.port.scheduler
         self.simulated = self.scheduler.simulated
         self._handlers: dict[int, list[Handler]] = {}
         self._fast: dict[int, Handler] = {}
@@ -83,7 +81,7 @@ class HostBus:
         self._users = 0
         self._auto = False
         #: what reading the bus met: frames it could not decode, failures, a shut-down
-        self.reading: ReadStats = bus.reading
+        self.reading: ReadStats = self.port.reading
 
     # -- sharing ----------------------------------------------------------------------------
 

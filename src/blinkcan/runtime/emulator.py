@@ -42,7 +42,7 @@ import can
 from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import ReadStats
-from blinkcan.runtime.port import Port, port_for
+from blinkcan.runtime.port import Port, take_port
 from blinkcan.runtime.scheduler import Scheduler, StuckDeadlineError, Timer
 from blinkcan.twin.base import CanopenTwin
 
@@ -79,17 +79,15 @@ class Emulator:
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         check_time("response_delay", response_delay, 0)
+        taken = take_port(bus, notifier=notifier, clock=clock, name="blinkcan-emulator")
         #: the python-can bus given (None when made on a port)
-        self.bus: can.BusABC | None = None
-        self._owns_port = isinstance(bus, can.BusABC)
-        if isinstance(bus, can.BusABC):
-            self.bus = bus
-            bus = port_for(bus, notifier=notifier, clock=clock, name="blinkcan-emulator")
-        self.port: Port = bus
+        self.bus: can.BusABC | None = taken.bus
+        self._owns_port = taken.owned
+        self.port: Port = taken.port
         self.twins: list[CanopenTwin] = list(twins)
         self.response_delay = response_delay
-        self.stats = EmulatorStats(reading=bus.reading)
-        self.scheduler: Scheduler = bus.scheduler
+        self.stats = EmulatorStats(reading=self.port.reading)
+        self.scheduler: Scheduler = self.port.scheduler
         self._clock = self.scheduler.clock
         self._detach: Callable[[], None] | None = None
         self._running = False

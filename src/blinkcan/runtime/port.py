@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
+from typing import NamedTuple, Protocol, runtime_checkable
 
 import can
 
@@ -65,3 +65,21 @@ def port_for(bus: can.BusABC, *, notifier: can.Notifier | None = None,
     if simulated is not None:
         return simulated
     return CanBusPort(bus, notifier=notifier, clock=clock, name=name)
+
+
+class Taken(NamedTuple):
+    """What a HostBus or an Emulator was given, as a port: the python-can bus (None for a
+    port), the port, and whether the port was made here (so its user stops it)."""
+
+    bus: can.BusABC | None
+    port: Port
+    owned: bool
+
+
+def take_port(bus: can.BusABC | Port, *, notifier: can.Notifier | None = None,
+              clock: Callable[[], float] = time.monotonic, name: str = "blinkcan") -> Taken:
+    """A port given stays the caller's; a python-can bus gets a port of its own
+    (:func:`port_for`), owned by whoever took it."""
+    if isinstance(bus, can.BusABC):
+        return Taken(bus, port_for(bus, notifier=notifier, clock=clock, name=name), True)
+    return Taken(None, bus, False)
