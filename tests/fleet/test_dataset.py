@@ -19,6 +19,7 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from blinkcan.cli.extras import install_command
 from blinkcan.cli.main import cli
 from blinkcan.fleet import decode_files
 from blinkcan.fleet.query import connect
@@ -293,7 +294,7 @@ def test_without_the_extra_parquet_says_how_to_install_it(tmp_path: Path,
     log = write_log(tmp_path / "unit.log", [(EPOCH, fleet_traffic()[0][1])])
     result = CliRunner().invoke(cli, ["decode", str(log), "--parquet", str(tmp_path / "x")])
     assert result.exit_code == 1
-    assert result.output == "Error: --parquet needs pyarrow: pip install 'blinkcan[fleet]'\n"
+    assert result.output == f"Error: --parquet needs pyarrow: {install_command('fleet')}\n"
     assert not (tmp_path / "x").exists()
 
 

@@ -24,6 +24,7 @@ from blinkcan.cli.bus_options import (
     parse_int,
     parse_node_id,
 )
+from blinkcan.cli.extras import install_command
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
@@ -178,7 +179,7 @@ def panel(emulator: Emulator, address: str | None, console: Console) -> Iterator
         from blinkcan.web.server import PanelServer, parse_address  # noqa: PLC0415 optional extra
     except ImportError:
         raise click.ClickException("the front panel needs the web extra: "
-                                   "pip install 'blinkcan[web]'") from None
+                                   f"{install_command('web')}") from None
     try:
         host, port = parse_address(address)
         server = PanelServer(emulator, host, port).start()

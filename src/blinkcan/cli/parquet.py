@@ -11,13 +11,15 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from blinkcan import fleet
+from blinkcan.cli.extras import install_command
 
 
 def check_extra() -> None:
     """One line naming the install command when the [fleet] extra is missing."""
     absent = fleet.missing()
     if absent:
-        raise click.ClickException(f"--parquet needs {', '.join(absent)}: {fleet.EXTRA}")
+        raise click.ClickException(f"--parquet needs {', '.join(absent)}: "
+                                   f"{install_command('fleet')}")
 
 
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,

@@ -14,6 +14,7 @@ from rich.console import Console
 from rich.table import Table
 
 from blinkcan import fleet
+from blinkcan.cli.extras import install_command
 
 #: rows printed as a table at most (CSV and JSON print all)
 TABLE_ROWS = 1000
@@ -55,7 +56,8 @@ def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
         raise click.UsageError("--csv and --json are two outputs: choose one")
     absent = fleet.missing("duckdb", "fsspec")
     if absent:
-        raise click.ClickException(f"query needs {', '.join(absent)}: {fleet.EXTRA}")
+        raise click.ClickException(f"query needs {', '.join(absent)}: "
+                                   f"{install_command('fleet')}")
     import duckdb  # noqa: PLC0415 (the [fleet] extra, checked above)
 
     from blinkcan.fleet.query import connect  # noqa: PLC0415
