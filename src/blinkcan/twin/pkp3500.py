@@ -18,7 +18,6 @@ at once, consumer heartbeat, restore, the J1939 switch) runs here on this model'
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -43,7 +42,7 @@ from blinkcan.protocol.nmt import NmtState
 from blinkcan.twin.hooks import Periodic
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
-from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.nvm import NvmArgument
 
 _TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
 #: M15 (Q): the firmware aborts an unknown command specifier with the code the manual lists,
@@ -124,7 +123,7 @@ class Pkp3500Twin(KeypadTwin):
         self,
         node_id: int = 0x15,
         quirks: Quirks = "firmware",
-        nvm: str | os.PathLike[str] | Nvm | None = None,
+        nvm: NvmArgument = None,
         manual: str | None = None,
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
