@@ -25,7 +25,6 @@ it last stored, and every stored write aborts 0606 0000h until a reset finds the
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Mapping
 from enum import Enum
 from typing import Any
@@ -61,7 +60,7 @@ from blinkcan.twin.hooks import (
     Watcher,
     WriteHook,
 )
-from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm, NvmError
+from blinkcan.twin.nvm import NvmArgument, NvmError, open_nvm
 from blinkcan.twin.schedule import Ticker, milliseconds
 
 _Route = Callable[[Frame, float], list[Frame]]
@@ -73,14 +72,6 @@ NMT_STATE_NAMES = {
     NmtState.OPERATIONAL: "operational",
     NmtState.PRE_OPERATIONAL: "pre-operational",
 }
-
-
-def open_nvm(nvm: str | os.PathLike[str] | Nvm | None, description: DeviceDescription) -> Nvm:
-    if nvm is None:
-        return MemoryNvm()
-    if isinstance(nvm, (str, os.PathLike)):
-        return JsonFileNvm(nvm, description.model, description.generation, description.table)
-    return nvm
 
 
 class ConsumerState(Enum):
@@ -99,7 +90,7 @@ class CanopenTwin:
     """The CANopen side of a Blink device; see the module docstring."""
 
     def __init__(self, description: DeviceDescription, node_id: int,
-                 nvm: str | os.PathLike[str] | Nvm | None = None,
+                 nvm: NvmArgument = None,
                  settings: Mapping[str, Value] | None = None,
                  extra_settings: ExtraSettings | None = None) -> None:
         check_node_id(node_id)
@@ -124,6 +115,9 @@ class CanopenTwin:
         self._store.persist = self._save_settings
         self._sdo = SdoServer(self._store)
         self._powered = False
+        #: the heartbeat frame of each NMT state, and of the present one (both follow the node id
+        #: in use: _use_node_id)
+        self._heartbeat_frames = {state: heartbeat_frame(node_id, state) for state in NmtState}
         self._nmt = NmtState.BOOT_UP
         self._bitrate_code = self._store.get_int("baud_rate")
         # registered behaviour (see blinkcan.twin.hooks)
@@ -175,6 +169,7 @@ class CanopenTwin:
     def _nmt(self, state: NmtState) -> None:
         # the gates are kept as booleans: hashing an enum on every frame costs a Python call
         self._nmt_state = state
+        self._heartbeat_frame = self._heartbeat_frames[state]
         self._sdo_allowed = state in SDO_ALLOWED
         self._pdo_allowed = state in PDO_ALLOWED
 
@@ -260,8 +255,13 @@ class CanopenTwin:
         if not self._powered:
             return []
         self._now = now
-        frames: list[Frame] = []
-        frames += [self._heartbeat_frames[self._nmt]] * self._heartbeat.fire(now)
+        heartbeat = self._heartbeat
+        due = heartbeat.due
+        if due is not None and now >= due:
+            owed = heartbeat.fire(now)
+            frames = [self._heartbeat_frame] if owed == 1 else [self._heartbeat_frame] * owed
+        else:
+            frames = []
         deadline = self._consumer_deadline
         if deadline is not None and now >= deadline:
             frames += self._heartbeat_lost(now)
@@ -460,6 +460,7 @@ class CanopenTwin:
         self._node_id = node_id
         self._sdo_tx = SDO_TX + node_id
         self._heartbeat_frames = {state: heartbeat_frame(node_id, state) for state in NmtState}
+        self._heartbeat_frame = self._heartbeat_frames[self._nmt_state]
 
     def _lose_live_state(self) -> None:
         self._watcher = None
