@@ -31,6 +31,7 @@ from rich.console import Console
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import model
+from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.cob import check_time
 from blinkcan.runtime import Emulator
 from blinkcan.twin.actions import ACTIONS, Action, Argument
@@ -67,7 +68,7 @@ GENERAL = MappingProxyType({
 })
 
 
-class CommandError(ValueError):
+class CommandError(BlinkcanError, ValueError):
     """A typed command that cannot be carried out; the message names what is valid."""
 
 
