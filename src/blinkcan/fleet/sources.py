@@ -19,7 +19,7 @@ import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import BinaryIO, TextIO, cast
+from typing import BinaryIO, TextIO
 
 import can
 
@@ -40,12 +40,48 @@ def _suffixes(path: Path) -> tuple[str, str]:
     return (suffixes[-1] if suffixes else ""), ""
 
 
-def _zstd_text(path: Path) -> TextIO:
-    import zstandard  # noqa: PLC0415 (the [fleet] extra)
+class _ZstdReader(io.RawIOBase):
+    """A .zst file's bytes, frame after frame, that raises :class:`EOFError` where the file
+    ends inside a frame: zstandard's ``stream_reader`` ends there as if the file were whole,
+    so a log cut short would lose its tail silently."""
 
-    raw = path.open("rb")
-    reader = zstandard.ZstdDecompressor().stream_reader(raw, closefd=True)
-    return io.TextIOWrapper(cast(BinaryIO, reader), encoding="utf-8")
+    def __init__(self, raw: BinaryIO) -> None:
+        import zstandard  # noqa: PLC0415 (the [fleet] extra)
+
+        self._raw, self._new = raw, zstandard.ZstdDecompressor().decompressobj
+        self._frame, self._pending, self._started = self._new(), b"", False
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
+        while not self._pending:
+            if self._frame.eof:  # the next frame starts with what the last one left
+                rest, self._frame, self._started = self._frame.unused_data, self._new(), False
+                if rest:
+                    self._started = True
+                    self._pending = self._frame.decompress(rest)
+                    continue
+            chunk = self._raw.read(1 << 16)
+            if not chunk:
+                if self._started and not self._frame.eof:
+                    raise EOFError("Compressed file ended before the end of its zstd frame")
+                return 0
+            self._started = True
+            self._pending = self._frame.decompress(chunk)
+        size = min(len(buffer), len(self._pending))
+        buffer[:size] = self._pending[:size]
+        self._pending = self._pending[size:]
+        return size
+
+    def close(self) -> None:
+        self._raw.close()
+        super().close()
+
+
+def _zstd_text(path: Path) -> TextIO:
+    reader = io.BufferedReader(_ZstdReader(path.open("rb")))
+    return io.TextIOWrapper(reader, encoding="utf-8")
 
 
 def _open_text(path: Path, compression: str) -> TextIO:
@@ -90,10 +126,8 @@ def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameCo
                 with gzip.open(path, "rb") as source:
                     shutil.copyfileobj(source, target)
             else:
-                import zstandard  # noqa: PLC0415 (the [fleet] extra)
-
-                with path.open("rb") as raw:
-                    shutil.copyfileobj(zstandard.ZstdDecompressor().stream_reader(raw), target)
+                with _ZstdReader(path.open("rb")) as source:
+                    shutil.copyfileobj(source, target)
         yield from message_columns(read_messages(Path(name)))
     finally:
         os.unlink(name)
