@@ -100,7 +100,7 @@ def test_decode_names_the_file_of_a_non_finite_time(tmp_path: Path) -> None:
                             capture_output=True, text=True, check=False)
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1] == (
-        f"Error: {log}: not a readable log (time (nan) is not a finite number of seconds)")
+        f"Error: {log}: not a readable log (line 2: time (nan) is not a finite number of seconds)")
 
 
 def test_an_identifier_over_8_hex_digits_is_refused_not_read_as_an_error_frame() -> None:

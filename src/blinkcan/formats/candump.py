@@ -22,7 +22,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, TextIO
 
 from blinkcan.formats.columns import FrameColumns
-from blinkcan.formats.log_source import bounded_line_blocks, bounded_lines
+from blinkcan.formats.log_source import LineTooLongError, bounded_line_blocks, bounded_lines
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
@@ -79,16 +79,28 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message]:
     """python-can's messages of a candump log, each error frame completed from its line, the
     lines bounded: one pass, so a stream is read once."""
     last = [""]  # the line python-can's reader read last: the one of the message it yields
+    number = [0]  # and its number
 
     def lines() -> Iterator[str]:
         for line in bounded_lines(stream, "candump"):
             last[0] = line
+            number[0] += 1
             yield line
 
     from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
 
-    for message in CanutilsLogReader(lines()):  # type: ignore[arg-type]  # iterates it only
-        yield restore_error_details(message, last[0])
+    messages = iter(CanutilsLogReader(lines()))  # type: ignore[arg-type]  # iterates it only
+    while True:
+        try:
+            message = next(messages, None)
+            if message is None:
+                return
+            message = restore_error_details(message, last[0])
+        except (LineTooLongError, UnicodeDecodeError):
+            raise  # they name their place themselves
+        except Exception as error:
+            raise _on_line(number[0], error) from error
+        yield message
 
 
 #: identifier texts remembered per log (then they start over): a log has few distinct ones
@@ -135,6 +147,7 @@ def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
     it are yielded."""
     fromhex = bytes.fromhex
     idents: dict[str, tuple[int, bool] | None] = {}
+    read = 0  # lines in the blocks before this one
     for lines in bounded_line_blocks(stream, "candump"):
         columns = FrameColumns()
         add_time, add_channel, add_id = (columns.times.append, columns.channels.append,
@@ -176,12 +189,19 @@ def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
                     if message.timestamp - message.timestamp:
                         _not_finite(fields[0])
                     columns.add_other(message, fields[1] if count > 1 else None)
-        except Exception:
+        except Exception as error:
             if columns.times:  # the frames before the line, then what is wrong with it
                 yield columns
-            raise
+            # the first line of the block that reads so (a line reads the same every time)
+            raise _on_line(read + lines.index(line) + 1, error) from error
+        read += len(lines)
         if columns.times:
             yield columns
+
+
+def _on_line(number: int, error: Exception) -> ValueError:
+    """``error`` of a candump line, naming the line (1-based) so a user can find it."""
+    return ValueError(f"line {number}: {str(error) or type(error).__name__}")
 
 
 def _not_finite(stamp: str) -> None:

@@ -143,6 +143,8 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
         if len(rest) > MAX_LINE or (lines and max(map(len, lines)) > MAX_LINE):
             long = next((n for n, line in enumerate(lines) if len(line) > MAX_LINE),
                         len(lines))
+            if long:  # the lines before it first: what a log holds before a bad line is kept
+                yield lines[:long]
             raise LineTooLongError(f"line {number + long + 1} is over {MAX_LINE} bytes: "
                                    f"not a {kind} log")
         number += len(lines)
