@@ -240,11 +240,7 @@ class HostBus:
             if fast is not None:
                 fast(frame, now)
         if extended or frame.can_id in self._handlers:
-            scheduler = self.scheduler
-            if scheduler.in_loop:
-                self._dispatch(frame, now)
-            else:
-                scheduler.post(lambda: self._dispatch(frame, now))
+            self.scheduler.deliver(self._dispatch, frame, now)
 
     def _dispatch(self, frame: Frame, now: float) -> None:
         handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())

@@ -114,7 +114,7 @@ class Emulator:
             raise RuntimeError("emulator already started")
         self._running = True
         self.scheduler.start()
-        self._detach = self.port.listen(self._on_frame)
+        self._detach = self.port.listen(partial(self.scheduler.deliver, self._received))
         self.run(self._power_on_all)
         return self
 
@@ -209,15 +209,8 @@ class Emulator:
             self._emit(i, frames, now)
         return []
 
-    def _on_frame(self, frame: Frame, now: float) -> None:
-        """A frame from the port, in its receiving context: on the loop, to the twins."""
-        scheduler = self.scheduler
-        if scheduler.in_loop:
-            self._received(frame, now)
-        else:
-            scheduler.post(partial(self._received, frame, now))
-
     def _received(self, frame: Frame, now: float) -> None:
+        """A frame from the port, on the loop (``scheduler.deliver``): to the twins."""
         if not self._running:
             return
         self.stats.frames_received += 1
@@ -244,7 +237,12 @@ class Emulator:
 
     def _deliver(self, frame: Frame, source: int | None, now: float) -> None:
         """Give ``frame`` to every twin listening to its COB-ID except its sender."""
-        targets = self._targets(frame)
+        if frame.extended:
+            targets: Iterable[int] = range(len(self.twins))
+        else:
+            if self._index_dirty:
+                self._refresh_index()
+            targets = self._index.get(frame.can_id, ())
         for i in targets:
             if i == source:
                 continue
@@ -268,12 +266,6 @@ class Emulator:
     def _reply_due(self, key: int, i: int, replies: list[Frame]) -> None:
         if self._delayed.pop(key, None) is not None and self._running:
             self._emit(i, replies, self._clock())
-
-    def _targets(self, frame: Frame) -> Iterable[int]:
-        if frame.extended:
-            return range(len(self.twins))
-        self._refresh_index()
-        return self._index.get(frame.can_id, ())
 
     def _refresh_index(self) -> None:
         """Rebuild COB-ID -> twins after any twin's routes changed (a boot, a new node id)."""
