@@ -3,9 +3,10 @@
 The emulator runs on a transport port (``runtime.port``: python-can's or the simulated one,
 never asked which) and its scheduler (``runtime.scheduler``). Twins are only ever called on
 the scheduler's loop, one call at a time, so nothing needs a lock: on a python-can bus the
-reader thread posts each frame to the loop (a thread of its own, in real time); on a simulated
-bus the simulation itself is the loop, in virtual time, with no thread at all
-(``blinkcan.testing``).
+reader thread hands each frame to the loop (``scheduler.deliver``: run at once on the reader's
+thread, holding the loop, when the loop is idle, else queued after what was posted before;
+timers run on the loop's own thread); on a simulated bus the simulation itself is the loop,
+in virtual time, with no thread at all (``blinkcan.testing``).
 Rules:
 - Frames a twin sends go on the bus and, because a bus does not echo its own frames, are also
   delivered to the other twins of this emulator that listen to that COB-ID.

@@ -3,7 +3,9 @@
 Two implementations share one interface:
 
 - :class:`RealTimeScheduler`: an owning thread, a queue for other threads' calls and a timer
-  heap on ``time.monotonic``. This is what runs on real buses (and python-can's ``virtual``).
+  heap on ``time.monotonic``; a frame a reader thread delivers while the loop is idle runs at
+  once on that thread, which holds the loop meanwhile (no thread hop per frame). This is what
+  runs on real buses (and python-can's ``virtual``).
 - :class:`SimulatedScheduler`: no thread and no sleeping. A virtual clock jumps from one due
   event to the next; events due at the same instant run in the order they were scheduled, so a
   scenario gives the same frames at the same times on every run. A caller that waits (a driver
