@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-import collections
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -74,56 +74,60 @@ class OwnFrames:
     """Recognises a bus's own frames when the bus echoes them (see :func:`echoes_own_frames`).
 
     Frames sent are remembered by content for ``window`` seconds; a received frame equal to one
-    of them is the echo and is consumed. An equal frame from another node within that window is
-    indistinguishable from the echo; it is consumed instead and the echo passes: the receiver
-    sees the same content either way. Thread-safe: senders and the reader may differ.
+    of them is the echo and is consumed (the oldest of equal ones first). An equal frame from
+    another node within that window is indistinguishable from the echo; it is consumed instead
+    and the echo passes: the receiver sees the same content either way. Thread-safe: senders and
+    the reader may differ. Every frame sent and received passes here: a dict lookup for a frame
+    that was not sent, no scan of the others.
     """
 
     def __init__(self, bus: can.BusABC, window: float = 2.0) -> None:
         self.active = echoes_own_frames(bus)
         self.window = window
-        self._pending: collections.Counter[tuple[int, bytes, bool]] = collections.Counter()
-        self._order: collections.deque[tuple[float, tuple[int, bytes, bool]]] = (
-            collections.deque())
+        #: frame -> the times it was sent, oldest first, echo not yet seen
+        self._pending: dict[Frame, list[float]] = {}
+        self._sweep_at = -math.inf
         self._lock = threading.Lock()
 
     def sent(self, frame: Frame, now: float) -> None:
         if not self.active:
             return
-        key = (frame.can_id, frame.data, frame.extended)
         with self._lock:
-            self._expire(now)
-            self._pending[key] += 1
-            self._order.append((now, key))
+            times = self._pending.get(frame)
+            if times is None:
+                self._pending[frame] = [now]
+            else:
+                times.append(now)
+            if now >= self._sweep_at:  # echoes that never came are forgotten, window by window
+                self._sweep(now)
 
     def is_echo(self, frame: Frame, now: float) -> bool:
         if not self.active:
             return False
-        key = (frame.can_id, frame.data, frame.extended)
+        pending = self._pending
+        if frame not in pending:  # never sent (it is there before its echo can come back)
+            return False
         with self._lock:
-            self._expire(now)
-            count = self._pending.get(key, 0)
-            if not count:
+            times = pending.get(frame)
+            window = self.window
+            while times and now - times[0] > window:
+                del times[0]
+            if not times:
+                pending.pop(frame, None)
                 return False
-            if count == 1:
-                del self._pending[key]
-            else:
-                self._pending[key] = count - 1
-            for i, (_, pending) in enumerate(self._order):
-                if pending == key:
-                    del self._order[i]
-                    break
+            del times[0]
+            if not times:
+                del pending[frame]
             return True
 
-    def _expire(self, now: float) -> None:
-        order, pending = self._order, self._pending
-        while order and now - order[0][0] > self.window:
-            _, key = order.popleft()
-            count = pending.get(key, 0)
-            if count <= 1:
-                pending.pop(key, None)
-            else:
-                pending[key] = count - 1
+    def _sweep(self, now: float) -> None:
+        self._sweep_at = now + self.window
+        window = self.window
+        for frame, times in list(self._pending.items()):
+            while times and now - times[0] > window:
+                del times[0]
+            if not times:
+                del self._pending[frame]
 
 
 @dataclass
