@@ -10,3 +10,10 @@ from __future__ import annotations
 
 class BlinkcanError(Exception):
     """Base class of every error blinkcan defines."""
+
+
+class NvmError(BlinkcanError, ValueError):
+    """A twin's non-volatile memory that cannot be used (a file: the message names it).
+
+    Here, below every layer, because the pure twin raises and catches it around any store
+    (``blinkcan.twin.nvm``) and the file store that raises it lives in ``blinkcan.formats``."""

@@ -278,6 +278,38 @@ def test_query_only_reads(tmp_path: Path, traffic: Traffic, sql: str) -> None:
     assert "can_id" in described.stdout
 
 
+@pytest.mark.parametrize("reader", ["read_csv('{secret}')", "read_text('{secret}')",
+                                    "glob('{outside}/*')", "read_csv('{out}/../secret.csv')",
+                                    "read_text('https://example.com/')"])
+def test_query_reads_the_dataset_and_nothing_else(tmp_path: Path, traffic: Traffic,
+                                                  reader: str) -> None:
+    out = tmp_path / "lake"
+    decode_files([write_log(tmp_path / "unit.log", traffic)], str(out))
+    (tmp_path / "secret.csv").write_text("password\nhunter2\n")
+    sql = "SELECT * FROM " + reader.format(secret=tmp_path / "secret.csv", outside=tmp_path,
+                                           out=out)
+    result = CliRunner().invoke(cli, ["query", str(out), sql, "--csv"])
+    assert result.exit_code == 1, result.output
+    assert result.output.startswith(f"Error: query reads only the dataset {out}: ")
+    assert "hunter2" not in result.output
+    assert "unit.log" not in result.output
+    allowed = CliRunner().invoke(cli, ["query", str(out), "SELECT count(*) AS n FROM events",
+                                       "--csv"])
+    assert allowed.exit_code == 0, allowed.output
+
+
+def test_a_connection_cannot_lift_its_confinement(tmp_path: Path, traffic: Traffic) -> None:
+    out = tmp_path / "lake"
+    decode_files([write_log(tmp_path / "unit.log", traffic)], str(out))
+    with connect(str(out)) as connection:
+        for setting in ("SET enable_external_access = true",
+                        "SET allowed_directories = ['/']"):
+            with pytest.raises(duckdb.Error):
+                connection.execute(setting)
+        [(count,)] = connection.execute("SELECT count(*) FROM events").fetchall()
+        assert count > 1000
+
+
 def test_query_names_a_folder_with_no_dataset(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["query", str(tmp_path), "SELECT 1"])
     assert result.exit_code == 1

@@ -27,6 +27,7 @@ from blinkcan.cli.bus_options import (
 from blinkcan.cli.extras import install_command
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import model_names, models, parse_spec
+from blinkcan.formats.nvm_file import nvm_file
 from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
@@ -62,7 +63,9 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
                                        f"not {found.description().title}")
             options["protocol"] = protocol
         try:
-            twins.append(build_twin(model, node, quirks, nvm, **options))
+            # the file store is opened here, at the edge: the twin layer does no I/O
+            store = None if nvm is None else nvm_file(nvm)
+            twins.append(build_twin(model, node, quirks, store, **options))
         except (ValueError, TypeError) as error:
             for twin in twins:
                 twin.close()

@@ -51,7 +51,8 @@ def _check_reads_only(connection: Any, sql: str) -> None:
 def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
     """Run SQL on the dataset `blinkcan decode --parquet OUT` wrote: its rows are the table
     `events` (columns: time, source, channel, can_id, extended, node, kind, key, pin, state,
-    colour, value, text, data, model, date). It only reads: every statement must be a SELECT."""
+    colour, value, text, data, model, date). It only reads, and only the dataset: every statement
+    must be a SELECT, and no other file or URL can be read."""
     if as_csv and as_json:
         raise click.UsageError("--csv and --json are two outputs: choose one")
     absent = fleet.missing("duckdb", "fsspec")
@@ -68,6 +69,9 @@ def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
             result = connection.execute(sql)
             names = [column[0] for column in result.description or []]
             rows = result.fetchall()
+    except duckdb.PermissionException as error:
+        raise click.ClickException(f"query reads only the dataset {dataset}: "
+                                   f"{str(error).splitlines()[0]}") from None
     except (duckdb.Error, ValueError) as error:
         raise click.ClickException(str(error).splitlines()[0]) from None
     out = sys.stdout

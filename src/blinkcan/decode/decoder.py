@@ -29,16 +29,26 @@ from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
-from blinkcan.protocol.nmt import NmtCommand, NmtState
+from blinkcan.protocol.nmt import NmtCommand, NmtState, parse_nmt
 from blinkcan.protocol.sdo import (
+    CCS_ABORT,
+    CCS_DOWNLOAD_SEGMENT,
+    CCS_INITIATE_DOWNLOAD,
+    CCS_INITIATE_UPLOAD,
+    CCS_UPLOAD_SEGMENT,
     EXPEDITED_UPLOAD_COMMAND,
-    abort_code_of,
-    expedited_payload,
-    segment_payload,
-    split_multiplexer,
+    SCS_ABORT,
+    SCS_DOWNLOAD_SEGMENT,
+    SCS_INITIATE_UPLOAD,
+    SCS_UPLOAD_SEGMENT,
+    SEGMENTED_UPLOAD_RESPONSE,
+    parse_sdo,
 )
+from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES
 
 _UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
+#: requests that name an object (CiA 301 §7.2.4.3): initiate download, upload, abort
+_INITIATE_REQUESTS = frozenset({CCS_INITIATE_DOWNLOAD, CCS_INITIATE_UPLOAD, CCS_ABORT})
 _NMT_TEXT = {
     NmtCommand.START: "start", NmtCommand.STOP: "stop",
     NmtCommand.ENTER_PRE_OPERATIONAL: "enter pre-operational",
@@ -391,15 +401,15 @@ class Decoder:
     # -- services ---------------------------------------------------------------------------------
 
     def _nmt(self, frame: Frame, time: float) -> Event:
+        request = parse_nmt(frame)  # CiA 301 §7.2.8.3.1: command byte, node id (0: all)
         data = frame.data
-        if len(data) < 2:
+        if request is not None:
+            text, node = _NMT_TEXT[request.command], request.node_id
+        elif len(data) < 2:
             return Event(time, frame, Kind.FRAME, "NMT frame too short")
-        try:
-            command = NmtCommand(data[0])
-            text = _NMT_TEXT[command]
-        except ValueError:
+        else:  # PKP §7 (errata P12): the keypad's legacy 00h is a stop
             text = "stop (legacy 00h)" if data[0] == 0 else f"command {data[0]:02X}h"
-        node = data[1]
+            node = data[1]
         target = "all nodes" if node == 0 else f"{self._who(node) or 'node'} {node:02X}h"
         return Event(time, frame, Kind.NMT, f"NMT {text}, {target}",
                      fields={"command": text, "target": node})
@@ -538,53 +548,52 @@ class Decoder:
 
     def _sdo_request(self, frame: Frame, data: bytes, time: float, node: int,
                      device: DeviceDescription | None) -> Event:
-        command, ccs = data[0], data[0] >> 5
+        request = parse_sdo(data[:8])
+        ccs = request.specifier
         kind = device.kind if device is not None else None
-        if ccs in (1, 2, 4):
-            index, sub = split_multiplexer(data[1:4])
+        if ccs in _INITIATE_REQUESTS:  # CiA 301 §7.2.4.3.3, §7.2.4.3.6, §7.2.4.3.17
+            index, sub = request.object_index, request.subindex
             entry = self._entry(device, index, sub)
             name = self._name(index, sub, entry)
             fields = {"index": index, "subindex": sub, "object": entry.name if entry else None}
-            if ccs == 2:
+            if ccs == CCS_INITIATE_UPLOAD:
                 self._transfers[node] = _Transfer(index, sub, entry, False, time)
                 return Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
-            if ccs == 4:
+            if ccs == CCS_ABORT:
                 self._transfers.pop(node, None)
-                code = int.from_bytes(data[4:8], "little")
+                code = request.word
                 return Event(time, frame, Kind.SDO_ABORT, f"SDO abort {name} by the client: "
                              f"{describe_abort(code)}", node, kind, {**fields, "code": code})
             self._transfers[node] = _Transfer(index, sub, entry, True, time)
-            if not command & 0x02:
+            if not request.expedited:
                 return Event(time, frame, Kind.SDO_WRITE, f"SDO segmented write {name}", node,
                              kind, fields)
-            raw = expedited_payload(command, data)
+            raw = request.expedited_data
             value = entry.decode(raw) if entry is not None else int.from_bytes(raw, "little")
             if index == 0x20FF and sub == 1 and value == 1:
                 text = "switch to J1939 (PKP §44)"
                 return Event(time, frame, Kind.J1939, text, node, kind, {**fields, "value": 1})
             return Event(time, frame, Kind.SDO_WRITE, f"SDO write {name} = {_show(value)}",
                          node, kind, {**fields, "value": value})
-        if ccs == 3:
+        if ccs == CCS_UPLOAD_SEGMENT:  # CiA 301 §7.2.4.3.7
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO read, next segment", node, kind)
-        if ccs == 0:
+        if ccs == CCS_DOWNLOAD_SEGMENT:  # CiA 301 §7.2.4.3.4
             transfer = self._live_transfer(node, time)
-            segment = segment_payload(data)
-            if transfer is not None and not self._grow(node, transfer, segment):
+            if transfer is not None and not self._grow(node, transfer, request.segment_data):
                 return Event(time, frame, Kind.SDO_SEGMENT, f"SDO write segment: over "
                              f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind)
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment", node, kind)
-        return Event(time, frame, Kind.FRAME, f"SDO request {command:02X}h", node, kind)
+        return Event(time, frame, Kind.FRAME, f"SDO request {request.command:02X}h", node, kind)
 
     def _sdo_reply(self, frame: Frame, time: float, node: int,
                    device: DeviceDescription | None) -> Event:
-        data = frame.data
-        command = data[0]
+        reply = parse_sdo(frame.data[:8])
+        command, scs = reply.command, reply.specifier
         kind = device.kind if device is not None else None
         transfer = self._live_transfer(node, time)
-        if command == 0x80:
+        if scs == SCS_ABORT:  # CiA 301 §7.2.4.3.17
             self._transfers.pop(node, None)
-            index, sub = split_multiplexer(data[1:4])
-            code = int(abort_code_of(data))
+            index, sub, code = reply.object_index, reply.subindex, reply.word
             name = self._name(index, sub, self._entry(device, index, sub))
             return Event(time, frame, Kind.SDO_ABORT,
                          f"SDO abort {name}: {code:08X}h {describe_abort(code)}", node, kind,
@@ -595,30 +604,32 @@ class Decoder:
         name = self._name(transfer.index, transfer.subindex, transfer.entry)
         fields: dict[str, Any] = {"index": transfer.index, "subindex": transfer.subindex,
                                   "object": transfer.entry.name if transfer.entry else None}
-        if transfer.writing and command in (0x60, 0x43) and data[1:4] == \
-                bytes((transfer.index & 0xFF, transfer.index >> 8, transfer.subindex)):
-            self._transfers.pop(node, None)  # errata K3: 43h acknowledges too
+        ours = reply.object_index == transfer.index and reply.subindex == transfer.subindex
+        if transfer.writing and command in QUIRK_ACKNOWLEDGES and ours:
+            self._transfers.pop(node, None)  # CiA 301 §7.2.4.3.3; errata K3: 43h too
             return Event(time, frame, Kind.SDO_WRITTEN, f"SDO write {name} done", node, kind,
                          fields)
-        if command in _UPLOAD_SIZES and not transfer.writing:
-            self._transfers.pop(node, None)
-            return self._value(frame, time, node, kind, transfer,
-                               bytes(data[4 : 4 + _UPLOAD_SIZES[command]]), name, fields)
-        if command == 0x41 and not transfer.writing:
-            size = int.from_bytes(data[4:8], "little")
-            return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: {size} bytes follow",
-                         node, kind, {**fields, "size": size})
-        if command >> 5 == 0 and not transfer.writing:
-            if not self._grow(node, transfer, segment_payload(data)):
+        if not transfer.writing and scs == SCS_INITIATE_UPLOAD:  # CiA 301 §7.2.4.3.6
+            if command in _UPLOAD_SIZES:  # expedited, size indicated
+                self._transfers.pop(node, None)
+                return self._value(frame, time, node, kind, transfer, reply.expedited_data,
+                                   name, fields)
+            if command == SEGMENTED_UPLOAD_RESPONSE:
+                size = reply.word
+                return Event(time, frame, Kind.SDO_SEGMENT,
+                             f"SDO read {name}: {size} bytes follow", node, kind,
+                             {**fields, "size": size})
+        if scs == SCS_UPLOAD_SEGMENT and not transfer.writing:  # CiA 301 §7.2.4.3.7
+            if not self._grow(node, transfer, reply.segment_data):
                 return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
                              f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
-            if command & 1:
+            if reply.last:
                 self._transfers.pop(node, None)
                 return self._value(frame, time, node, kind, transfer, bytes(transfer.buffer),
                                    name, fields)
             return Event(time, frame, Kind.SDO_SEGMENT,
-                         f"SDO read {name}: segment {bytes(data[1:8])!r}", node, kind, fields)
-        if command >> 5 == 1 and transfer.writing:
+                         f"SDO read {name}: segment {reply.raw[1:8]!r}", node, kind, fields)
+        if scs == SCS_DOWNLOAD_SEGMENT and transfer.writing:  # CiA 301 §7.2.4.3.4
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment acknowledged", node,
                          kind, fields)
         return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)

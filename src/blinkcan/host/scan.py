@@ -20,7 +20,7 @@ from blinkcan.host.device import several_answer, unreversed
 from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.sdo import expedited_payload
+from blinkcan.protocol.sdo import SCS_INITIATE_UPLOAD, parse_sdo
 from blinkcan.protocol.sdo_client import SdoError
 
 
@@ -60,9 +60,10 @@ def _text(channel: SdoClient, index: int) -> str | None:
 
 def _expedited_value(reply: bytes) -> int | None:
     """The value of an expedited upload response (None for an abort or a segmented one)."""
-    if reply[0] >> 5 != 2 or not reply[0] & 0x02:
+    parsed = parse_sdo(reply)  # answers() gives eight-byte replies only
+    if parsed.specifier != SCS_INITIATE_UPLOAD or not parsed.expedited:
         return None
-    return int.from_bytes(expedited_payload(reply[0], reply), "little")
+    return int.from_bytes(parsed.expedited_data, "little")
 
 
 def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
@@ -81,7 +82,7 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
         def probe(node: int) -> Found | None:
             channel = host.sdo(node, timeout=timeout, retries=0)
             replies = channel.channel.answers(0x1000, 0, timeout)
-            if not replies or replies[0][0] == 0x80:
+            if not replies or parse_sdo(replies[0]).is_abort:
                 return None  # nothing, or a device without 1000h: not CANopen
             if len(replies) > 1:  # their identity reads would be taken for one another
                 types = {_expedited_value(reply) for reply in replies}

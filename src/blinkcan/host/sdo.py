@@ -34,7 +34,7 @@ from typing import Protocol
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import SDO_RX, SDO_TX
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.sdo import multiplexer
+from blinkcan.protocol.sdo import SdoFrameError, multiplexer, parse_sdo
 from blinkcan.protocol.sdo_client import (
     DownloadTransfer,
     SdoError,
@@ -136,8 +136,7 @@ class SdoChannel:
             finally:
                 with self._state_lock:
                     gathered, self._gathered = self._gathered, None
-        return [data for data in gathered if len(data) == 8 and data[1:4] == mux
-                and (data[0] >> 5 == 2 or data[0] == 0x80)]
+        return [data for data in gathered if _answers_upload_of(data, mux)]
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
@@ -217,8 +216,7 @@ class SdoChannel:
         request = b"\x40" + _RESYNC_MUX + b"\x00\x00\x00\x00"
 
         def answers_resync(data: bytes) -> bool:
-            return len(data) >= 4 and data[1:4] == _RESYNC_MUX and (
-                data[0] >> 5 == 2 or data[0] == 0x80)
+            return _answers_upload_of(data, _RESYNC_MUX)
 
         if self._exchange(request, timeout, answers_resync) is None:
             raise SdoTimeoutError(
@@ -237,6 +235,14 @@ class SdoChannel:
             return error
         return SdoTimeoutError(f"no reply within {timeout} s", self.node_id, transfer.index,
                                transfer.subindex)
+
+
+def _answers_upload_of(data: bytes, mux: bytes) -> bool:
+    """A reply (eight bytes) that answers a read of ``mux``: its upload response or abort."""
+    try:
+        return parse_sdo(data).answers_upload_of(mux)
+    except SdoFrameError:
+        return False
 
 
 class SdoClient:

@@ -7,7 +7,9 @@ sub-index; KBX §8 "Every answer has index and sub index echo") and four data by
 from __future__ import annotations
 
 import struct
+from typing import NamedTuple
 
+from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.abort import AbortCode
 
 #: Client command specifiers (bits 7-5 of byte 0 of a request).
@@ -38,6 +40,107 @@ EXPEDITED_DOWNLOAD_COMMAND = {1: 0x2F, 2: 0x2B, 3: 0x27, 4: 0x23}
 
 ZEROS = b"\x00" * 8
 _MULTIPLEXER = struct.Struct("<HB")
+#: CiA 301 §7.2.4.3: command byte, index (LSB first), sub-index, four data bytes
+_SDO_LAYOUT = struct.Struct("<BHBI")
+_new_tuple = tuple.__new__
+#: server specifiers that answer an initiate upload request (CiA 301 §7.2.4.3.6, §7.2.4.3.17)
+_ANSWERS_UPLOAD = frozenset({SCS_INITIATE_UPLOAD, SCS_ABORT})
+
+
+class SdoFrameError(BlinkcanError, ValueError):
+    """Bytes that are not an SDO frame: CiA 301 §7.2.4.3 frames are exactly eight bytes."""
+
+
+class SdoFrame(NamedTuple):
+    """One CiA 301 SDO frame, parsed (:func:`parse_sdo`); immutable, equal by value.
+
+    The parse does not depend on the direction: ``specifier`` is bits 7-5 of byte 0, which a
+    request calls the client command specifier (``CCS_*``) and a reply the server one
+    (``SCS_*``). Every field of the layouts is offered; the caller, who knows the direction
+    and the specifier, reads the ones that frame has (a segment has no multiplexer: its
+    ``object_index`` and ``subindex`` are data bytes).
+    """
+
+    #: byte 0
+    command: int
+    #: bytes 1-2 (LSB first) and 3: the object named (CiA 301 §7.2.4.3.3, §7.2.4.3.6);
+    #: not ``index``, which a tuple already has
+    object_index: int
+    subindex: int
+    #: bytes 4-7 as a little-endian number: size, abort code or expedited data
+    word: int
+    #: the eight bytes as received
+    raw: bytes
+
+    @property
+    def specifier(self) -> int:
+        """Bits 7-5 of byte 0: the command specifier (ccs of a request, scs of a reply)."""
+        return self.command >> 5
+
+    @property
+    def mux(self) -> bytes:
+        """Bytes 1-3, the multiplexer, as sent (echoed in replies: KBX §8)."""
+        return self.raw[1:4]
+
+    @property
+    def expedited(self) -> bool:
+        """Initiate frames: the e bit (bit 1), data in bytes 4-7 (CiA 301 §7.2.4.3.3)."""
+        return bool(self.command & 0x02)
+
+    @property
+    def size_indicated(self) -> bool:
+        """Initiate frames: the s bit (bit 0): a size is given (CiA 301 §7.2.4.3.3)."""
+        return bool(self.command & 0x01)
+
+    @property
+    def expedited_data(self) -> bytes:
+        """An expedited initiate's data: 4 - n bytes when the size is indicated (n in bits
+        3-2), else all four (CiA 301 §7.2.4.3.3, §7.2.4.3.6)."""
+        return expedited_payload(self.command, self.raw)
+
+    @property
+    def size(self) -> int | None:
+        """A segmented initiate's announced size (s set, e clear: bytes 4-7), else None."""
+        return self.word if self.command & 0x03 == 0x01 else None
+
+    @property
+    def toggle(self) -> int:
+        """Segment frames: the toggle bit t, as its mask (0 or TOGGLE; CiA 301 §7.2.4.3.4)."""
+        return self.command & TOGGLE
+
+    @property
+    def last(self) -> bool:
+        """Segment frames: the c bit (bit 0): no more segments follow (CiA 301 §7.2.4.3.4)."""
+        return bool(self.command & 0x01)
+
+    @property
+    def segment_data(self) -> bytes:
+        """Segment frames: bytes 1-7 less the n unused ones (bits 3-1; CiA 301 §7.2.4.3.4)."""
+        return segment_payload(self.raw)
+
+    @property
+    def is_abort(self) -> bool:
+        """An abort transfer frame, either direction (CiA 301 §7.2.4.3.17: cs = 4)."""
+        return self.command >> 5 == CCS_ABORT
+
+    @property
+    def abort_code(self) -> AbortCode | int:
+        """An abort frame's code (bytes 4-7), as an AbortCode where it is a known one."""
+        return abort_code_of(self.raw)
+
+    def answers_upload_of(self, mux: bytes) -> bool:
+        """A reply that ends or opens the upload of ``mux``: an initiate upload response or an
+        abort for that object (CiA 301 §7.2.4.3.6, §7.2.4.3.17)."""
+        return self.raw[1:4] == mux and self.command >> 5 in _ANSWERS_UPLOAD
+
+
+def parse_sdo(data: bytes) -> SdoFrame:
+    """The SDO frame in ``data``: any eight bytes parse (CiA 301 §7.2.4.3: every SDO frame
+    is eight bytes); any other length raises :class:`SdoFrameError`, the only error."""
+    if len(data) != 8:
+        raise SdoFrameError(f"an SDO frame has 8 bytes, not {len(data)}")
+    raw = bytes(data)
+    return _new_tuple(SdoFrame, (*_SDO_LAYOUT.unpack(raw), raw))
 
 
 def multiplexer(index: int, subindex: int) -> bytes:

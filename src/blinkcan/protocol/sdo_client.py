@@ -15,12 +15,14 @@ from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.sdo import (
     EXPEDITED_DOWNLOAD_COMMAND,
+    SCS_DOWNLOAD_SEGMENT,
+    SCS_INITIATE_UPLOAD,
+    SCS_UPLOAD_SEGMENT,
     TOGGLE,
     ZEROS,
-    expedited_payload,
+    SdoFrame,
     multiplexer,
-    segment_payload,
-    split_multiplexer,
+    parse_sdo,
 )
 
 QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowledges with 43h
@@ -70,14 +72,16 @@ class _Transfer:
     def _fail(self, message: str) -> SdoProtocolError:
         return SdoProtocolError(message, None, self.index, self.subindex)
 
-    def _check_common(self, data: bytes) -> None:
+    def _check_common(self, data: bytes) -> SdoFrame:
+        """The reply parsed; an abort (CiA 301 §7.2.4.3.17) or a short frame raised."""
         if len(data) < 8:
             raise self._fail(f"reply of {len(data)} bytes, SDO frames have 8")
-        if data[0] == 0x80:
-            if data[1:4] != self.mux and data[1:4] != b"\x00\x00\x00":
+        reply = parse_sdo(data[:8])
+        if reply.is_abort:
+            if reply.mux not in (self.mux, b"\x00\x00\x00"):
                 raise self._fail("abort for another object")
-            raise SdoAbortError(int.from_bytes(data[4:8], "little"), None, self.index,
-                                self.subindex)
+            raise SdoAbortError(reply.word, None, self.index, self.subindex)
+        return reply
 
     def abort_request(self, code: int) -> bytes:
         """The frame that tells the server to give up this transfer."""
@@ -99,23 +103,24 @@ class UploadTransfer(_Transfer):
 
     def on_reply(self, data: bytes) -> bytes | None:
         """The next request, or None when the value is complete (then ``done``)."""
-        self._check_common(data)
-        command = data[0]
-        if self._size is None and not self._buffer and command >> 5 == 2:
-            if data[1:4] != self.mux:
-                raise self._fail(f"reply for {split_multiplexer(data[1:4])}")
-            if command & 0x02:  # expedited; size stated or all four bytes
-                self.value = bytes(expedited_payload(command, data))
+        reply = self._check_common(data)
+        command = reply.command
+        if self._size is None and not self._buffer and reply.specifier == SCS_INITIATE_UPLOAD:
+            if reply.mux != self.mux:
+                raise self._fail(f"reply for {(reply.object_index, reply.subindex)}")
+            if reply.expedited:  # CiA 301 §7.2.4.3.6: size stated or all four bytes
+                self.value = reply.expedited_data
                 self.done = True
                 return None
-            self._size = int.from_bytes(data[4:8], "little") if command & 0x01 else -1
+            size = reply.size
+            self._size = -1 if size is None else size
             return b"\x60" + ZEROS[:7]
-        if command >> 5 != 0:
+        if reply.specifier != SCS_UPLOAD_SEGMENT:
             raise self._fail(f"unexpected reply {command:02X}h")
-        if command & TOGGLE != self._toggle:
+        if reply.toggle != self._toggle:  # CiA 301 §7.2.4.3.7
             raise self._fail("toggle bit not alternated")
-        self._buffer += segment_payload(data)
-        if command & 0x01:  # last segment (errata B6: strings of any length)
+        self._buffer += reply.segment_data
+        if reply.last:  # last segment (errata B6: strings of any length)
             if self._size not in (None, -1) and len(self._buffer) != self._size:
                 raise self._fail(f"{len(self._buffer)} bytes, {self._size} announced")
             self.value = bytes(self._buffer)
@@ -143,14 +148,16 @@ class DownloadTransfer(_Transfer):
         return b"\x21" + self.mux + len(data).to_bytes(4, "little")
 
     def on_reply(self, data: bytes) -> bytes | None:
-        self._check_common(data)
-        command = data[0]
-        if self._position == 0 and command in QUIRK_ACKNOWLEDGES and data[1:4] == self.mux:
+        reply = self._check_common(data)
+        command = reply.command
+        if self._position == 0 and command in QUIRK_ACKNOWLEDGES and reply.mux == self.mux:
             if not self._segmented:
                 self.done = True
                 return None
             return self._next_segment()
-        if self._segmented and command >> 5 == 1 and command & TOGGLE == self._toggle ^ TOGGLE:
+        # CiA 301 §7.2.4.3.4: a segment's response echoes its toggle bit
+        if self._segmented and reply.specifier == SCS_DOWNLOAD_SEGMENT and \
+                reply.toggle == self._toggle ^ TOGGLE:
             if self._position >= len(self.data):
                 self.done = True
                 return None

@@ -21,20 +21,24 @@ from typing import Protocol
 
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.sdo import (
+    CCS_DOWNLOAD_SEGMENT,
+    CCS_UPLOAD_SEGMENT,
     DOWNLOAD_ACKNOWLEDGE,
     EXPEDITED_UPLOAD_COMMAND,
     SEGMENTED_UPLOAD_RESPONSE,
     TOGGLE,
     ZEROS,
+    SdoFrame,
     abort_data,
-    expedited_payload,
-    segment_payload,
+    parse_sdo,
 )
 
 #: The largest segmented download the server buffers (both devices have only short objects).
 MAX_DOWNLOAD_SIZE = 1024
 _NO_MULTIPLEXER = b"\x00\x00\x00"
 _ACKNOWLEDGE_PREFIX = [bytes((command,)) for command in range(256)]
+#: client specifiers of segment requests: bytes 1-3 are data, not a multiplexer
+_SEGMENT_REQUESTS = frozenset({CCS_DOWNLOAD_SEGMENT, CCS_UPLOAD_SEGMENT})
 
 
 class ObjectAccess(Protocol):
@@ -57,7 +61,7 @@ class TransferState(IntEnum):
     DOWNLOADING = 2
 
 
-_Handler = Callable[[bytes], "bytes | None"]
+_Handler = Callable[[SdoFrame], "bytes | None"]
 
 
 class SdoServer:
@@ -76,7 +80,8 @@ class SdoServer:
         self._size: int | None = None
         #: mux -> (value bytes, reply): an unchanged value object gets the same reply bytes
         self._replies: dict[bytes, tuple[bytes, bytes]] = {}
-        # state -> handler per client command specifier (0..7): the protocol as a table. A list
+        # state -> handler per client command specifier (0..7; CiA 301 §7.2.4.3): the protocol
+        # as a table. A list
         # per state, not a dict keyed by (state, ccs): hashing an enum costs a Python call.
         refuse = self._refuse
         self._tables: dict[TransferState, list[_Handler]] = {}
@@ -106,24 +111,25 @@ class SdoServer:
 
     def on_request(self, data: bytes) -> bytes | None:
         """The eight reply bytes for one request, or None (a client abort needs no reply)."""
-        if len(data) < 8:
+        if len(data) < 8:  # errata P10: read as padded with zeros
             data = data + ZEROS[len(data) :]
-        return self._handlers[data[0] >> 5](data)
+        request = parse_sdo(data[:8])
+        return self._handlers[request.command >> 5](request)
 
     # -- handlers -------------------------------------------------------------------------
 
-    def _refuse(self, data: bytes) -> bytes:
+    def _refuse(self, request: SdoFrame) -> bytes:
         mux = self._mux if self._state is not TransferState.IDLE else _NO_MULTIPLEXER
-        if data[0] >> 5 not in (0, 3):  # segment frames carry data, not a multiplexer
-            mux = data[1:4]
+        if request.specifier not in _SEGMENT_REQUESTS:  # a segment carries no multiplexer
+            mux = request.mux
         self._enter(TransferState.IDLE)
         return abort_data(mux, AbortCode.COMMAND_SPECIFIER_INVALID)
 
-    def _client_abort(self, data: bytes) -> None:
-        self._enter(TransferState.IDLE)
+    def _client_abort(self, request: SdoFrame) -> None:
+        self._enter(TransferState.IDLE)  # CiA 301 §7.2.4.3.17: an abort is not answered
 
-    def _initiate_upload(self, data: bytes) -> bytes:
-        mux = data[1:4]
+    def _initiate_upload(self, request: SdoFrame) -> bytes:
+        mux = request.mux
         if self._handlers is not self._idle:
             self._enter(TransferState.IDLE)
         value = self._access.sdo_upload(mux)
@@ -144,8 +150,8 @@ class SdoServer:
         self._toggle = 0
         return bytes((SEGMENTED_UPLOAD_RESPONSE,)) + mux + size.to_bytes(4, "little")
 
-    def _upload_segment(self, data: bytes) -> bytes:
-        toggle = data[0] & TOGGLE
+    def _upload_segment(self, request: SdoFrame) -> bytes:
+        toggle = request.toggle  # CiA 301 §7.2.4.3.7: alternates from 0 on each segment
         if toggle != self._toggle:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
@@ -159,19 +165,17 @@ class SdoServer:
         command = toggle | ((7 - len(chunk)) << 1) | last
         return bytes((command,)) + chunk + ZEROS[len(chunk) : 7]
 
-    def _initiate_download(self, data: bytes) -> bytes:
-        command, mux = data[0], data[1:4]
+    def _initiate_download(self, request: SdoFrame) -> bytes:
+        mux = request.mux
         if self._handlers is not self._idle:
             self._enter(TransferState.IDLE)
-        if command & 0x02:  # expedited: n bytes when the size is indicated, else four
-            if command & 0x01:
-                result = self._access.sdo_download(mux, expedited_payload(command, data), True)
-            else:
-                result = self._access.sdo_download(mux, data[4:8], False)
+        if request.expedited:  # CiA 301 §7.2.4.3.3: n bytes if the size is indicated, else 4
+            result = self._access.sdo_download(mux, request.expedited_data,
+                                               request.size_indicated)
             if result > 0xFF:
                 return abort_data(mux, result)
             return _ACKNOWLEDGE_PREFIX[result] + mux + b"\x00\x00\x00\x00"
-        size = int.from_bytes(data[4:8], "little") if command & 0x01 else None
+        size = request.size
         if size is not None and size > MAX_DOWNLOAD_SIZE:
             return abort_data(mux, AbortCode.OUT_OF_MEMORY)
         self._enter(TransferState.DOWNLOADING)
@@ -181,19 +185,18 @@ class SdoServer:
         self._toggle = 0
         return bytes((DOWNLOAD_ACKNOWLEDGE,)) + mux + b"\x00\x00\x00\x00"
 
-    def _download_segment(self, data: bytes) -> bytes:
-        command = data[0]
-        toggle = command & TOGGLE
+    def _download_segment(self, request: SdoFrame) -> bytes:
+        toggle = request.toggle  # CiA 301 §7.2.4.3.4: alternates from 0 on each segment
         if toggle != self._toggle:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
-        self._buffer += segment_payload(data)
+        self._buffer += request.segment_data
         if len(self._buffer) > MAX_DOWNLOAD_SIZE:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.OUT_OF_MEMORY)
         self._toggle ^= TOGGLE
         reply = bytes((0x20 | toggle,)) + ZEROS[:7]
-        if not command & 0x01:
+        if not request.last:
             return reply
         self._enter(TransferState.IDLE)
         if self._size is not None and self._size != len(self._buffer):

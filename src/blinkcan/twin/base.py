@@ -25,7 +25,6 @@ it last stored, and every stored write aborts 0606 0000h until a reset finds the
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Mapping
 from enum import Enum
 from typing import Any
@@ -61,7 +60,7 @@ from blinkcan.twin.hooks import (
     Watcher,
     WriteHook,
 )
-from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm, NvmError
+from blinkcan.twin.nvm import NvmArgument, NvmError, open_nvm
 from blinkcan.twin.schedule import Ticker, milliseconds
 
 _Route = Callable[[Frame, float], list[Frame]]
@@ -73,14 +72,6 @@ NMT_STATE_NAMES = {
     NmtState.OPERATIONAL: "operational",
     NmtState.PRE_OPERATIONAL: "pre-operational",
 }
-
-
-def open_nvm(nvm: str | os.PathLike[str] | Nvm | None, description: DeviceDescription) -> Nvm:
-    if nvm is None:
-        return MemoryNvm()
-    if isinstance(nvm, (str, os.PathLike)):
-        return JsonFileNvm(nvm, description.model, description.generation, description.table)
-    return nvm
 
 
 class ConsumerState(Enum):
@@ -99,7 +90,7 @@ class CanopenTwin:
     """The CANopen side of a Blink device; see the module docstring."""
 
     def __init__(self, description: DeviceDescription, node_id: int,
-                 nvm: str | os.PathLike[str] | Nvm | None = None,
+                 nvm: NvmArgument = None,
                  settings: Mapping[str, Value] | None = None,
                  extra_settings: ExtraSettings | None = None) -> None:
         check_node_id(node_id)

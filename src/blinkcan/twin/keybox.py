@@ -10,7 +10,6 @@ Where the manual is silent about outputs, the twin is fail-safe (blinkcan decisi
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
@@ -34,7 +33,7 @@ from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtState
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keybox_outputs import Outputs, PinState, check_pin
-from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.nvm import NvmArgument
 
 _STATE_NAMES = {state: PIN_STATE_NAMES[state] for state in PinState}
 _PIN_ENTRIES = tuple(f"pin_{pin}_state" for pin in FACE.pin_numbers)
@@ -50,7 +49,7 @@ class KeyboxTwin(CanopenTwin):
         self,
         node_id: int = DEFAULT_NODE_ID,
         quirks: Quirks = "firmware",
-        nvm: str | os.PathLike[str] | Nvm | None = None,
+        nvm: NvmArgument = None,
         low_side: Iterable[int] = (),
         settings: Mapping[str, Value] | None = None,
         model: str = MODEL,

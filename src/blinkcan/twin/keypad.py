@@ -11,7 +11,6 @@ and, from the base, the consumer heartbeat and restore defaults. In J1939 mode
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
@@ -45,7 +44,7 @@ from blinkcan.twin.keypad_display import (
     startup_shows,
 )
 from blinkcan.twin.keypad_j1939 import J1939Keypad
-from blinkcan.twin.nvm import JsonFileNvm, MemoryNvm, Nvm
+from blinkcan.twin.nvm import NvmArgument, open_nvm
 
 PROTOCOLS = {"canopen": PROTOCOL_CANOPEN, "j1939": PROTOCOL_J1939}
 
@@ -79,7 +78,7 @@ class KeypadTwin(CanopenTwin):
         self,
         node_id: int = 0x15,
         quirks: Quirks = "firmware",
-        nvm: str | os.PathLike[str] | Nvm | None = None,
+        nvm: NvmArgument = None,
         manual: str | None = None,
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
@@ -98,11 +97,8 @@ class KeypadTwin(CanopenTwin):
         description = found.description(manual, quirks, node_id)
         if protocol not in PROTOCOLS:
             raise ValueError(f"protocol must be one of {', '.join(PROTOCOLS)}, not {protocol!r}")
-        if nvm is None:
-            nvm = MemoryNvm()
-        elif isinstance(nvm, (str, os.PathLike)):  # J1939 settings live in the same file
-            nvm = JsonFileNvm(nvm, description.model, description.generation, description.table,
-                              {NVM_PREFIX + key: f.valid for key, f in STORED_SETTINGS.items()})
+        nvm = open_nvm(nvm, description,  # J1939 settings live in the same store
+                       {NVM_PREFIX + key: f.valid for key, f in STORED_SETTINGS.items()})
         j1939_name = name if isinstance(name, J1939Name) else J1939Name.from_bytes(name)
         speaks = "j1939" in description.features
         if protocol == "j1939" and not speaks:

@@ -1,69 +1,30 @@
 """Non-volatile memory of a twin: where its stored settings live across power cycles.
 
-``None`` keeps them in the twin object; a path keeps them in a JSON file so they survive the
-process too. The rules for the file, so that nothing a user stored is lost or replaced:
-
-- The file is the one a path names after every symbolic link is followed (its *target*): a
-  symlink is written through, never replaced by a regular file, and a symlink and its target
-  are one file to the lock below.
-- Written atomically: a temporary file beside the target, fsync, rename onto the target, fsync
-  of its directory; the target keeps its permissions. The temporary file has one fixed name
-  (``.NAME.tmp``), so one killed with ``kill -9`` mid-write is reclaimed by the next write, and
-  removed when the file is next opened.
-- One twin at a time: the opener holds an exclusive lock (``fcntl.flock`` on ``.NAME.lock``
-  beside the target) until :meth:`JsonFileNvm.close`, and a second opener, in this process or
-  another, through any symlink, is refused with an error naming the file and the holder's
-  process id. The kernel drops the lock when its holder dies, so a crash never leaves the file
-  locked. (No locking where ``fcntl`` does not exist, i.e. on Windows.)
-- A file with more than one name (a hard link) is refused, at opening and at every write: the
-  atomic rename gives the target a new inode, so the other names would silently keep the old
-  settings, and a lock keyed by a name would let a second twin in through the other name.
-  Writing in place instead would give up the atomicity (a write killed midway would leave half
-  a file). One name and the resolved path is then one inode; a symlink is the way to give the
-  file a second name.
-- A file that is corrupt, belongs to another model, or was changed by someone else since this
-  twin read or wrote it, is refused with a clear error, never replaced.
-- Every error is an :class:`NvmError` naming the file.
-
-This module is the pure core's one place of file I/O; it needs no clock and no bus.
+A twin takes an :class:`Nvm`: ``None`` is a :class:`MemoryNvm` (settings kept in the twin
+object, across ``power_off()``), and a store that keeps them elsewhere is opened outside this
+pure layer, which does no I/O: the JSON file store is ``blinkcan.formats.nvm_file``, which the
+command line's ``emulate --nvm`` opens. A twin may also be given an *opener* (called with its
+model's identity, so the store can refuse another model's settings) or, as it always could, a
+path: :func:`open_nvm` hands the path to the file store, the one import this layer makes of
+another (a convenience of the public constructors, kept for callers; it does no I/O here).
 """
 
 from __future__ import annotations
 
-import contextlib
-import glob
-import json
-import os
-import re
-import stat
-import sys
-from collections.abc import Mapping
-from pathlib import Path
-from typing import Protocol
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Protocol, TypeAlias, runtime_checkable
 
+from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectTable, Ranges, Value
-from blinkcan.errors import BlinkcanError
+from blinkcan.errors import NvmError
 
-if sys.platform != "win32":
-    import fcntl
+if TYPE_CHECKING:  # a type only: this layer opens no file
+    from os import PathLike
 
-FORMAT = "blinkcan-nvm"
-VERSION = 1
-_MKSTEMP_SUFFIX = re.compile(r"[a-z0-9_]{8}")
+__all__ = ["MemoryNvm", "Nvm", "NvmArgument", "NvmError", "NvmOpener", "open_nvm"]
 
 
-class NvmError(BlinkcanError, ValueError):
-    """A non-volatile memory file that cannot be used; the message names the file."""
-
-
-def _read_holder(lock: int) -> str:
-    """The process id the holder wrote into the lock file, or "unknown"."""
-    try:
-        return os.pread(lock, 32, 0).decode("ascii", "replace").strip() or "unknown"
-    except OSError:
-        return "unknown"
-
-
+@runtime_checkable
 class Nvm(Protocol):
     def load(self) -> dict[str, Value] | None:
         """The stored settings, or None if nothing was ever stored."""
@@ -76,6 +37,13 @@ class Nvm(Protocol):
     def close(self) -> None:
         """Let go of the memory (a file's lock); later use may fail."""
         ...
+
+
+#: Opens a store for a model: (model, generation, its object table, the stored settings that
+#: are not objects, with their valid values) -> the store; ``formats.nvm_file.nvm_file(path)``
+NvmOpener: TypeAlias = Callable[[str, str, ObjectTable, Mapping[str, Ranges]], Nvm]
+#: What a twin's ``nvm`` argument takes
+NvmArgument: TypeAlias = "Nvm | NvmOpener | str | PathLike[str] | None"
 
 
 class MemoryNvm:
@@ -94,206 +62,19 @@ class MemoryNvm:
         pass
 
 
-class JsonFileNvm:
-    """Settings in a JSON file tagged with the model and generation that wrote it; see the
-    module docstring for the rules. Opening takes the file's lock (NvmError if taken).
-    ``others``: stored settings that are not objects of ``table`` (the keypad's J1939 ones)."""
+def open_nvm(nvm: NvmArgument, description: DeviceDescription,
+             others: Mapping[str, Ranges] | None = None) -> Nvm:
+    """The store a twin of ``description`` keeps its settings in; ``others``: its stored
+    settings that are not objects of its table (the keypad's J1939 ones). A file store fails
+    here when another twin holds the file."""
+    if nvm is None:
+        return MemoryNvm()
+    if isinstance(nvm, Nvm):
+        return nvm
+    if callable(nvm):
+        return nvm(description.model, description.generation, description.table,
+                   dict(others or {}))
+    # a path: the file store, outside the pure layer (imported only when a path is given)
+    from blinkcan.formats.nvm_file import nvm_file  # noqa: PLC0415
 
-    def __init__(self, path: str | os.PathLike[str], model: str, generation: str,
-                 table: ObjectTable, others: Mapping[str, Ranges] | None = None) -> None:
-        self.path = Path(path)
-        #: the file itself: every symbolic link followed (a symlink is written through)
-        self.target = Path(os.path.realpath(self.path))
-        #: the file as messages name it: the path given, and its target if that differs
-        self.name = f"{self.path} (a link to {self.target})" if self.path.is_symlink() \
-            else str(self.path)
-        if self.target.is_dir() or not self.path.name:
-            raise NvmError(f"NVM file {self.name} is a directory; name a file in it")
-        if not self.target.parent.is_dir():  # a typo is not silently made a new directory
-            raise NvmError(f"cannot open NVM file {self.name}: directory {self.target.parent} "
-                           "does not exist")
-        self.model = model
-        self.generation = generation
-        self._table = table
-        self._others = dict(others or {})
-        self._temporary = self.target.with_name(f".{self.target.name}.tmp")
-        self._known: str | None = None  # the text this twin last read or wrote
-        self._lock: int | None = self._acquire()
-        try:
-            self._check_one_name()
-        except NvmError:
-            self.close()
-            raise
-        self._remove_stale_temporaries()
-
-    def _check_one_name(self) -> None:
-        """Refuse a file with hard links (see the module docstring)."""
-        try:
-            names = self.target.stat().st_nlink
-        except FileNotFoundError:
-            return
-        except OSError as error:
-            raise NvmError(f"cannot open NVM file {self.name}: {error.strerror}") from error
-        if names > 1:
-            raise NvmError(
-                f"NVM file {self.name} has {names} names (hard links); refusing it: its "
-                "settings are replaced by an atomic rename, which would leave the other names "
-                "with the old ones. Give it one name (a symbolic link may point at it)")
-
-    def _remove_stale_temporaries(self) -> None:
-        """Temporary files of writers killed mid-write: ours (``.NAME.tmp``) and those of
-        earlier blinkcan versions (``.NAME.`` + eight ``tempfile.mkstemp`` characters)."""
-        target = self.target
-        stale = [self._temporary, *(
-            path for path in target.parent.glob(f".{glob.escape(target.name)}.????????")
-            if _MKSTEMP_SUFFIX.fullmatch(path.name[len(target.name) + 2:]))]
-        for path in stale:
-            with contextlib.suppress(OSError):
-                path.unlink(missing_ok=True)
-
-    # -- the lock ---------------------------------------------------------------------------
-
-    def _acquire(self) -> int:
-        """The lock's file descriptor, locked, with this process's id in it for the message
-        of the next opener."""
-        lock_path = self.target.with_name(f".{self.target.name}.lock")
-        try:
-            lock = os.open(lock_path, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0),
-                           0o644)
-        except OSError as error:
-            raise NvmError(f"cannot open NVM file {self.name}: cannot create its lock file "
-                           f"{lock_path}: {error.strerror}") from error
-        if sys.platform == "win32":
-            return lock
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = _read_holder(lock)
-            os.close(lock)
-            raise NvmError(f"NVM file {self.name} is in use by another twin (process "
-                           f"{holder}); close that one first or use another file") from None
-        except OSError as error:  # a file system without locks: refused, not risked
-            os.close(lock)
-            raise NvmError(f"cannot lock NVM file {self.name}: {error.strerror}") from error
-        try:  # a full disk or a file-size limit shows here first
-            os.ftruncate(lock, 0)
-            os.write(lock, f"{os.getpid()}\n".encode())
-        except OSError as error:
-            os.close(lock)  # and the lock with it
-            raise NvmError(f"cannot use NVM file {self.name}: writing its lock file "
-                           f"{lock_path} failed: {error.strerror}") from error
-        return lock
-
-    def close(self) -> None:
-        """Release the lock; the file can then be opened by another twin or process."""
-        if self._lock is not None:
-            os.close(self._lock)  # closing the descriptor drops the flock
-            self._lock = None
-
-    def _check_open(self) -> None:
-        if self._lock is None:
-            raise NvmError(f"NVM file {self.name} was closed by this twin")
-
-    # -- reading ----------------------------------------------------------------------------
-
-    def load(self) -> dict[str, Value] | None:
-        self._check_open()
-        text = self._read()
-        if text is None:
-            self._known = None
-            return None
-        settings = self._parse(text)
-        self._known = text
-        return settings
-
-    def _read(self) -> str | None:
-        try:
-            return self.target.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            return None
-        except (OSError, UnicodeDecodeError) as error:
-            reason = error.strerror if isinstance(error, OSError) else "not UTF-8 text"
-            raise NvmError(f"cannot read NVM file {self.name}: {reason}") from error
-
-    def _parse(self, text: str) -> dict[str, Value]:
-        try:
-            document = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise NvmError(f"NVM file {self.name} is not valid JSON ({error.msg}, line "
-                           f"{error.lineno}); refusing to replace it") from error
-        if not isinstance(document, dict) or document.get("format") != FORMAT:
-            raise NvmError(f"{self.name} is not a blinkcan NVM file; refusing to replace it")
-        if document.get("version") != VERSION:
-            raise NvmError(f"{self.name} has NVM format version {document.get('version')!r}, "
-                           f"this blinkcan reads version {VERSION}")
-        model, generation = document.get("model"), document.get("generation")
-        if (model, generation) != (self.model, self.generation):
-            raise NvmError(f"{self.name} holds the settings of a {model} (generation "
-                           f"{generation}), not of a {self.model} (generation "
-                           f"{self.generation}); use another file")
-        settings = document.get("settings")
-        if not isinstance(settings, dict):
-            raise NvmError(f"{self.name} has no settings object")
-        return self._checked(settings)
-
-    def _checked(self, settings: dict[str, object]) -> dict[str, Value]:
-        checked: dict[str, Value] = {}
-        for name, value in settings.items():
-            if name in self._others:
-                if not isinstance(value, int) or value not in self._others[name]:
-                    raise NvmError(f"{self.name}: {name} = {value!r} is not valid "
-                                   f"({self._others[name]})")
-                checked[name] = value
-                continue
-            if name not in self._table or not self._table[name].stored:
-                raise NvmError(f"{self.name}: {name!r} is not a stored setting of a {self.model}")
-            entry = self._table[name]
-            if not isinstance(value, (int, str)) or not entry.accepts(value):
-                raise NvmError(f"{self.name}: {name} = {value!r} is not valid "
-                               f"({entry.describe_valid()})")
-            checked[name] = value
-        return checked
-
-    # -- writing ----------------------------------------------------------------------------
-
-    def save(self, settings: dict[str, Value]) -> None:
-        self._check_open()
-        if self._read() != self._known:
-            raise NvmError(f"NVM file {self.name} was changed by someone else since this twin "
-                           "read it; refusing to replace it (a reset of the twin loads it)")
-        self._check_one_name()  # linked since it was opened: a rename would split the names
-        document = {
-            "format": FORMAT,
-            "version": VERSION,
-            "model": self.model,
-            "generation": self.generation,
-            "settings": dict(sorted(settings.items())),
-        }
-        text = json.dumps(document, indent=2) + "\n"
-        try:
-            self._write_atomically(text)
-        except OSError as error:
-            with contextlib.suppress(OSError):
-                self._temporary.unlink(missing_ok=True)
-            raise NvmError(f"cannot write NVM file {self.name}: {error.strerror}") from error
-        self._known = text
-
-    def _write_atomically(self, text: str) -> None:
-        """``text`` in the target, or the target as it was (see the module docstring)."""
-        try:
-            mode: int | None = stat.S_IMODE(self.target.stat().st_mode)
-        except FileNotFoundError:
-            mode = None
-        with open(self._temporary, "w", encoding="utf-8") as stream:
-            if mode is not None:
-                os.fchmod(stream.fileno(), mode)
-            stream.write(text)
-            stream.flush()
-            os.fsync(stream.fileno())
-        os.replace(self._temporary, self.target)
-        if sys.platform != "win32":  # the rename itself on disk too
-            directory = os.open(self.target.parent, os.O_RDONLY)
-            try:
-                os.fsync(directory)
-            finally:
-                os.close(directory)
+    return nvm_file(nvm)(description.model, description.generation, description.table, others)

@@ -18,7 +18,6 @@ at once, consumer heartbeat, restore, the J1939 switch) runs here on this model'
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -40,15 +39,15 @@ from blinkcan.protocol.cob import check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState
+from blinkcan.protocol.sdo import parse_sdo
 from blinkcan.twin.hooks import Periodic
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
-from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.nvm import NvmArgument
 
 _TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
 #: M15 (Q): the firmware aborts an unknown command specifier with the code the manual lists,
 #: 0100 0405h, where CiA 301 says 0504 0001h
-_CIA_UNKNOWN_COMMAND = int(AbortCode.COMMAND_SPECIFIER_INVALID).to_bytes(4, "little")
 _FIRMWARE_UNKNOWN_COMMAND = int(AbortCode.COMMAND_BYTE_INVALID_BLINK).to_bytes(4, "little")
 
 
@@ -124,7 +123,7 @@ class Pkp3500Twin(KeypadTwin):
         self,
         node_id: int = 0x15,
         quirks: Quirks = "firmware",
-        nvm: str | os.PathLike[str] | Nvm | None = None,
+        nvm: NvmArgument = None,
         manual: str | None = None,
         protocol: str = "canopen",
         name: J1939Name | bytes = DEFAULT_NAME,
@@ -383,7 +382,8 @@ class Pkp3500Twin(KeypadTwin):
 
 def _firmware_abort_code(reply: bytes) -> bytes:
     """M15 (Q): the firmware's abort code for an unknown command specifier."""
-    if reply[0] == 0x80 and reply[4:8] == _CIA_UNKNOWN_COMMAND:
+    parsed = parse_sdo(reply)  # the server's replies are eight bytes
+    if parsed.is_abort and parsed.word == AbortCode.COMMAND_SPECIFIER_INVALID:
         return reply[:4] + _FIRMWARE_UNKNOWN_COMMAND
     return reply
 

@@ -3,13 +3,12 @@ a model; this imports it on first use and builds twins from specs such as ``"key
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 from blinkcan.devices.model import Model
 from blinkcan.devices.registry import load_class, model, parse_spec
 from blinkcan.twin.base import CanopenTwin
-from blinkcan.twin.nvm import Nvm
+from blinkcan.twin.nvm import NvmArgument
 
 
 def _twin_class(found: Model) -> type[CanopenTwin]:
@@ -22,7 +21,7 @@ def twin_class(name: str) -> type[CanopenTwin]:
 
 
 def build_twin(spec: str, node_id: int | None = None, quirks: str = "firmware",
-               nvm: str | os.PathLike[str] | Nvm | None = None, **options: Any) -> CanopenTwin:
+               nvm: NvmArgument = None, **options: Any) -> CanopenTwin:
     """A twin of ``spec`` ("keypad", "keypad@1.5", "keybox"), at its default node id unless
     one is given. ``options`` go to the twin class (``low_side`` for a Keybox)."""
     found, generation = parse_spec(spec)

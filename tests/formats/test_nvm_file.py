@@ -1,5 +1,6 @@
-"""Non-volatile settings in a file: nothing acknowledged is lost, nothing found is replaced, one
-twin at a time, nothing left behind by a killed writer."""
+"""Non-volatile settings in a file (``blinkcan.formats.nvm_file``): nothing acknowledged is lost,
+nothing found is replaced, one twin at a time, nothing left behind by a killed writer. A twin
+is given the file as a path (the public constructors) or as the store's opener (the CLI)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from blinkcan.twin import KeyboxTwin, KeypadTwin, NvmError
+from blinkcan.formats.nvm_file import JsonFileNvm, nvm_file
+from blinkcan.twin import KeyboxTwin, KeypadTwin, MemoryNvm, NvmError
 from tests.conftest import frame
 from tests.twin.trace import Bench
 
@@ -301,3 +303,44 @@ def test_a_file_size_limit_at_open_is_one_line_naming_the_file(tmp_path: Path) -
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith(f"Error: cannot use NVM file {path}"), lines
     assert "File too large" in lines[0]
+
+
+def test_a_twin_given_the_file_stores_opener_keeps_its_settings_in_the_file(
+        tmp_path: Path) -> None:
+    path = tmp_path / "keypad.json"
+    bench = Bench(KeypadTwin(nvm=nvm_file(path), protocol="j1939"))  # J1939 ones beside
+    with pytest.raises(NvmError, match="in use by another twin"):  # the opener took the lock
+        KeypadTwin(nvm=path)
+    bench.twin.close()
+    stored = json.loads(path.read_text())
+    assert stored["model"] == "pkp-2600-si"
+    assert stored["settings"]["can_protocol"] == 1
+    assert any(name.startswith("j1939_") for name in stored["settings"])
+    KeypadTwin(nvm=nvm_file(path)).close()  # and reads it back
+
+
+def test_a_twin_takes_any_store_as_it_is() -> None:
+    store = MemoryNvm()
+    KeyboxTwin(nvm=store).close()
+    again = KeyboxTwin(nvm=store)
+    assert again.stored_settings() == store.load()
+
+
+def test_a_twin_given_neither_a_store_nor_a_path_is_a_type_error() -> None:
+    with pytest.raises(TypeError):
+        KeypadTwin(nvm=15)  # type: ignore[arg-type]
+
+
+def test_the_file_store_keeps_its_old_name_in_the_twin_package() -> None:
+    import blinkcan.twin
+
+    assert blinkcan.twin.JsonFileNvm is JsonFileNvm
+
+
+def test_a_twin_without_a_file_loads_no_file_store() -> None:
+    code = ("import sys\nfrom blinkcan.twin import KeyboxTwin, KeypadTwin, MemoryNvm\n"
+            "KeypadTwin().power_on(0.0); KeyboxTwin(nvm=MemoryNvm()).power_on(0.0)\n"
+            "assert 'blinkcan.formats.nvm_file' not in sys.modules\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=False)
+    assert result.returncode == 0, result.stderr
