@@ -12,6 +12,15 @@ Rules:
   delivered to the other twins of this emulator that listen to that COB-ID.
 - Timers come from ``twin.next_deadline()``: one scheduler timer per twin; lateness is
   recorded.
+- Real devices are not in phase: each powers up at its own moment, so their periodic frames
+  do not all fall due at once. The emulator powers each twin up (at :meth:`Emulator.start`
+  and :meth:`Emulator.add`) as if it had booted a per-node fraction of ``power_up_spread``
+  earlier (:func:`power_up_phase`): its schedules start out of phase with the others', while
+  its boot-up frame still goes out at once and it answers at once. The fraction is fixed per
+  node id (a golden-ratio sequence: any set of nodes spreads evenly), so runs repeat; a
+  power-up asked for by the caller (:meth:`Emulator.power_on`) happens exactly when asked.
+  ``power_up_spread=0`` keeps every twin in phase (``blinkcan.testing.Rig`` does: a test's
+  timeline is what it says).
 - With ``response_delay`` > 0 a twin's reply leaves that long after the request, and an SDO
   request that reaches a twin still busy answering the previous one is dropped, as real keypads
   do (errata.md, field reports).
@@ -51,6 +60,17 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 #: real time: how long a twin whose deadline did not move waits before it is asked again
 _STUCK_RETRY_S = 0.001
+#: the window power-up phases spread over: the shortest period the devices' object ranges
+#: allow (heartbeat and PDO periods from 10 ms), so no twin starts with a period already owed
+DEFAULT_POWER_UP_SPREAD = 0.01
+_GOLDEN_FRACTION = (5 ** 0.5 - 1) / 2
+
+
+def power_up_phase(node_id: int, spread: float) -> float:
+    """How much earlier than its power-up the twin at ``node_id`` is taken to have booted: a
+    fraction of ``spread`` fixed per node, n x golden ratio (mod 1), so that nodes of any
+    number and numbering spread evenly over it."""
+    return spread * ((node_id * _GOLDEN_FRACTION) % 1.0)
 
 
 @dataclass
@@ -78,8 +98,11 @@ class Emulator:
         response_delay: float = 0.0,
         notifier: can.Notifier | None = None,
         clock: Callable[[], float] = time.monotonic,
+        power_up_spread: float = DEFAULT_POWER_UP_SPREAD,
     ) -> None:
         check_time("response_delay", response_delay, 0)
+        #: twins powered up here boot out of phase over this many seconds (module docstring)
+        self.power_up_spread = check_time("power_up_spread", power_up_spread, 0)
         taken = take_port(bus, notifier=notifier, clock=clock, name="blinkcan-emulator")
         #: the python-can bus given (None when made on a port)
         self.bus: can.BusABC | None = taken.bus
@@ -163,7 +186,7 @@ class Emulator:
             self._index_dirty = True
             if self._running:
                 index = len(self.twins) - 1
-                frames = self._call(index, twin.power_on, now)
+                frames = self._call(index, twin.power_on, now - self._phase(twin))
                 self._reschedule(index)
                 self._emit(index, frames, now)
             return []
@@ -205,7 +228,7 @@ class Emulator:
 
     def _power_on_all(self, now: float) -> list[Frame]:
         for i, twin in enumerate(self.twins):
-            frames = self._call(i, twin.power_on, now)
+            frames = self._call(i, twin.power_on, now - self._phase(twin))
             self._reschedule(i)
             self._emit(i, frames, now)
         return []
@@ -349,6 +372,10 @@ class Emulator:
             self._stuck_reported.add(i)
             log.error("%s; asking it again every %g s", message, _STUCK_RETRY_S)
         self._plan(i, now + _STUCK_RETRY_S)
+
+    def _phase(self, twin: CanopenTwin) -> float:
+        spread = self.power_up_spread
+        return power_up_phase(twin.node_id, spread) if spread else 0.0
 
     def _name(self, i: int) -> str:
         twin = self.twins[i]
