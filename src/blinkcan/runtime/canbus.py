@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections
 import logging
 import math
 import threading
@@ -77,15 +78,17 @@ class OwnFrames:
     of them is the echo and is consumed (the oldest of equal ones first). An equal frame from
     another node within that window is indistinguishable from the echo; it is consumed instead
     and the echo passes: the receiver sees the same content either way. Thread-safe: senders and
-    the reader may differ. Every frame sent and received passes here: a dict lookup for a frame
-    that was not sent, no scan of the others.
+    the reader may differ. Every frame sent and received passes here: the reader takes no lock
+    (a dict lookup, and a deque's atomic popleft for an echo); senders take one, and forget the
+    frames whose echoes never came once a window.
     """
 
     def __init__(self, bus: can.BusABC, window: float = 2.0) -> None:
         self.active = echoes_own_frames(bus)
         self.window = window
-        #: frame -> the times it was sent, oldest first, echo not yet seen
-        self._pending: dict[Frame, list[float]] = {}
+        #: frame -> the times it was sent, oldest first, echo not yet seen (the reader only
+        #: pops from a deque; only senders, under the lock, add and remove keys)
+        self._pending: dict[Frame, collections.deque[float]] = {}
         self._sweep_at = -math.inf
         self._lock = threading.Lock()
 
@@ -95,39 +98,39 @@ class OwnFrames:
         with self._lock:
             times = self._pending.get(frame)
             if times is None:
-                self._pending[frame] = [now]
+                self._pending[frame] = collections.deque((now,))
             else:
                 times.append(now)
-            if now >= self._sweep_at:  # echoes that never came are forgotten, window by window
+            if now >= self._sweep_at:
                 self._sweep(now)
 
     def is_echo(self, frame: Frame, now: float) -> bool:
         if not self.active:
             return False
-        pending = self._pending
-        if frame not in pending:  # never sent (it is there before its echo can come back)
+        times = self._pending.get(frame)
+        if not times:  # never sent (it is there before its echo can come back)
             return False
-        with self._lock:
-            times = pending.get(frame)
-            window = self.window
-            while times and now - times[0] > window:
-                del times[0]
-            if not times:
-                pending.pop(frame, None)
+        window = self.window
+        while True:
+            try:
+                sent_at = times.popleft()
+            except IndexError:
                 return False
-            del times[0]
-            if not times:
-                del pending[frame]
-            return True
+            if now - sent_at <= window:
+                return True
+            # older than the window: that echo never came; the next one may be this
 
     def _sweep(self, now: float) -> None:
+        """Forget the frames whose every echo is in or older than the window's past."""
         self._sweep_at = now + self.window
         window = self.window
-        for frame, times in list(self._pending.items()):
-            while times and now - times[0] > window:
-                del times[0]
-            if not times:
-                del self._pending[frame]
+        pending = self._pending
+        for frame, times in list(pending.items()):
+            try:
+                if now - times[-1] > window:
+                    del pending[frame]
+            except IndexError:  # all echoes came
+                del pending[frame]
 
 
 @dataclass
