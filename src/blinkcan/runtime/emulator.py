@@ -255,9 +255,12 @@ class Emulator:
         try:
             return method(*args)
         except Exception as error:
-            self.stats.twin_errors += 1
-            self.scheduler.failed(error, f"twin {self._name(i)}")
+            self._twin_failed(i, error)
             return []
+
+    def _twin_failed(self, i: int, error: Exception) -> None:
+        self.stats.twin_errors += 1
+        self.scheduler.failed(error, f"twin {self._name(i)}")
 
     def _deliver(self, frame: Frame, source: int | None, now: float) -> None:
         """Give ``frame`` to every twin listening to its COB-ID except its sender."""
@@ -283,9 +286,14 @@ class Emulator:
                     self._delayed[key] = self.scheduler.call_at(
                         now + self.response_delay, partial(self._reply_due, key, i, replies))
             else:
-                replies = self._call(i, twin.receive, frame, now)
+                try:  # self._call, inlined: every frame a twin hears comes this way
+                    replies = twin.receive(frame, now)
+                except Exception as error:
+                    self._twin_failed(i, error)
+                    replies = []
                 self._reschedule(i)
-                self._emit(i, replies, now)
+                if replies:
+                    self._emit(i, replies, now)
 
     def _reply_due(self, key: int, i: int, replies: list[Frame]) -> None:
         if self._delayed.pop(key, None) is not None and self._running:
@@ -321,7 +329,8 @@ class Emulator:
                 if self._failing_sends == 1:  # a shut-down bus fails every frame: log once
                     log.warning("send failed for %r: %s (further failures are counted, "
                                 "reported when it sends again or stops)", frame, error)
-            self._deliver(frame, source, now)
+            if self._index_dirty or frame.extended or frame.can_id in self._index:
+                self._deliver(frame, source, now)  # to the twins that listen (often none)
 
     def _reschedule(self, i: int) -> None:
         """After any call into twin ``i``: its next deadline, and whether its routes changed

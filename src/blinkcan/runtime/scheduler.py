@@ -40,6 +40,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Hashable
 from concurrent.futures import Future, ThreadPoolExecutor
 from functools import partial
+from threading import get_ident
 from typing import Any, Protocol, TypeVar
 
 from blinkcan.errors import BlinkcanError
@@ -319,7 +320,7 @@ class RealTimeScheduler(Scheduler):
 
     @property
     def in_loop(self) -> bool:
-        return self._owner == threading.get_ident()
+        return self._owner == get_ident()
 
     def start(self) -> None:
         if self._thread is None:
@@ -361,14 +362,15 @@ class RealTimeScheduler(Scheduler):
         """Run ``callback(*args)`` on the loop: at once on this thread when it is the loop's
         or the loop is idle with nothing posted before (this thread holds the loop
         meanwhile: no thread hop), else posted. An exception reaches the caller."""
-        if self._owner == threading.get_ident():
+        me = get_ident()
+        if self._owner == me:
             callback(*args)
             return
         held = self._held
-        if self._thread is not None and not self._calls and held.acquire(blocking=False):
+        if self._thread is not None and not self._calls and held.acquire(False):
             try:
                 if not self._calls:  # nothing posted before still waits: order kept
-                    self._owner = threading.get_ident()
+                    self._owner = me
                     try:
                         callback(*args)
                     finally:
@@ -420,7 +422,7 @@ class RealTimeScheduler(Scheduler):
 
     def _loop(self) -> None:
         inbox, heap, calls, held = self._inbox, self._heap, self._calls, self._held
-        me = threading.get_ident()
+        me = get_ident()
         held.acquire()
         self._owner = me
         try:
