@@ -393,7 +393,9 @@ class RealTimeScheduler(Scheduler):
 
     def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
         assert isinstance(signal, (Wakeup, threading.Event))
-        return signal.wait(check_time("timeout", timeout))
+        if timeout.__class__ is not float or timeout - timeout:  # not a finite float: check
+            check_time("timeout", timeout)
+        return signal.wait(timeout)
 
     def sleep(self, seconds: float) -> None:
         time.sleep(check_time("seconds", seconds, 0))
