@@ -622,6 +622,11 @@ class Keypad(Device):
             probe.close()
         self.j1939.send("source_address", node_id, 0xFF)  # FFh: the identifier unchanged
         self.j1939.address = node_id
+        try:  # §16: in use at once, so the keypad answers there (never a move not seen)
+            self.j1939.software_revision(self.sdo.timeout)
+        except TimeoutError:
+            raise NoDeviceError(f"no keypad answers at {node_id:02X}h after the move to it "
+                                "(§16, 70h): the keypad is gone or did not take it") from None
 
     def set_bitrate(self, bitrate: int, *, confirm: bool = False) -> None:
         """Store a bit rate (Device.set_bitrate); in J1939 mode with the §15 codes (6Fh: 500 or
