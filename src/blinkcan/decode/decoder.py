@@ -14,13 +14,12 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from functools import lru_cache
 from typing import Any, NamedTuple
 
 import orjson
 
+from blinkcan.decode.describers import keyed_signal, pdo_describer
 from blinkcan.decode.j1939 import J1939KeypadDecoder
-from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.pdo import PdoLayout
@@ -28,7 +27,6 @@ from blinkcan.devices.registry import describe_device, identify
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState, parse_nmt
 from blinkcan.protocol.sdo import (
     CCS_ABORT,
@@ -69,10 +67,6 @@ _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
 
 def _encode_text(text: str) -> str:
     return orjson.dumps(text).decode()
-
-
-def _encode_fields(fields: dict[str, Any]) -> str:
-    return _encode(fields)
 
 
 def _encode(document: dict[str, Any]) -> str:
@@ -139,43 +133,6 @@ class Event(NamedTuple):
             "text": str(self),
             **self.fields,
         }
-
-
-#: masks whose item numbers, listing and JSON are kept (key, LED and pin masks are 12-13 bits,
-#: so a log's masks are found again; a bounded cache keeps memory flat on random ones)
-_MASKS_KEPT = 8192
-
-
-@lru_cache(maxsize=_MASKS_KEPT)
-def _items(mask: int) -> tuple[int, ...]:
-    return tuple(item_numbers(mask))
-
-
-def numbers(mask: int, offset: int = 1) -> list[int]:
-    """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
-    if offset == 1 and mask >= 0:
-        return list(_items(mask))
-    return item_numbers(mask, offset)
-
-
-def listing(items: list[int]) -> str:
-    return ", ".join(map(str, items)) if items else "none"
-
-
-@lru_cache(maxsize=_MASKS_KEPT)
-def mask_listing(mask: int) -> str:
-    """``listing(numbers(mask))``, one lookup for a mask seen before."""
-    return listing(numbers(mask))
-
-
-@lru_cache(maxsize=_MASKS_KEPT)
-def _mask_json(mask: int) -> str:
-    """``numbers(mask)`` as compact JSON, one lookup for a mask seen before."""
-    return _encode_text_list(numbers(mask))
-
-
-def _encode_text_list(items: list[int]) -> str:
-    return orjson.dumps(items).decode()
 
 
 #: an SDO transfer with no frame for this long is over (its client gave up); its state goes
@@ -364,12 +321,13 @@ class Decoder:
         if device is not None:
             for layout in device.pdos:
                 if layout.cob_id(node) == can_id:
-                    if layout.name == "key_state":
+                    keyed = keyed_signal(layout)
+                    if keyed is not None:  # its meaning depends on the keys held before
                         self._pure.discard(key)
-                        keys = layout.signal("keys")
-                        self._keyed[key] = (node, keys.start, keys.mask)
-                    self._json_routes[key] = self._pdo_json_route(layout, node, device.kind)
-                    return self._pdo_route(layout, node, device.kind)
+                        shift, mask = keyed
+                        self._keyed[key] = (node, shift, mask & ((1 << device.face.keys) - 1))
+                    route, self._json_routes[key] = self._pdo_routes(layout, node, device)
+                    return route
         return self._unknown
 
     def _keep_raw(self, event: Event) -> None:
@@ -448,81 +406,39 @@ class Decoder:
 
     # -- PDOs -------------------------------------------------------------------------------------
 
-    def _pdo_route(self, layout: PdoLayout, node: int, device: str
-                   ) -> Callable[[Frame, float], Event]:
-        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
+    def _pdo_routes(self, layout: PdoLayout, node: int, description: DeviceDescription
+                    ) -> tuple[Callable[[Frame, float], Event],
+                               Callable[[Frame, float], str | None]]:
+        """The PDO's two renderings of one describer (decode/describers.py): its Event, and
+        its JSON line written directly (the same text as the Event's ``to_json``, without
+        the Event and the dict in between; None for a frame too short, which the Event
+        route names)."""
+        describe = pdo_describer(layout, description, node, self._keys)
+        device, name, min_length = description.kind, layout.name, layout.min_length
+        too_short = f"{layout.label}: too short"
 
         def route(frame: Frame, time: float) -> Event:
-            if len(frame.data) < layout.min_length:
-                return Event(time, frame, Kind.FRAME, f"{layout.label}: too short", node, device)
-            values = layout.decode(frame.data)
-            if len(frame.data) < layout.length:  # signals the frame does not carry are absent
-                bits = 8 * len(frame.data)
-                values = {s.name: values[s.name] for s in layout.signals if s.start < bits}
-            text, fields = describe(self, node, values)
-            return Event(time, frame, Kind.PDO, text, node, device,
-                         {"pdo": layout.name, **fields})
+            data = frame.data
+            if len(data) < min_length:
+                return Event(time, frame, Kind.FRAME, too_short, node, device)
+            text, fields = describe(data)
+            return Event(time, frame, Kind.PDO, text, node, device, {"pdo": name, **fields})
 
-        return route
-
-    def _pdo_json_route(self, layout: PdoLayout, node: int, device: str
-                        ) -> Callable[[Frame, float], str | None]:
-        """The PDO's JSON line written directly: the same text as ``to_json`` of its event
-        (tests/decode check both ways agree), without the Event and the dict in between.
-        None for what the event route handles (a short frame)."""
-        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
-        length, name = layout.length, layout.name
-        decode_values = layout.decode
-        signals = {s.name: (s.start, s.mask) for s in layout.signals}
-        fast = _PDO_JSON.get(name)
-        if fast is not None and not set(fast[0]) <= set(signals):
-            fast = None  # another model's PDO of that name: the Event route describes it
-        if fast is not None:  # the signals it reads, as (shift, mask), in its order
-            names, describe_json = fast
-            (s0, m0), (s1, m1), (s2, m2) = ([signals[n] for n in names] + [(0, 0)] * 3)[:3]
+        head = f',"id":{layout.cob_id(node)},"extended":false,"data":"'
+        middle = f'","kind":"pdo","node":{node},"device":{_encode_text(device)},"text":'
         who = f"{device} {node:02X}h: "
-        head = ""  # the constant part between "time" and "data", made on the first frame
-        middle = (f'","kind":"pdo","node":{node},"device":{_encode_text(device)},"text":')
         pdo = f',"pdo":{_encode_text(name)}'
 
-        def route(frame: Frame, time: float) -> str | None:
-            nonlocal head
+        def json_route(frame: Frame, time: float) -> str | None:
             data = frame.data
-            if len(data) < length:
+            if len(data) < min_length:
                 return None
-            if not head:
-                head = f',"id":{frame.can_id},"extended":false,"data":"'
-            if fast is not None:
-                word = int.from_bytes(data, "little")
-                text, fields_json = describe_json(self, node, (word >> s0) & m0,
-                                                  (word >> s1) & m1, (word >> s2) & m2)
-                return (f'{{"time":{time!r}{head}{data.hex()}{middle}"{who}{text}"'
-                        f'{pdo},{fields_json}}}')  # the texts have no character to escape
-            text, fields = describe(self, node, decode_values(data))
-            rest = _encode_fields(fields)
+            text, fields = describe(data)
+            rest = _encode(fields)
             return (f'{{"time":{time!r}{head}{data.hex()}{middle}{_encode_text(who + text)}'
                     f'{pdo}{"," + rest[1:] if len(rest) > 2 else "}"}')
 
-        return route
-
-    def _key_masks(self, node: int, keys: int) -> tuple[int, int, int]:
-        """(pressed, released, held) masks of a key-state PDO, the keys remembered."""
-        keys &= (1 << self.devices[node].face.keys) - 1
-        before = self._keys.get(node, 0)
-        self._keys[node] = keys
-        return keys & ~before, before & ~keys, keys
-
-    def _key_state(self, node: int, values: dict[str, int]) -> tuple[str, dict[str, Any]]:
-        pressed, released, held = self._key_masks(node, values["keys"])
-        return _key_text(pressed, released, held), {
-            "pressed": numbers(pressed), "released": numbers(released), "held": numbers(held),
-            "tick": values.get("tick")}  # errata P8: frames of 2-4 bytes have none
-
-    def _key_state_json(self, node: int, keys: int, tick: int, _: int) -> tuple[str, str]:
-        pressed, released, held = self._key_masks(node, keys)
-        return _key_text(pressed, released, held), (
-            f'"pressed":{_mask_json(pressed)},"released":{_mask_json(released)},'
-            f'"held":{_mask_json(held)},"tick":{tick}')
+        return route, json_route
 
     # -- SDO --------------------------------------------------------------------------------------
 
@@ -710,107 +626,3 @@ def error_event(time: float, error_class: int, data: bytes) -> Event:
 
 def _show(value: int | str) -> str:
     return repr(value) if isinstance(value, str) else f"{value:X}h"
-
-
-def _backlight(values: dict[str, int]) -> tuple[str, dict[str, Any]]:
-    level = values["level"]
-    if level > 0x3F:
-        return f"backlight level {level:02X}h over 3Fh: ignored", {"level": level}
-    if "colour" not in values:  # rev 1.1 §14
-        return f"backlight brightness {level}/63", {"level": level}
-    code = values["colour"]  # rev 1.5 §15: byte 1 is the colour, 00h the default one
-    colour = BacklightColour(code).label if BacklightColour.is_code(code) else "the default colour"
-    return f"backlight {level}/63 in {colour}", {"level": level, "colour": colour}
-
-
-def _generic_pdo(layout: PdoLayout
-                 ) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
-    """Any PDO from its layout alone: masks as item numbers, values scaled to their unit."""
-    signals = {s.name: s for s in layout.signals}
-
-    def describe(decoder: Decoder, node: int, values: dict[str, int]
-                 ) -> tuple[str, dict[str, Any]]:
-        parts: list[str] = []
-        fields: dict[str, Any] = {}
-        for name, raw in values.items():
-            signal = signals[name]
-            if signal.item is not None:
-                items = numbers(raw)
-                fields[name] = items
-                parts.append(f"{signal.item} {listing(items)}")
-            else:
-                value = signal.physical(raw)
-                fields[name] = value
-                shown = f"{value:g} {signal.unit}" if signal.unit else f"{value}"
-                parts.append(f"{signal.label.lower()} {shown}")
-        return f"{layout.label.lower()}: {', '.join(parts)}", fields
-
-    return describe
-
-
-def _key_text(pressed: int, released: int, held: int) -> str:
-    if pressed and released:
-        return f"key {mask_listing(pressed)} pressed; key {mask_listing(released)} released"
-    if pressed:
-        return f"key {mask_listing(pressed)} pressed"
-    if released:
-        return f"key {mask_listing(released)} released"
-    return f"keys held: {mask_listing(held)}"
-
-
-def _led_text(verb: str, red: int, green: int, blue: int) -> str:
-    parts = [f"{colour} {mask_listing(mask)}" for colour, mask in
-             (("red", red), ("green", green), ("blue", blue)) if mask]
-    return f"{verb}: {'; '.join(parts) if parts else 'none'}"
-
-
-def _leds(verb: str) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
-    def describe(decoder: Decoder, node: int, values: dict[str, int]
-                 ) -> tuple[str, dict[str, Any]]:
-        red, green, blue = values["red"], values["green"], values["blue"]
-        return (_led_text(verb, red, green, blue),
-                {"red": numbers(red), "green": numbers(green), "blue": numbers(blue)})
-
-    return describe
-
-
-def _leds_json(verb: str) -> Callable[[Decoder, int, int, int, int], tuple[str, str]]:
-    def describe(decoder: Decoder, node: int, red: int, green: int, blue: int
-                 ) -> tuple[str, str]:
-        return (_led_text(verb, red, green, blue), f'"red":{_mask_json(red)},'
-                f'"green":{_mask_json(green)},"blue":{_mask_json(blue)}')
-
-    return describe
-
-
-def _outputs_text(off: int, high: int) -> str:
-    return f"outputs OFF: {mask_listing(off)}; HIGH: {mask_listing(high)}"
-
-
-_PDO_TEXT: dict[str, Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]] = {
-    "key_state": lambda d, n, v: d._key_state(n, v),
-    "led_on": _leds("LEDs on"),
-    "led_blink": _leds("LEDs blink"),
-    "indicator_brightness": lambda d, n, v: (f"indicator brightness {v['level']}/63",
-                                             {"level": v["level"]}),
-    "backlight_brightness": lambda d, n, v: _backlight(v),
-    "outputs": lambda d, n, v: (  # KBX §17: OFF wins
-        _outputs_text(v["off"], v["high"] & ~v["off"]),
-        {"off": numbers(v["off"]), "high": numbers(v["high"] & ~v["off"])}),
-    "faults": lambda d, n, v: (f"outputs in FAULT: {mask_listing(v['faults'])}",
-                               {"faults": numbers(v["faults"])}),
-}
-
-#: the same PDOs written straight to JSON (Decoder._pdo_json_route): the signals each reads,
-#: in order, and (text, the fields as JSON members); the texts are shared with _PDO_TEXT
-_PDO_JSON: dict[str, tuple[tuple[str, ...], Callable[..., tuple[str, str]]]] = {
-    "key_state": (("keys", "tick"), lambda d, n, keys, tick, _: d._key_state_json(n, keys, tick,
-                                                                                   0)),
-    "led_on": (("red", "green", "blue"), _leds_json("LEDs on")),
-    "led_blink": (("red", "green", "blue"), _leds_json("LEDs blink")),
-    "outputs": (("off", "high"), lambda d, n, off, high, _: (  # KBX §17: OFF wins
-        _outputs_text(off, high & ~off),
-        f'"off":{_mask_json(off)},"high":{_mask_json(high & ~off)}')),
-    "faults": (("faults",), lambda d, n, faults, _, __: (
-        f"outputs in FAULT: {mask_listing(faults)}", f'"faults":{_mask_json(faults)}')),
-}
