@@ -15,8 +15,9 @@
 (d) ``isinstance(..., SimulatedBus)`` outside the simulated port (``runtime/simport.py``): the
     transport is a Port (``runtime/port.py``); HostBus and the Emulator never ask which.
 
-(a) and (b) are 0 for ``twin/``, (b) also for ``runtime/`` and ``host/``, (c) and (d) for the
-whole package. ``python -m
+(a), (c) and (d) are 0 for the whole package (a driver class builds on ``host.device.Device``
+through its public face: ``listen``, ``on_close``, ``pdo_frame``, ``heard`` and the hooks it
+overrides), (b) for ``twin/``, ``runtime/`` and ``host/``. ``python -m
 tests.test_architecture`` prints them for the package.
 """
 
@@ -345,6 +346,11 @@ def _in_twin(module: str) -> bool:
 def test_no_twin_module_uses_another_modules_private_state() -> None:
     uses = [str(use) for use in private_uses() if _in_twin(use.module)]
     assert uses == []
+
+
+def test_no_module_uses_another_modules_private_state() -> None:
+    # host/ was the last: its drivers build on Device, Keypad on public, documented APIs
+    assert [str(use) for use in private_uses()] == []
 
 
 def test_no_import_cycle_touches_twin() -> None:

@@ -11,7 +11,8 @@ from blinkcan.cli.main import cli
 
 
 def test_demo_runs_the_controller_and_shows_outputs_and_frames() -> None:
-    result = CliRunner().invoke(cli, ["demo", "--pause", "0"], env={"COLUMNS": "160"})
+    result = CliRunner().invoke(cli, ["demo", "--pause", "0"],  # as a terminal shows it
+                                env={"COLUMNS": "160", "TTY_COMPATIBLE": "1", "NO_COLOR": "1"})
     assert result.exit_code == 0, result.output
     for text in ("firmware V2.2", "Keybox Keybox3", "4:HIGH", "1:OFF", "7:HIGH", "operational",
                  "outputs HIGH at the end: [4, 7]", "keypad 15h: LEDs on"):

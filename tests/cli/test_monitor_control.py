@@ -32,7 +32,9 @@ def bench() -> Iterator[tuple[str, Emulator, KeypadTwin, KeyboxTwin]]:
 
 
 def run(*args: str) -> str:
-    result = CliRunner().invoke(cli, list(args), env={"COLUMNS": "160"})
+    # monitor's picture as a terminal shows it (rich: TTY_COMPATIBLE); a pipe gets lines
+    result = CliRunner().invoke(cli, list(args),
+                                env={"COLUMNS": "160", "TTY_COMPATIBLE": "1", "NO_COLOR": "1"})
     assert result.exit_code == 0, result.output
     return result.output
 

@@ -13,32 +13,34 @@ from __future__ import annotations
 import contextlib
 import functools
 import io
+import json
 import time
 import uuid
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import can
 import canopen
 import cantools
+import click
 import pytest
 from click.testing import CliRunner, Result
 
 from blinkcan.cli.main import cli
 from blinkcan.decode import Decoder
 from blinkcan.decode.decoder import Kind
-from blinkcan.formats.dbc import dbc_text
-from blinkcan.formats.dbc_j1939 import dbc_text as j1939_dbc_text
 from blinkcan.formats.eds import eds_text
 from blinkcan.host import HostBus, scan
 from blinkcan.host.device import HealthEvent
 from blinkcan.host.j1939_keypad import scan_j1939
 from blinkcan.host.registry import driver_class
-from blinkcan.runtime import Emulator
+from blinkcan.runtime import Emulator, to_message
 from blinkcan.testing import Rig
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.registry import build_twin
-from tests.conformance.cases import Case, cases
+from tests.conformance.cases import CASES, Case, cases
 
 SETTLED = 10.0  # virtual seconds: past any start-up LED show
 
@@ -170,39 +172,92 @@ def test_the_driver_follows_its_heartbeat(rig: Rig, case: Case) -> None:
 
 # -- every input the face has is a Rig call; the decoder names every frame ------------------------
 
-def _inputs(rig: Rig, twin: CanopenTwin, case: Case) -> dict[str, Callable[[], object]]:
+def _inputs(rig: Rig, twin: CanopenTwin, case: Case) -> dict[str, functools.partial[None]]:
+    """Every input of the case's face as a Rig call, in an order where each changes something
+    (a fuse is blown before it is replaced, an input set high before low)."""
     face = case.description.face
-    found: dict[str, Callable[[], object]] = {}
+    found: dict[str, functools.partial[None]] = {}
     for key in face.key_numbers:
         found[f"key {key}"] = functools.partial(rig.tap, twin, key)
+    for key in face.key_numbers[-1:]:
+        found[f"key {key} down"] = functools.partial(rig.press, twin, key)
+        found[f"key {key} up"] = functools.partial(rig.release, twin, key)
+        found[f"key {key} held"] = functools.partial(rig.long_press, twin, key)
     for encoder in face.encoders:
         found[f"encoder {encoder.number}"] = functools.partial(rig.turn, twin, encoder.number, 1)
+        found[f"encoder {encoder.number} back"] = functools.partial(rig.turn, twin,
+                                                                    encoder.number, -1)
     for number in range(face.analog_inputs):
         found[f"analog {number}"] = functools.partial(rig.set_analog, twin, number,
                                                       face.analog_volts_max / 2)
     for number in range(face.digital_inputs):
         found[f"digital {number}"] = functools.partial(rig.set_digital_input, twin, number, True)
+        found[f"digital {number} low"] = functools.partial(rig.set_digital_input, twin, number,
+                                                           False)
     for pin in face.pin_numbers:
         found[f"fuse {pin}"] = functools.partial(rig.blow_fuse, twin, pin)
+        found[f"fuse {pin} replaced"] = functools.partial(rig.replace_fuse, twin, pin)
         found[f"input {pin}"] = functools.partial(rig.set_input, twin, pin, True)
+        found[f"input {pin} low"] = functools.partial(rig.set_input, twin, pin, False)
     return found
+
+
+#: the Rig's public members that are not a device's inputs (time, frames, twins, faults)
+NOT_INPUTS = {"now", "frames", "frames_since", "advance", "settle", "until", "add", "twins",
+              "twin", "act", "snapshot", "power_off", "power_on", "power_cycle", "drop", "delay",
+              "drop_node", "stop_heartbeat", "busy", "bus_down", "bus_up", "close"}
 
 
 @pytest.mark.parametrize("case", cases("inputs"))
 def test_rig_reaches_every_input_and_the_decoder_names_every_frame(rig: Rig, case: Case
                                                                    ) -> None:
+    twin, unreached = _session(rig, case)
+    assert unreached == []
+    decoder = Decoder({twin.node_id: case.description})
+    unnamed = {f"{t.frame.can_id:03X}" for t in rig.frames
+               if decoder.decode(t.frame, t.time).kind is Kind.FRAME}
+    assert unnamed == set()
+
+
+def _session(rig: Rig, case: Case) -> tuple[CanopenTwin, list[str]]:
+    """The case's twin booted, started by its driver and given every input its face has; the
+    inputs that changed nothing."""
     twin = _booted(rig, case)
     if case.canopen:  # operational: inputs are reported by PDOs
         device = _driver(case, rig.bus, twin)
         device.close()
     inputs = _inputs(rig, twin, case)
     assert inputs, "the face has no input"
-    unreached = [name for name, action in inputs.items() if not _changed(rig, twin, action)]
-    assert unreached == []
-    decoder = Decoder({twin.node_id: case.description})
-    unnamed = {f"{t.frame.can_id:03X}" for t in rig.frames
-               if decoder.decode(t.frame, t.time).kind is Kind.FRAME}
-    assert unnamed == set()
+    return twin, [name for name, action in inputs.items() if not _changed(rig, twin, action)]
+
+
+@pytest.mark.parametrize("case", cases("decode"))
+def test_decode_and_monitor_name_a_session(rig: Rig, case: Case, tmp_path: Path) -> None:
+    """``blinkcan decode`` and ``monitor --file`` of a log of every input the face has."""
+    twin, _ = _session(rig, case)
+    log = tmp_path / "session.asc"
+    with can.Logger(str(log)) as writer:
+        for timed in rig.frames:
+            message = to_message(timed.frame)
+            message.timestamp = timed.time
+            writer(message)
+    device = ["--device", f"0x{twin.node_id:02X}={case.spec}"]
+    decoded = _run("decode", str(log), "--json", *device)
+    assert decoded.exit_code == 0, decoded.output
+    lines = [json.loads(line) for line in decoded.output.splitlines()]
+    assert len(lines) == len(rig.frames)
+    assert [line for line in lines if line["kind"] == Kind.FRAME.value] == []
+    monitored = _run("monitor", "--file", str(log), "--speed", "1000", *device)
+    assert monitored.exit_code == 0, monitored.output
+    assert lines[-1]["text"] in monitored.output
+
+
+def test_every_input_helper_of_the_rig_is_in_the_inputs_check(rig: Rig) -> None:
+    """A new Rig helper for an input is reached for every model whose face has the input."""
+    helpers = {name for name in dir(Rig) if not name.startswith("_")} - NOT_INPUTS
+    used = {action.func.__name__ for case in CASES
+            for action in _inputs(rig, _twin(case), case).values()}
+    assert used == helpers
 
 
 # -- the CLI against an emulated device -----------------------------------------------------------
@@ -241,57 +296,182 @@ def _holds(emulator: Emulator, done: Callable[[], object]) -> bool:
     return bool(emulator.run(lambda now: done()))
 
 
-def _cli_commands(case: Case, twin: CanopenTwin) -> list[tuple[list[str], Callable[[], object]]]:
-    """(the command's words after the group, what must be true after it) for the case."""
-    face = case.description.face
-    commands: list[tuple[list[str], Callable[[], object]]] = []
-    if face.led_keys:
-        key = face.led_keys[-1]
-        commands.append((["led", str(key), "red"],
-                         lambda: twin.snapshot()["keys"][key - 1]["colour"] == "red"))
-    if face.pins:
-        pin = face.pin_numbers[-1]
-        commands.append((["on", str(pin)],
-                         lambda: twin.snapshot()["pins"][pin - 1]["state"] == "high"))
-        commands.append((["off", str(pin)],
-                         lambda: twin.snapshot()["pins"][pin - 1]["state"] == "off"))
-    if face.encoders:
-        led = face.encoders[0].ring_leds[0]
-        commands.append((["ring", "1", str(led)], lambda: True))
-        commands.append((["encoder", "1"], lambda: True))
-    if face.analog_inputs or face.digital_inputs:
-        commands.append((["inputs"], lambda: True))
-    return commands
+@dataclass(frozen=True)
+class CliCheck:
+    """One command against the device: its words (after the device's group and node options,
+    or after ``blinkcan`` when ``top_level``), what must hold on the twin's snapshot after it,
+    and what its output must say."""
+
+    words: tuple[str, ...]
+    holds: Callable[[dict[str, Any]], object] = lambda snapshot: True
+    says: str = ""
+    top_level: bool = False
+
+
+def _heartbeat_ms(case: Case, snapshot: dict[str, Any]) -> int:
+    """The producer heartbeat period the twin runs (a protocol of its own keeps its own)."""
+    settings = snapshot if case.canopen else snapshot[case.protocol]
+    return int(settings["heartbeat_ms"])
+
+
+def _field_is(path: tuple[str | int, ...], value: object
+              ) -> Callable[[dict[str, Any]], object]:
+    """Whether the snapshot's field at ``path`` is ``value``."""
+
+    def holds(snapshot: dict[str, Any]) -> object:
+        found: Any = snapshot
+        for step in path:
+            found = found[step]
+        return bool(found == value)
+
+    return holds
+
+
+def _snapshot_holds(check: CliCheck, twin: CanopenTwin) -> object:
+    return check.holds(twin.snapshot())
+
+
+def _free_node(node: int) -> int:
+    return node + 1 if node < 127 else node - 1
+
+
+#: a CLI command that may apply to a device -> its checks for a case and the twin's snapshot
+#: before the commands ([]: it does not apply to the case). Run in this order: a node id moves
+#: last, an NMT stop is followed by a start.
+CLI_CHECKS: dict[str, Callable[[Case, dict[str, Any]], list[CliCheck]]] = {
+    "nmt": lambda case, s: [
+        CliCheck(("nmt", "stop", str(s["node_id"])), lambda t: t["nmt_state"] == "stopped",
+                 top_level=True),
+        CliCheck(("nmt", "start", str(s["node_id"])), lambda t: t["nmt_state"] == "operational",
+                 top_level=True)] if case.canopen else [],
+    "info": lambda case, s: [CliCheck(("info",), says=case.description.model
+                                      if case.canopen else case.description.title)],
+    "led": lambda case, s: [
+        CliCheck(("led", str(key), "red"), _field_is(("keys", key - 1, "colour"), "red"))
+        for key in case.description.face.led_keys[-1:]],
+    "backlight": lambda case, s: [
+        CliCheck(("backlight", "--level", "20"), lambda t: t["backlight"]["level"] == 20)
+    ] if "backlight_brightness" in case.description.table else [],
+    "brightness": lambda case, s: [
+        CliCheck(("brightness", "30"), lambda t: t["indicator_brightness"] == 30)
+    ] if "indicator_brightness" in case.description.table else [],
+    "heartbeat": lambda case, s: [
+        CliCheck(("heartbeat", "100"), lambda t: _heartbeat_ms(case, t) == 100)],
+    "write": lambda case, s: [
+        CliCheck(("write", "producer_heartbeat_time", "250"),
+                 lambda t: _heartbeat_ms(case, t) == 250)],
+    "read": lambda case, s: [
+        CliCheck(("read", "vendor_id"), says=str(case.description.table["vendor_id"].default))
+    ] if case.canopen else [],  # J1939 mode answers no SDO
+    "on": lambda case, s: [
+        CliCheck(("on", str(pin)), _field_is(("pins", pin - 1, "state"), "high"))
+        for pin in case.description.face.pin_numbers[-1:]],
+    "off": lambda case, s: [
+        CliCheck(("off", str(pin)), _field_is(("pins", pin - 1, "state"), "off"))
+        for pin in case.description.face.pin_numbers[-1:]],
+    "pwm": lambda case, s: [
+        CliCheck(("pwm", str(pin), "5"), _field_is(  # 5 tenths: 50 % (KBX §22)
+            ("pins", pin - 1, "pwm_percent"), 5 * (100 // case.description.face.pwm_duty_max)))
+        for pin in case.description.face.pwm_pins[-1:]],
+    "reset": lambda case, s: [
+        CliCheck(("reset", str(pin)), _field_is(("pins", pin - 1, "state"), "off"))
+        for pin in case.description.face.pin_numbers[-1:]],
+    "states": lambda case, s: [
+        CliCheck(("states",), says=f"pin {pin:>2}: ")
+        for pin in case.description.face.pin_numbers[-1:]],
+    "faults": lambda case, s: [
+        CliCheck(("faults",), says="FAULT") for _ in case.description.face.pin_numbers[:1]],
+    "ring": lambda case, s: [
+        CliCheck(("ring", str(encoder.number), str(encoder.ring_leds[0])),
+                 lambda t: t["encoders"][0]["ring"][0]["on"])
+        for encoder in case.description.face.encoders[:1]],
+    "encoder": lambda case, s: [
+        CliCheck(("encoder", str(encoder.number), "--top", "5"),
+                 lambda t: t["encoders"][0]["top"] == 5, says="top 5")
+        for encoder in case.description.face.encoders[:1]],
+    "inputs": lambda case, s: [
+        CliCheck(("inputs",), says="IN0:") for _ in range(
+            min(1, case.description.face.analog_inputs + case.description.face.digital_inputs))],
+    "set-baud": lambda case, s: [
+        CliCheck(("set-baud", str(s["bitrate"]), "--yes"), says=f"bit rate {s['bitrate']}")
+    ] if case.canopen else [],  # a CANopen setting
+    "restore-defaults": lambda case, s: [
+        CliCheck(("restore-defaults", "--yes"), says="factory defaults restored")
+    ] if case.canopen and "restore_all_parameters" in case.description.table else [],
+    "set-node-id": lambda case, s: [
+        CliCheck(("set-node-id", str(_free_node(s["node_id"])), "--yes"),
+                 lambda t: t["settings"]["node_id"] == _free_node(s["node_id"]))
+    ] if case.canopen else [],
+}
+
+#: commands of the command line that do not name a device model, and why
+NOT_PER_DEVICE = {
+    "convert": "converts log formats, frames only",
+    "record": "records any bus, frames only",
+    "query": "SQL on a decoded dataset (tests/fleet/)",
+    "demo": "its own keypad and Keybox (tests/cli/)",
+}
+#: commands checked per case by other tests of this suite
+ELSEWHERE = {
+    "scan": "test_the_cli_commands_that_apply_work",
+    "emulate": "test_panel.py",
+    "export": "test_exports.py, test_the_dbc_loads_in_cantools",
+    "decode": "test_decode_and_monitor_name_a_session",
+    "monitor": "test_decode_and_monitor_name_a_session",
+}
+
+
+def _commands(group: Any) -> list[str]:
+    """The names of a click group's commands (the root group imports them when they run)."""
+    return list(group.list_commands(click.Context(group)))
+
+
+def _subcommands(kind: str) -> list[str]:
+    group = cli.get_command(click.Context(cli), kind)
+    return _commands(group)
+
+
+def test_every_cli_command_is_checked_for_every_case() -> None:
+    """A new command (or subcommand of a device's group) fails here until the suite says what
+    it checks for each case."""
+    kinds = {case.model.kind for case in CASES}
+    group_commands = {name for kind in kinds for name in _subcommands(kind)}
+    assert group_commands - set(CLI_CHECKS) == set()
+    top = set(_commands(cli)) - kinds
+    assert top == (set(CLI_CHECKS) - group_commands) | set(NOT_PER_DEVICE) | set(ELSEWHERE)
 
 
 @pytest.mark.parametrize("case", cases("cli"))
 def test_the_cli_commands_that_apply_work(case: Case) -> None:
     failures = []
     with _live(case) as (bus, emulator, twin, where):
-        for words, done in _cli_commands(case, twin):
-            result = _run(case.model.kind, *where, *words, *bus)
-            if result.exit_code != 0:
-                failures.append(f"{' '.join(words)}: {result.output.strip()}")
-                continue
-            try:
-                _until(functools.partial(_holds, emulator, done))
-            except AssertionError:
-                failures.append(f"{' '.join(words)}: no effect on the device")
+        before = emulator.run(lambda now: twin.snapshot())
+        group = _subcommands(case.model.kind)
+        for name, checks in CLI_CHECKS.items():
+            for check in checks(case, before):
+                if not check.top_level and name not in group:
+                    failures.append(f"{name}: not a {case.model.kind} command")
+                    continue
+                words = (list(check.words) if check.top_level
+                         else [case.model.kind, *where, *check.words])
+                result = _run(*words, *bus)
+                said = " ".join(check.words)
+                if result.exit_code != 0:
+                    failures.append(f"{said}: {result.output.strip()}")
+                elif check.says not in result.output:
+                    failures.append(f"{said} does not say {check.says!r}: {result.output}")
+                else:
+                    try:
+                        _until(functools.partial(_holds, emulator, functools.partial(
+                            _snapshot_holds, check, twin)))
+                    except AssertionError:
+                        failures.append(f"{said}: no effect on the device")
         listed = " ".join(_run("scan", "--listen", "0.2", *bus).output.split())
     named = (str(case.description.table["model_id"].default) if case.canopen
              else f"{case.model.kind} ({case.protocol.upper()})")
     if named not in listed:
         failures.append(f"scan does not name it: {listed}")
     assert failures == []
-
-
-@pytest.mark.parametrize("case", cases("cli-info"))
-def test_the_cli_info_names_it(case: Case) -> None:
-    with _live(case) as (bus, _, _, where):
-        result = _run(case.model.kind, *where, "info", *bus)
-    assert result.exit_code == 0, result.output
-    description = case.description
-    assert description.model in result.output or description.title in result.output
 
 
 # -- the files other tools read ------------------------------------------------------------------
@@ -318,15 +498,19 @@ def test_the_eds_loads_in_python_canopen_and_a_remote_node_reads_its_pdos(rig: R
 
 
 @pytest.mark.parametrize("case", cases("dbc"))
-def test_the_dbc_loads_in_cantools(case: Case) -> None:
-    if case.canopen:
-        text = dbc_text(case.description, case.model.default_node_id)
-        expected = {layout.cob_id(case.model.default_node_id) for layout in case.description.pdos}
-    else:
-        twin = _twin(case)
-        text = j1939_dbc_text(_address(case, twin))
-        expected = set()
-    database: Any = cantools.database.load_string(text, "dbc")
-    ids = {message.frame_id for message in database.messages}
-    assert ids
-    assert expected <= ids
+def test_the_dbc_loads_in_cantools(rig: Rig, case: Case, tmp_path: Path) -> None:
+    """``blinkcan export dbc``'s file has a message for each of the device's PDOs; in J1939
+    mode, for every frame it sends in a session of every input."""
+    twin, _ = _session(rig, case)
+    path = tmp_path / "device.dbc"
+    options = (["--node-id", str(twin.node_id)] if case.canopen else
+               ["--protocol", case.protocol, "--address", str(_address(case, twin))])
+    result = _run("export", "dbc", case.spec, *options, "-o", str(path))
+    assert result.exit_code == 0, result.output
+    database: Any = cantools.database.load_file(str(path))
+    ids = {message.frame_id | (0x80000000 if message.is_extended_frame else 0)
+           for message in database.messages}
+    expected = ({layout.cob_id(twin.node_id) for layout in case.description.pdos} if case.canopen
+                else {t.frame.can_id | 0x80000000 for t in rig.frames if t.frame.extended})
+    assert expected
+    assert sorted(expected - ids) == []

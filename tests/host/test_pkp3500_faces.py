@@ -301,7 +301,8 @@ def test_monitor_draws_the_3_by_5_face_and_the_knobs_and_inputs(tmp_path: Path) 
                 Frame(0x495, bytes.fromhex("F401C8002C016400")))):
             writer.write(float(timestamp), frame)
     result = CliRunner().invoke(cli, ["monitor", "--file", str(path), "--device",
-                                      "0x15=pkp-3500-mt"], env={"COLUMNS": "160"})
+                                      "0x15=pkp-3500-mt"],  # the picture, as a terminal has it
+                                env={"COLUMNS": "160", "TTY_COMPATIBLE": "1", "NO_COLOR": "1"})
     assert result.exit_code == 0, result.output
     rows = [line for line in result.output.splitlines() if "[11" in line]
     assert rows  # MT §2: 11, 6, 1 on the top row

@@ -27,6 +27,38 @@ def test_simulated_scheduler_runs_events_in_time_then_schedule_order() -> None:
     assert scheduler.clock() == 0.31
 
 
+def test_deferred_calls_take_their_turn_among_timers_in_schedule_order() -> None:
+    """The wire hands frames over with defer(), not timers: the order must be the same."""
+    scheduler = SimulatedScheduler()
+    seen: list[tuple[float, str]] = []
+
+    def note(what: str) -> None:
+        seen.append((scheduler.clock(), what))
+
+    def at_one_tenth() -> None:
+        note("timer")
+        scheduler.call_soon(lambda: note("soon 1"))
+        scheduler.defer(note, "deferred 1")
+        scheduler.call_soon(lambda: note("soon 2"))
+        scheduler.defer(note, "deferred 2")
+        scheduler.call_later(0.0, lambda: note("later 0"))
+
+    scheduler.call_later(0.1, at_one_tenth)
+    scheduler.call_later(0.1, lambda: note("timer 2"))  # scheduled before the calls above
+    scheduler.defer(note, "deferred now")
+    assert scheduler.next_due() == 0.0
+    assert scheduler.run_until(lambda: len(seen) == 4, 1.0)  # the predicate between events
+    assert seen == [(0.0, "deferred now"), (0.1, "timer"), (0.1, "timer 2"), (0.1, "soon 1")]
+    assert scheduler.next_due() == 0.1
+    scheduler.run_until(None, 0.1)
+    assert [what for _, what in seen[4:]] == ["deferred 1", "soon 2", "deferred 2", "later 0"]
+    assert scheduler.next_due() is None
+    scheduler.defer(note, "not before its time")
+    assert not scheduler.step(0.05)  # the clock never goes back: nothing is due by 0.05
+    assert scheduler.step(0.1)
+    assert seen[-1] == (0.1, "not before its time")
+
+
 def test_a_wait_runs_the_simulation_until_its_signal_or_its_virtual_timeout() -> None:
     scheduler = SimulatedScheduler()
     signal = scheduler.signal()

@@ -241,3 +241,32 @@ def test_a_periodic_producer_woken_late_runs_once_per_period_owed() -> None:
     timer.advance(10.0)  # a stall of ~1000 periods: only the last few are made up for
     assert len(runs) == 2 + CATCH_UP_PERIODS
     assert timer.due == at(0.0, 10010)
+
+
+@settings(max_examples=300, deadline=None)
+@given(origin=st.one_of(st.floats(0, 1e4), st.sampled_from([2.0 ** 40, 2.0 ** 52, 2.0 ** 60])),
+       period=st.integers(1, 5000), retime=st.one_of(st.none(), st.integers(1, 5000)),
+       wakes=st.lists(st.integers(0, 3 * CATCH_UP_PERIODS * 1000), min_size=1, max_size=8),
+       jitter=st.sampled_from([0.0, -1e-12, 1e-12]))
+def test_a_ticker_owes_what_counting_its_schedule_owes(
+        origin: float, period: int, retime: int | None, wakes: list[int], jitter: float) -> None:
+    """overdue() and fire() (with their fast path for the usual wake-up) owe exactly the ticks
+    of the schedule, at(origin, count), at or before the wake-up, at most CATCH_UP_PERIODS,
+    and leave the next one due strictly later: also where a tick is below the clock's
+    resolution (huge origins) and at a hair before or after a due time."""
+    timer = Ticker()
+    timer.run(origin, period)
+    start, count, step = origin, period, period
+    if retime is not None:
+        timer.retime(retime)  # counted from the due time
+        start, count, step = at(origin, period), 0, retime
+    for offset in sorted(wakes):
+        assert timer.due == at(start, count)
+        now = at(start, count) + offset * 1e-3 + jitter
+        owed = 0
+        while at(start, count + owed * step) <= now:
+            owed += 1
+        assert timer.overdue(now) == min(owed, CATCH_UP_PERIODS)
+        assert timer.fire(now) == min(owed, CATCH_UP_PERIODS)
+        count += owed * step
+        assert owed == 0 or (timer.due is not None and timer.due > now)

@@ -1,4 +1,8 @@
-"""``blinkcan decode FILE [--json] [--device 0x15=keypad ...]``: what a log file means."""
+"""``blinkcan decode FILE [--json] [--device 0x15=keypad ...]``: what a log file means.
+
+The text gives each frame's time in seconds since the log's first frame (``--absolute``: the
+wall clock, ISO 8601 UTC; cli/clock.py); ``--json`` keeps the log's own timestamp as ``time``,
+untouched, for programs."""
 
 from __future__ import annotations
 
@@ -9,6 +13,7 @@ from typing import TYPE_CHECKING
 import click
 
 from blinkcan.cli.bus_options import parse_int
+from blinkcan.cli.clock import ABSOLUTE, iso_utc
 from blinkcan.decode import Decoder, Event
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
@@ -73,11 +78,16 @@ def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:
               help="With --parquet: files decoded at once, on local processes.")
 @click.option("--force", is_flag=True,
               help="With --parquet: decode again files already decoded by this version.")
+@ABSOLUTE
 def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
-            parquet: str | None, jobs: int, force: bool) -> None:
+            parquet: str | None, jobs: int, force: bool, absolute: bool) -> None:
     """Decode a log file (any python-can format, or .pcap) into what happened; with
     --parquet, any number of them into a dataset for SQL (blinkcan query). Without
-    --device the keypad is assumed at 15h and the Keybox at 0Ch."""
+    --device the keypad is assumed at 15h and the Keybox at 0Ch. Times: seconds since the
+    first frame, or --absolute; --json keeps the log's own timestamps."""
+    if absolute and (as_json or parquet is not None):
+        raise click.UsageError("--absolute is for the text output; --json and --parquet keep "
+                               "the log's own timestamps")
     known = parse_devices(devices)
     if parquet is not None:
         from blinkcan.cli.parquet import decode_to_parquet  # noqa: PLC0415 (pyarrow: only here)
@@ -101,13 +111,14 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
 
         progress = Progress(SpinnerColumn(), TextColumn("{task.completed:,} frames"),
                             console=Console(stderr=True), transient=True)
-    _decode_to_stdout(decoder, file, as_json, progress)
+    _decode_to_stdout(decoder, file, as_json, progress, absolute)
 
 
-def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Progress | None
-                      ) -> None:
+def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Progress | None,
+                      absolute: bool = False) -> None:
     """Every frame's line on stdout: JSON, or the text with the frame (and a progress
-    display on a terminal)."""
+    display on a terminal): its time since the first frame, or with ``absolute`` the wall
+    clock."""
     lines: list[str] = []  # written in batches (one write per line costs a tenth of decoding)
     add = lines.append
     try:
@@ -124,6 +135,7 @@ def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Prog
         task = progress.add_task("decode") if progress is not None else None
         if progress is not None:
             progress.start()
+        start: float | None = None
         for count, (timestamp, item) in enumerate(read_log(file), start=1):
             if isinstance(item, Frame):
                 frame, event = item, decoder.decode(item, timestamp)
@@ -131,7 +143,12 @@ def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Prog
                 event = other_event(decoder, item)
                 frame = event.frame
             ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
-            add(f"{timestamp:17.6f}  {ident:>8}  {frame.data.hex(' ').upper():<23}  {event}")
+            if absolute:
+                shown = iso_utc(timestamp)
+            else:
+                start = timestamp if start is None else start
+                shown = f"{timestamp - start:12.6f}"
+            add(f"{shown}  {ident:>8}  {frame.data.hex(' ').upper():<23}  {event}")
             if len(lines) >= _BATCH:
                 _write(lines)
                 if progress is not None and task is not None:

@@ -3,7 +3,10 @@
 A keypad (15h) and a Keybox (0Ch) twin run in an Emulator on a virtual bus; the controller uses
 the host drivers only, as an application would: key N toggles output N, and the key's LED shows
 the output (green on, off when off, red blinking on FAULT). A script presses keys, blows a fuse
-and power-cycles the keypad; the live view shows the keypad, the outputs and the frames.
+and power-cycles the keypad; the live view shows the keypad, the outputs and the frames
+(heartbeats and unchanged periodic frames folded). Off a terminal (a pipe, a file) it writes
+plain lines instead: each step's narration, each frame that is news (seconds since the start),
+and after each step what the devices show.
 """
 
 from __future__ import annotations
@@ -14,9 +17,9 @@ import queue
 import threading
 import time
 import uuid
-from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import can
 import click
@@ -25,9 +28,11 @@ from rich.live import Live
 from rich.panel import Panel
 from rich.text import Text
 
+from blinkcan.cli.clock import Clock
 from blinkcan.cli.emulate import panel
-from blinkcan.cli.render import keybox_panel, keypad_panel
+from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.decode import Decoder
+from blinkcan.decode.eventlog import EventLog, Row
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
 from blinkcan.host.keybox import FaultEvent
 from blinkcan.protocol.frame import Frame
@@ -119,12 +124,31 @@ SCRIPT = (
 )
 
 
-def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, object],
-          log: deque[str], grid: tuple[tuple[int, ...], ...]) -> Group:
+def _frame_line(row: Row) -> str:
+    frame = row.event.frame
+    return f"{frame.can_id:03X} {frame.data.hex(' ').upper():<23} {row.text()}"
+
+
+def _state_line(keypad: dict[str, Any], keybox: dict[str, Any]) -> str:
+    """What the devices show, as one line: "keys lit: 1 green, 4 ~red; outputs HIGH: [1]"."""
+    lit = []
+    for key in keypad["keys"]:
+        a, b = key["phases"]
+        if a == b != "off":
+            lit.append(f"{key['key']} {a}")
+        elif a != b:
+            lit.append(f"{key['key']} ~{b if a == 'off' else a}" if "off" in (a, b)
+                       else f"{key['key']} {a}/{b}")
+    high = [p["pin"] for p in keybox["pins"] if p["state"] == "high"]
+    faults = [p["pin"] for p in keybox["pins"] if p["state"] == "fault"]
+    return (f"  keys lit: {', '.join(lit) or 'none'}; outputs HIGH: {high}"
+            + (f"; FAULT: {faults}" if faults else ""))
+
+
+def _view(header: str, title: str, keypad: dict[str, Any], keybox: dict[str, Any],
+          log: EventLog, grid: tuple[tuple[int, ...], ...]) -> Group:
     keys = keypad["keys"]
     pins = keybox["pins"]
-    assert isinstance(keys, list)
-    assert isinstance(pins, list)
     return Group(
         Text(header, style="cyan"),
         Text(title, style="bold"),
@@ -133,8 +157,46 @@ def _view(header: str, title: str, keypad: dict[str, object], keybox: dict[str, 
         keybox_panel(((p["pin"], p["state"], p["fuse"] == "blown", p["pwm_percent"])
                       for p in pins),
                      f"Keybox 0Ch, {keybox['nmt_state']}"),
-        Panel(Text("\n".join(log), style="grey70"), title="last frames on the bus", expand=False),
+        Panel(Text("\n".join(_frame_line(row) for row in list(log.rows)), style="grey70",
+                   no_wrap=True, overflow="ellipsis"),
+              title="last frames on the bus", expand=False),
     )
+
+
+class _Show:
+    """What the demo shows: on a terminal a live picture redrawn after each step; elsewhere
+    lines (the narration, each frame that is news, after each step what the devices show)."""
+
+    def __init__(self, console: Console, emulator: Emulator, keypad: KeypadTwin,
+                 keybox: KeyboxTwin) -> None:
+        self.console, self.emulator, self.keypad, self.keybox = console, emulator, keypad, keybox
+        self.decoder = Decoder({t.node_id: t.description for t in (keypad, keybox)})
+        self.log = EventLog(10, self.decoder)  # heartbeats (the controller's too) and
+        self.frames = 0                        # periodic frames fold
+        self.lines = not console.is_terminal  # a pipe or a file: lines, not a live picture
+        self.clock = Clock(start=time.monotonic())  # the emulator's clock, from its start
+        self.live: Live | None = None
+        self.header = ""
+        emulator.on_frame = self.record
+
+    def record(self, frame: Frame, sent: bool, now: float) -> None:
+        self.frames += 1
+        row = self.log.add(self.decoder.decode(frame, now))
+        if row.count == 1:  # news: not a repeated heartbeat or periodic frame
+            self.say(f"{self.clock(now):>7} {_frame_line(row)}")
+
+    def say(self, text: str) -> None:
+        if self.lines:
+            self.console.out(text, highlight=False)
+
+    def draw(self, title: str) -> None:
+        keypad = self.emulator.snapshot(self.keypad)
+        keybox = self.emulator.snapshot(self.keybox)
+        if self.lines:
+            self.say(_state_line(keypad, keybox))
+        elif self.live is not None:
+            self.live.update(_view(self.header, title, keypad, keybox, self.log,
+                                   self.keypad.description.face.grid), refresh=True)
 
 
 def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
@@ -144,45 +206,33 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     keypad_twin, keybox_twin = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
-    decoder = Decoder({t.node_id: t.description for t in (keypad_twin, keybox_twin)})
-    log: deque[str] = deque(maxlen=10)
-    seen = {"frames": 0}
-
-    def record(frame: Frame, sent: bool, now: float) -> None:
-        seen["frames"] += 1
-        if frame.can_id != 0x77F:  # the controller's own heartbeat would fill the log
-            log.append(f"{frame.can_id:03X} {frame.data.hex(' ').upper():<23} "
-                       f"{decoder.decode(frame, now)}")
-
     emulator = Emulator(device_bus, [keypad_twin, keybox_twin])
-    emulator.on_frame = record
+    show = _Show(console, emulator, keypad_twin, keybox_twin)
     try:
         with emulator, panel(emulator, web, console), HostBus(host_bus) as host, \
-                Live(console=console, auto_refresh=False) as live:
+                Live(console=console, auto_refresh=False, transient=show.lines) as live:
+            show.live = live
             keypad = Keypad(host)
             keybox = Keybox(host, watchdog=0.2)  # outputs off if this controller dies
             identity = keypad.identity()
-            header = (f"Controller: keypad {identity.model_id} firmware "
-                      f"{identity.software_version}, Keybox {keybox.identity().model_id} "
-                      "watching the controller's heartbeat. Key N toggles output N.")
-
-            def show(title: str) -> None:
-                live.update(_view(header, title, emulator.snapshot(keypad_twin),
-                                  emulator.snapshot(keybox_twin), log,
-                                  keypad_twin.description.face.grid), refresh=True)
-
+            show.header = (f"Controller: keypad {identity.model_id} firmware "
+                           f"{identity.software_version}, Keybox {keybox.identity().model_id} "
+                           "watching the controller's heartbeat. Key N toggles output N.")
             controller = Controller(keypad, keybox)
-            show("The keypad plays its startup LED show")
+            show.say(show.header)
+            show.say("== The keypad plays its startup LED show")
+            show.draw("The keypad plays its startup LED show")
             time.sleep(max(pause * 4, 0.05))
             for step in SCRIPT:
+                show.say(f"== {step.title}")
                 step.act(emulator, keypad_twin, keybox_twin)
                 time.sleep(0.05)
                 controller.idle()
                 time.sleep(max(pause, 0.05))
-                show(step.title)
+                show.draw(step.title)
             if pause:  # the keypad plays its show again after the power cycle, then the LEDs
                 time.sleep(2.6)
-                show(SCRIPT[-1].title)
+                show.draw(SCRIPT[-1].title)
             states = keybox.states()
             if web is not None:  # the script's result, then the panel; the end comes after
                 live.stop()
@@ -197,7 +247,7 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
     finally:
         host_bus.shutdown()
         device_bus.shutdown()
-    console.print(f"\n{seen['frames']} frames on the bus; outputs HIGH at the end: "
+    console.print(f"\n{show.frames} frames on the bus; outputs HIGH at the end: "
                   f"{_high(states)}")
     return 0
 
@@ -218,4 +268,4 @@ def _until_interrupted() -> None:
               metavar="[HOST:PORT]", help="Serve the front panel too, and keep running.")
 def command(pause: float, web: str | None) -> None:
     """A controller on a keypad and a Keybox twin: key N toggles output N, shown live."""
-    raise SystemExit(run_demo(Console(highlight=False), pause, web))
+    raise SystemExit(run_demo(output_console(), pause, web))

@@ -2,18 +2,23 @@
 
 A frame from one of the twins' node ids that the emulator did not send (a boot-up, heartbeat or
 SDO reply; for a keypad in J1939 mode, any frame from its source address) means another device
-uses that id: every SDO request then gets two answers. It is said once per node id."""
+uses that id: every SDO request then gets two answers. It is said once per node id.
+
+Each frame is a line: seconds since the emulator started (``--absolute``: the wall clock), the
+direction, the frame and its meaning; off a terminal the lines are never wrapped."""
 
 from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from collections.abc import Iterator
 from types import MappingProxyType
 from typing import Any
 
 import click
 from rich.console import Console
+from rich.markup import escape
 
 from blinkcan.cli.bus_options import (
     NODE_ID,
@@ -24,7 +29,9 @@ from blinkcan.cli.bus_options import (
     parse_int,
     parse_node_id,
 )
+from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.extras import install_command
+from blinkcan.cli.render import output_console
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.formats.nvm_file import nvm_file
@@ -117,10 +124,11 @@ def _free_node_id(near: int, taken: set[int]) -> int:
               help="Keypads start in this protocol unless --nvm stored another (J1939: "
                    "source address 21h, 250 kbit/s).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
+@ABSOLUTE
 @bus_options
 def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quirks: str,
             response_delay: float, low_side: str, web: str | None, protocol: str,
-            quiet: bool) -> None:
+            quiet: bool, absolute: bool) -> None:
     """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
     (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5: the newer
     firmware, manual rev 1.5).
@@ -131,7 +139,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     blinkcan emulate keypad:0x15 keypad:0x16 -i socketcan -c vcan0
     blinkcan emulate keypad --protocol j1939
     """
-    console = Console(highlight=False)
+    console = output_console()
     try:
         pins = tuple(parse_int(p) for p in low_side.split(",") if p.strip())
         twins = build_twins(devices, node_id, nvm, quirks, pins, protocol)
@@ -139,7 +147,9 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
         raise click.ClickException(str(error)) from None
     bus = cli_bus()
     decoder = Decoder({t.node_id: t.description for t in twins})
-    printer = None if quiet else _FramePrinter(console, decoder)
+    # the emulator's clock is time.monotonic: its start is 0, its offset to the epoch measured
+    clock = Clock(absolute, start=time.monotonic(), to_epoch=time.time() - time.monotonic())
+    printer = None if quiet else _FramePrinter(console, decoder, clock)
     emulator = Emulator(bus, twins, response_delay=response_delay)
     foreign = ForeignFrames(emulator.twins, console)
 
@@ -239,11 +249,13 @@ class ForeignFrames:
 
 
 class _FramePrinter:
-    def __init__(self, console: Console, decoder: Decoder) -> None:
+    def __init__(self, console: Console, decoder: Decoder, clock: Clock) -> None:
         self.console = console
         self.decoder = decoder
+        self.clock = clock
 
     def __call__(self, frame: Frame, sent: bool, now: float) -> Any:
         arrow = "[cyan]->[/]" if sent else "[yellow]<-[/]"
-        self.console.print(f"{now:12.3f} {arrow} {frame.can_id:03X} "
-                           f"{frame.data.hex(' ').upper():<24} {self.decoder.decode(frame, now)}")
+        self.console.print(f"{self.clock(now):>10} {arrow} {frame.can_id:03X} "
+                           f"{frame.data.hex(' ').upper():<24} "
+                           f"{escape(str(self.decoder.decode(frame, now)))}")

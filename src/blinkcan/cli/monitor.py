@@ -1,13 +1,17 @@
 """``blinkcan monitor``: live view of a bus, updated in place: the events (repeated heartbeats
-folded, times from the first event), each keypad's keys and LEDs (blinking and alternating as
+and unchanged periodic frames folded), each keypad's keys and LEDs (blinking and alternating as
 the keypad shows them), each Keybox's outputs (PWM pins with their duty). ``--file`` replays a
 log at its own pace (``--speed``) instead of a live bus. Without ``--device`` the keypad is
-assumed at 15h and the Keybox at 0Ch, and it says so."""
+assumed at 15h and the Keybox at 0Ch, and it says so. Times: seconds since the first frame,
+``--absolute`` the wall clock (cli/clock.py). Off a terminal (a pipe, a file) there is no
+picture: each event is one line, as ``decode`` writes it.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import can
 import click
@@ -18,9 +22,10 @@ from rich.text import Text
 
 from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, cli_bus
+from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.decode import assumed_text, other_event, parse_devices
-from blinkcan.cli.render import keybox_panel, keypad_panel
-from blinkcan.decode import Decoder
+from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
+from blinkcan.decode import Decoder, Event
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.decode.view import BusView
 from blinkcan.formats.logs import LogError, read_log
@@ -28,7 +33,7 @@ from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import to_frame
 
 
-def render(view: BusView, log: EventLog) -> Group:
+def render(view: BusView, log: EventLog, clock: Clock | None = None) -> Group:
     parts: list[object] = []
     for node in sorted(view.nodes.values(), key=lambda n: n.node_id):
         title = f"{node.device or 'node'} {node.node_id:02X}h, {node.state}"
@@ -40,15 +45,43 @@ def render(view: BusView, log: EventLog) -> Group:
             parts.append(keybox_panel(pins, title))
         if node.other:  # what the model sends besides keys and outputs: knobs, inputs...
             parts.append(Text("\n".join(node.other.values())))
-    table = Table("s", "id", "data", "meaning", title="events (s from the first)",
+    clock = clock if clock is not None else Clock(start=log.start)
+    table = Table("UTC" if clock.absolute else "s", "id", "data", "meaning",
+                  title="events" if clock.absolute else "events (s from the first frame)",
                   title_justify="left")
     for row in log.rows:
         frame = row.event.frame
-        ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
-        table.add_row(f"{log.since_start(row.event):.3f}", ident, frame.data.hex(" ").upper(),
+        table.add_row(clock(row.event.time), _ident(frame), frame.data.hex(" ").upper(),
                       row.text())
     parts.append(table)
     return Group(*parts)  # type: ignore[arg-type]
+
+
+def _ident(frame: Frame) -> str:
+    return f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
+
+
+def event_line(time_text: str, event: Event) -> str:
+    """One event as one plain line, the way ``decode`` writes it."""
+    frame = event.frame
+    return f"{time_text:>12}  {_ident(frame):>8}  {frame.data.hex(' ').upper():<23}  {event}"
+
+
+class _Lines:
+    """Off a terminal, Live's stand-in: no picture (the events go out as lines)."""
+
+    def update(self, *_: object, **__: object) -> None:
+        return None
+
+
+@contextlib.contextmanager
+def _screen(picture: Callable[[], Group], console: Console) -> Iterator[Live | _Lines]:
+    """The picture updated in place on a terminal; nothing to draw elsewhere."""
+    if not console.is_terminal:
+        yield _Lines()
+        return
+    with Live(picture(), console=console, auto_refresh=False) as live:
+        yield live
 
 
 def replay_wait(first: float, frame_time: float, started: float, now: float,
@@ -73,45 +106,55 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
               help="Stop after this many seconds.")
 @click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True,
               help="Events shown (repeated heartbeats fold into one row).")
+@ABSOLUTE
 @bus_options
 def command(devices: tuple[str, ...], log_file: str | None, speed: float,
-            duration: float | None, rows: int) -> None:
+            duration: float | None, rows: int, absolute: bool) -> None:
     """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops. A bus
-    error is counted and the watching goes on; a bus that keeps failing ends it."""
+    error is counted and the watching goes on; a bus that keeps failing ends it. Off a
+    terminal: one line per event."""
     known = parse_devices(devices)
     if not devices:
         click.echo(assumed_text(known), err=True)
     decoder = Decoder(known)
     view = BusView(decoder)
-    log = EventLog(rows)
-    console = Console(highlight=False)
+    log = EventLog(rows, decoder)
+    console = output_console()
+    clock = Clock(absolute)
+    lines = not console.is_terminal
 
     def feed(frame_time: float, item: Frame | can.Message) -> None:
         event = decoder.decode(item, frame_time) if isinstance(item, Frame) else \
             other_event(decoder, item)
+        time_text = clock(event.time)  # the first frame starts the clock
         view.update(event)
         log.add(event)
+        if lines:
+            console.out(event_line(time_text, event), highlight=False)
+
+    def picture() -> Group:
+        return render(view, log, clock)
 
     if log_file is not None:
-        _replay(log_file, speed, duration, feed, lambda: render(view, log), console)
+        _replay(log_file, speed, duration, feed, picture, console)
         return
     bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
     faults = BusFaults()
     try:
-        with Live(render(view, log), console=console, auto_refresh=False) as live:
+        with _screen(picture, console) as live:
             shown = time.monotonic()
             while end is None or time.monotonic() < end:
-                message = receive(bus, 0.05, faults, live.console.print)
+                message = receive(bus, 0.05, faults, console.print)
                 if message is not None:
                     frame = to_frame(message)
                     feed(message.timestamp, frame if frame is not None else message)
                 elif faults.given_up():
                     break
                 if time.monotonic() - shown > 0.1:  # at most ten redraws a second
-                    live.update(render(view, log), refresh=True)
+                    live.update(picture(), refresh=True)
                     shown = time.monotonic()
-            live.update(render(view, log), refresh=True)
+            live.update(picture(), refresh=True)
     except KeyboardInterrupt:
         pass
     finally:
@@ -130,7 +173,7 @@ def _replay(log_file: str, speed: float, duration: float | None,
     end = None if duration is None else started + duration
     first: float | None = None
     try:
-        with Live(picture(), console=console, auto_refresh=False) as live:
+        with _screen(picture, console) as live:
             shown = started
             for frame_time, item in read_log(log_file):
                 first = frame_time if first is None else first

@@ -87,7 +87,7 @@ class BytePaddedKeypad:
                 PdoSignal("keys", "Keys pressed", 0, self.key_bits, "keys_pressed", item="key",
                           items=self.keys),
                 PdoSignal("tick", "Tick timer", 32, 8, None),  # errata P8, as the 2600
-            ), min_length=1),
+            ), min_length=1, period="tpdo1_event_timer"),  # 1800h/05 periodic transmission
             "led_on": self.led_pdo("led_on", "Set LED on", RPDO1),
             "led_blink": self.led_pdo("led_blink", "Set LED blink", RPDO2),
             # pkp-2500-si p. 9: byte 0 the level, no colour byte (unlike 2600 rev 1.5 §15)

@@ -163,7 +163,7 @@ def _pdos() -> tuple[PdoLayout, ...]:
         ), min_length=4),
         PdoLayout("faults", "Fault message", TPDO1, Direction.TX, 8, (  # KBX §18
             PdoSignal("faults", "Pins in FAULT", 0, PIN_COUNT, "output_fault_mask", item="pin"),
-        ), min_length=2),
+        ), min_length=2, period="fault_period"),  # KBX §25: periodic fault message
     )
 
 

@@ -215,7 +215,7 @@ def _pdos() -> tuple[PdoLayout, ...]:
         PdoLayout("key_state", "Keys state", TPDO1, Direction.TX, 5, (  # PKP §10, errata P8
             PdoSignal("keys", "Keys pressed", 0, KEY_COUNT, "keys_pressed", item="key"),
             PdoSignal("tick", "Tick timer", 32, 8, None),
-        ), min_length=2),
+        ), min_length=2, period="tpdo1_event_timer"),  # PKP §41b: periodic state transmission
         _led_pdo("led_on", "Set LED on", RPDO1, "led_on"),
         _led_pdo("led_blink", "Set LED blink", RPDO2, "led_blink"),
         PdoLayout("indicator_brightness", "Indicator LEDs brightness", RPDO3, Direction.RX, 8, (

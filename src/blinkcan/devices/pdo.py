@@ -60,7 +60,9 @@ class PdoLayout:
     """One PDO: its COB-ID base (node id added), length and signals.
 
     ``min_length`` is the shortest frame the device acts on (errata P14: the brightness PDOs
-    accept DLC 1..8); a shorter frame is ignored.
+    accept DLC 1..8); a shorter frame is ignored. ``period`` names the object entry that sets
+    how often the device repeats this TPDO by itself (PKP §41b's event timer, KBX §25, MT §14);
+    empty: the device sends it on a change only.
     """
 
     name: str
@@ -71,6 +73,7 @@ class PdoLayout:
     signals: tuple[PdoSignal, ...]
     min_length: int = 0
     doc: str = ""
+    period: str = ""
 
     def __post_init__(self) -> None:
         if not self.min_length:

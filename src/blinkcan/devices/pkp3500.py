@@ -286,13 +286,13 @@ def _pdos() -> tuple[PdoLayout, ...]:
         PdoLayout("key_state", "Keys state", TPDO1, Direction.TX, 5, (  # MT §11, M13, M31
             PdoSignal("keys", "Keys pressed", 0, KEY_COUNT, "keys_pressed", item="key"),
             PdoSignal("tick", "Tick timer", 32, 8, None),
-        ), min_length=2),
+        ), min_length=2, period="tpdo1_event_timer"),  # MT §50: 1800h/05 event timer
         _encoder_pdo(1, TPDO2),
         _encoder_pdo(2, TPDO3),
         PdoLayout("analog_inputs", "Analog inputs", TPDO4, Direction.TX, 8, tuple(  # MT §14
             PdoSignal(f"in{n}", f"IN{n}", 16 * n, 16, None, scale=0.01, unit="V")
             for n in range(ANALOG_INPUTS)
-        )),
+        ), period="analog_period"),  # MT §14: every 2006h x 10 ms
         _led_pdo("led_on", "Set key-LED on", RPDO1),
         _led_pdo("led_blink", "Set key-LED blink", RPDO2),
         PdoLayout("ring_leds", "Set encoder LEDs on", RPDO3, Direction.RX, 8, (  # MT §17, M29

@@ -26,12 +26,20 @@ commands sent to it (by this driver or heard from another master on 000h):
 A heartbeat answers an NMT command only if it can come after it: the states commands asked for
 are kept until a heartbeat reports them, so a heartbeat sent just before a command (still on
 the wire when it went out) is never taken for its answer, nor for a trip.
+
+A driver class (``Keypad``, ``Keybox``, a new model's) builds on :class:`Device` through its
+public face only: :meth:`Device.listen` and :meth:`Device.on_close` for the frames it hears,
+:meth:`Device.pdo_frame` for the PDOs it sends, :func:`confirm_or_close` in its constructor,
+:attr:`Device.health_id`, :meth:`Device.heard`, and the hooks it overrides (called on the bus
+thread; applications do not call them): :meth:`Device.nmt_command_seen`,
+:meth:`Device.state_reported`, :meth:`Device.booted_up`, :meth:`Device.watchdog_tripped`,
+:meth:`Device.host_heartbeat_sent` and :meth:`Device.adopt_identity`.
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +50,7 @@ from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry, Value
 from blinkcan.devices.registry import identify
 from blinkcan.errors import BlinkcanError
-from blinkcan.host.bus import HostBus, Timer
+from blinkcan.host.bus import Handler, HostBus, Timer
 from blinkcan.host.events import EventSource
 from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range
@@ -105,6 +113,20 @@ def several_answer(count: int, node_id: int) -> str:
             "replies): give each device its own node id")
 
 
+def confirm_or_close(device: Device, verify: bool) -> None:
+    """A driver's constructor: :meth:`Device.confirm` the device (when ``verify``; without, the
+    application vouches for it); on failure the driver lets go of the bus and the error
+    rises."""
+    if not verify:
+        device.confirmed = True
+        return
+    try:
+        device.confirm()
+    except BaseException:
+        device.close()
+        raise
+
+
 def check_one_device(sdo: SdoClient, window: float | None = None) -> None:
     """:class:`SharedNodeIdError` when more than one device answers a read of 1000h (every
     CANopen device has it, CiA 301 §7.5.2.1) at ``sdo``'s node within ``window`` seconds
@@ -150,9 +172,6 @@ class Device:
         self._watch: Timer | None = None
         self._producer: Timer | None = None
         self.host_node_id = 0x7F
-        #: held while an output or LED command is sent and the driver's picture updated, and
-        #: while a restore computes what to send and sends it: the two never interleave
-        self._command_lock = threading.Lock()
         #: held while the host heartbeat producer is replaced or stopped, and at close
         self._producer_lock = threading.Lock()
         self._closed = False
@@ -160,6 +179,38 @@ class Device:
             self.host.subscribe(HEARTBEAT + node_id, self._on_heartbeat),
             self.host.subscribe(NMT, self._on_nmt_heard),
         ]
+
+    # -- what a driver class builds on ------------------------------------------------------------
+
+    def listen(self, can_id: int, handler: Handler) -> None:
+        """Call ``handler(frame, now)`` on the bus thread for every frame of ``can_id`` until
+        the driver closes."""
+        self._unsubscribe.append(self.host.subscribe(can_id, handler))
+
+    def on_close(self, release: Callable[[], None]) -> None:
+        """Call ``release()`` when the driver closes (a link it opened, a subscription)."""
+        self._unsubscribe.append(release)
+
+    def pdo_frame(self, name: str, values: Mapping[str, int]) -> Frame:
+        """The PDO ``name`` of this device with ``values``, from its layout in ``devices/``
+        (signals not named: 0); built, not sent."""
+        layout = self.description.pdo(name)
+        return Frame(layout.cob_id(self.node_id), layout.encode(values))
+
+    @property
+    def health_id(self) -> int:
+        """The id "lost" and :meth:`heard`'s "back" events name: the node id (a driver whose
+        device speaks another protocol may name its address there)."""
+        return self.node_id
+
+    def heard(self, now: float) -> None:
+        """The device was heard where it sends no CANopen heartbeat (a keypad in J1939 mode,
+        its §18 heartbeat or any message): "back" if it was lost, and the watch of
+        :meth:`monitor_heartbeat` starts again. On the bus thread."""
+        if self.alive is False:
+            self.health.emit(HealthEvent(self.health_id, BACK, now))
+        self.alive = True
+        self._rearm()
 
     # -- objects by name --------------------------------------------------------------------
 
@@ -202,7 +253,7 @@ class Device:
         asked = _ASKED.get(command)
         if asked is not None:
             self._asked = [*self._asked[-(_ASKED_KEPT - 1):], asked]
-        self._on_nmt_command(command)
+        self.nmt_command_seen(command)
 
     def _answered(self, state: NmtState) -> bool:
         """Whether a reported ``state`` is what a pending NMT command asked for; the commands
@@ -215,8 +266,32 @@ class Device:
         del asked[:asked.index(state) + 1]
         return True
 
-    def _on_nmt_command(self, command: NmtCommand) -> None:
-        """An NMT command was sent to the device: drivers update their picture."""
+    # -- hooks a driver class overrides: all but the last on the bus thread; applications do --
+    # -- not call them --------------------------------------------------------------------------
+
+    def nmt_command_seen(self, command: NmtCommand) -> None:
+        """An NMT command was sent to the device (by this driver, or heard from another master
+        on 000h): drivers update their picture."""
+
+    def booted_up(self, now: float) -> None:
+        """The confirmed device (re)booted: drivers restore what the application had set."""
+
+    def watchdog_tripped(self, now: float) -> None:
+        """The confirmed device's consumer heartbeat tripped: drivers update their picture."""
+
+    def state_reported(self, state: NmtState, now: float) -> None:
+        """The confirmed device reported a new NMT state (not a trip)."""
+
+    def host_heartbeat_sent(self) -> None:
+        """After each host heartbeat this driver sends: the device's consumer, if it watches
+        this host, is armed from now on (KBX §28: monitoring starts at a heartbeat)."""
+
+    def adopt_identity(self, found: Mapping[str, Value | None]) -> None:
+        """:meth:`confirm` read ``found`` (1000h, 1018h/01, 100Bh by name), on its caller's
+        thread; before they are compared with the description, a driver class that runs
+        several models may take the description of the one they name."""
+
+    # -- NMT commands ---------------------------------------------------------------------------
 
     def start(self) -> None:
         self.nmt(NmtCommand.START)
@@ -263,7 +338,7 @@ class Device:
             self.nmt_state, self._asked = NmtState.PRE_OPERATIONAL, []
             self.health.emit(HealthEvent(self.node_id, BOOT_UP, now, NmtState.BOOT_UP))
             if self.confirmed:  # never command a device before knowing what it is
-                self._on_boot_up(now)
+                self.booted_up(now)
         elif code in NmtState._value2member_map_:
             asked = self._answered(NmtState(code))
             if code != self.nmt_state:
@@ -279,9 +354,9 @@ class Device:
                 and not asked):
             self.health.emit(HealthEvent(self.node_id, WATCHDOG, now, state))
             if self.confirmed:
-                self._on_watchdog_trip(now)
+                self.watchdog_tripped(now)
         elif self.confirmed:
-            self._on_state(state, now)
+            self.state_reported(state, now)
 
     def _rearm(self) -> None:
         if self._watch is not None:
@@ -293,16 +368,7 @@ class Device:
         self._watch = None
         if self.alive is not False:
             self.alive = False
-            self.health.emit(HealthEvent(self.node_id, "lost", self.host.clock()))
-
-    def _on_boot_up(self, now: float) -> None:
-        """The device (re)booted: drivers restore what the application had set."""
-
-    def _on_watchdog_trip(self, now: float) -> None:
-        """The device's consumer heartbeat tripped: drivers update their picture."""
-
-    def _on_state(self, state: NmtState, now: float) -> None:
-        """The device reported a new NMT state (not a trip)."""
+            self.health.emit(HealthEvent(self.health_id, LOST, self.host.clock()))
 
     # -- which device answers ---------------------------------------------------------------------
 
@@ -319,6 +385,7 @@ class Device:
             raise
         if self.sdo.channel.late_replies != late:  # a reply nobody awaited: a second device?
             check_one_device(self.sdo)
+        self.adopt_identity(found)
         self._compare_identity(found)
 
     def _identity_values(self) -> dict[str, Value | None]:
@@ -357,17 +424,6 @@ class Device:
             f"node {self.node_id:02X}h is not a {self.description.title}: device type "
             f"{show(device_type)}, vendor {show(found['vendor_id'])}, model {show(model_id)} "
             "answered")
-
-    def _confirm_or_close(self, verify: bool) -> None:
-        """:meth:`confirm` (when ``verify``); on failure the driver lets go of the bus."""
-        if not verify:
-            self.confirmed = True  # the application vouches for the device
-            return
-        try:
-            self.confirm()
-        except BaseException:
-            self.close()
-            raise
 
     # -- identity -------------------------------------------------------------------------------
 
@@ -486,11 +542,7 @@ class Device:
 
     def _send_host_heartbeat(self, frame: Frame) -> None:
         self.host.send(frame)
-        self._host_heartbeat_sent()
-
-    def _host_heartbeat_sent(self) -> None:
-        """On the bus thread, after each host heartbeat: the device's consumer, if it watches
-        this host, is armed from now on (KBX §28: monitoring starts at a heartbeat)."""
+        self.host_heartbeat_sent()
 
     def stop_host_heartbeat(self) -> None:
         """Stop the host heartbeat (as a crashed application would): the device reacts."""

@@ -18,6 +18,7 @@ entering (fault PDO, poll, read) and leaving (an acknowledged RESET, a reboot, a
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
@@ -37,7 +38,7 @@ from blinkcan.devices.keybox import (
     pwm_register,
 )
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device
+from blinkcan.host.device import Device, confirm_or_close
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range
 from blinkcan.protocol.frame import Frame
@@ -97,6 +98,9 @@ class Keybox(Device):
         self.restore_outputs = restore_outputs
         self.host_node_id = check_node_id(host_node_id)
         self._commanded: frozenset[int] = frozenset()
+        #: held while an output command is sent and the driver's picture updated, and while a
+        #: restore computes what to send and sends it: the two never interleave
+        self._command_lock = threading.Lock()
         self._actual = dict.fromkeys(FACE.pin_numbers, "off")
         self._in_pwm: frozenset[int] = frozenset()
         self._poller: Timer | None = None
@@ -105,8 +109,8 @@ class Keybox(Device):
         #: a restore waits for the next host heartbeat (the Keybox's watchdog re-arms on it)
         self._restore_when_watched = False
         fault_pdo = self.description.pdo("faults")
-        self._unsubscribe.append(self.host.subscribe(fault_pdo.cob_id(node_id), self._on_faults))
-        self._confirm_or_close(verify)
+        self.listen(fault_pdo.cob_id(node_id), self._on_faults)
+        confirm_or_close(self, verify)
         if verify:
             self.states()  # the picture starts true
         if watchdog is not None:
@@ -301,22 +305,22 @@ class Keybox(Device):
             if state == "high":
                 self._actual[pin] = "off"
 
-    def _on_nmt_command(self, command: NmtCommand) -> None:
+    def nmt_command_seen(self, command: NmtCommand) -> None:
         if command in _OUTPUTS_OFF_AFTER:
             self._outputs_went_off()
 
-    def _on_state(self, state: NmtState, now: float) -> None:
+    def state_reported(self, state: NmtState, now: float) -> None:
         if state is NmtState.STOPPED:
             self._outputs_went_off()
 
-    def _on_boot_up(self, now: float) -> None:
+    def booted_up(self, now: float) -> None:
         for pin in sorted(self.fault_pins):  # a reset clears FAULT latches
             self._leave_fault(pin, now)
         self._actual = dict.fromkeys(self._actual, "off")  # every reset starts with outputs OFF
         self._in_pwm = frozenset()
         self._recover()
 
-    def _on_watchdog_trip(self, now: float) -> None:
+    def watchdog_tripped(self, now: float) -> None:
         self._outputs_went_off()  # KBX §28 note 2
         self._recover()
 
@@ -336,7 +340,7 @@ class Keybox(Device):
             return
         self.host.spawn(self._restore, ("restore outputs", self.node_id))
 
-    def _host_heartbeat_sent(self) -> None:
+    def host_heartbeat_sent(self) -> None:
         if self._restore_when_watched:
             self._restore_when_watched = False
             self.host.spawn(self._restore, ("restore outputs", self.node_id))

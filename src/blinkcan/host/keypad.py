@@ -49,13 +49,12 @@ from blinkcan.devices.registry import identify
 from blinkcan.devices.registry import model as registry_model
 from blinkcan.host.bus import HostBus, Timer
 from blinkcan.host.device import (
-    BACK,
     BOOT_UP,
-    LOST,
     Device,
     HealthEvent,
     NoDeviceError,
     WrongDeviceError,
+    confirm_or_close,
 )
 from blinkcan.host.events import EventSource
 from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
@@ -175,12 +174,15 @@ class Keypad(Device):
         #: the picture (LEDs, brightness, the J1939 link): changed and sent under it, by the
         #: application's threads and the bus thread's restores alike
         self._picture_lock = threading.RLock()
+        #: held while a backlight command is sent and the driver's picture updated, and while
+        #: a restore computes what to send and sends it: the two never interleave
+        self._command_lock = threading.Lock()
         self._generation_lock = threading.Lock()
         self._indicator: int | None = None
         self._backlight_level: int | None = None
         self._backlight_colour: int | None = None
         key_pdo = self.description.pdo("key_state")
-        self._unsubscribe.append(self.host.subscribe(key_pdo.cob_id(node_id), self._on_keys))
+        self.listen(key_pdo.cob_id(node_id), self._on_keys)
         #: the J1939 side while the keypad is in J1939 mode, else None
         self.j1939: J1939KeypadLink | None = None
         if protocol == "j1939":
@@ -192,7 +194,7 @@ class Keypad(Device):
                 self._confirm_j1939(sdo_timeout)
             self.confirmed = True
         else:
-            self._confirm_or_close(verify)
+            confirm_or_close(self, verify)
             if verify:  # known from now on: no property reads the device later
                 self._detect_or_close()
         if watchdog is not None:
@@ -228,9 +230,9 @@ class Keypad(Device):
             self.close()
             raise
 
-    def _compare_identity(self, found: dict[str, Value | None]) -> None:
+    def adopt_identity(self, found: Mapping[str, Value | None]) -> None:
         """No model named: a keypad this very class runs (its 100Bh says which) is adopted, as
-        :meth:`connect` would; any other device is refused as before."""
+        :meth:`connect` would; any other device is then refused by the comparison."""
         model_id = found["model_id"]
         answered = identify(model_id=model_id) if isinstance(model_id, str) else None
         if (not self._model_given and answered is not None
@@ -240,7 +242,6 @@ class Keypad(Device):
             if self._generation not in self._model.generations:
                 self._generation = None  # a generation of the model first assumed
             self.description = self._describe(self._generation, self.node_id)
-        super()._compare_identity(found)
 
     def _probe_generation(self) -> str:
         """The model's generation with 1016h if the device answers 1016h, else the one
@@ -347,7 +348,7 @@ class Keypad(Device):
             with self._picture_lock:
                 self._steady[key], self._blink[key] = int(on), int(toggled_channels)
                 self._looks[key] = look
-                self._flush()
+                self._send_changes()
             return
         steady = led_colour(colour)
         blinking = led_colour(blink) if blink is not None else Channel.NONE
@@ -364,7 +365,7 @@ class Keypad(Device):
             self._steady[key] = int(steady)
             self._blink[key] = toggled
             self._looks.pop(key, None)
-            self._flush()
+            self._send_changes()
 
     def read_leds(self) -> None:
         """Take the LEDs the keypad shows now (2001h/2002h, PKP §11) as this driver's picture,
@@ -387,8 +388,8 @@ class Keypad(Device):
             self._steady = {key: channels for key, channels in steady.items() if channels}
             self._blink = {key: channels for key, channels in blinking.items() if channels}
             self._looks = {}
-            self._sent = (self._pdo_frame("led_on", _masks(self._steady)),
-                          self._pdo_frame("led_blink", _masks(self._blink)))
+            self._sent = (self.pdo_frame("led_on", _masks(self._steady)),
+                          self.pdo_frame("led_blink", _masks(self._blink)))
 
     def set_leds(self, colours: Mapping[int, str], blink: Mapping[int, str] | None = None) -> None:
         """Several keys at once, in at most two PDOs."""
@@ -412,9 +413,9 @@ class Keypad(Device):
         finally:
             with self._picture_lock:
                 self._batching -= 1
-                self._flush()
+                self._send_changes()
 
-    def _flush(self, force: bool = False) -> None:
+    def _send_changes(self, force: bool = False) -> None:
         """Send what changed in the picture (everything with ``force``); under the picture
         lock, so what is sent last is the picture as it is then."""
         with self._picture_lock:
@@ -431,19 +432,14 @@ class Keypad(Device):
                                                                   self._blink.get(key, 0))
                              for key in named}, force)
             return
-        on, blink = self._pdo_frame("led_on", _masks(self._steady)), \
-            self._pdo_frame("led_blink", _masks(self._blink))
+        on, blink = self.pdo_frame("led_on", _masks(self._steady)), \
+            self.pdo_frame("led_blink", _masks(self._blink))
         sent = self._sent
         if force or sent is None or sent[0] != on:
             self.host.send(on)
         if force or sent is None or sent[1] != blink:
             self.host.send(blink)
         self._sent = (on, blink)
-
-    def _pdo_frame(self, name: str, values: Mapping[str, int]) -> Frame:
-        """An RPDO of this keypad from its layout in ``devices/`` (signals not named: 0)."""
-        layout = self.description.pdo(name)
-        return Frame(layout.cob_id(self.node_id), layout.encode(values))
 
     # -- brightness and backlight -----------------------------------------------------------------
 
@@ -455,7 +451,7 @@ class Keypad(Device):
             if self.j1939 is not None:
                 self.j1939.send("led_brightness", level)
                 return
-            self.host.send(self._pdo_frame("indicator_brightness", {"level": level}))
+            self.host.send(self.pdo_frame("indicator_brightness", {"level": level}))
 
     def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
         """Backlight colour (by name, PKP §18c) and level 0..63 (0 = off, PKP §14)."""
@@ -489,7 +485,7 @@ class Keypad(Device):
         self.detect_generation()  # the description of the generation found
         colour = ((self._backlight_colour or 0)
                   if "backlight-colour-pdo" in self.description.features else 0)
-        return self._pdo_frame("backlight_brightness", {"level": level, "colour": colour})
+        return self.pdo_frame("backlight_brightness", {"level": level, "colour": colour})
 
     def set_default_backlight_colour(self, colour: str) -> None:
         self.write("default_backlight_colour", int(BacklightColour.from_name(colour)))
@@ -557,7 +553,7 @@ class Keypad(Device):
     def _use_j1939(self, address: int) -> None:
         self.j1939 = J1939KeypadLink(self.host, address, self._on_j1939_key,
                                      on_health=self._on_j1939_health)
-        self._unsubscribe.append(self.j1939.close)
+        self.on_close(self.j1939.close)
 
     def _confirm_j1939(self, timeout: float) -> None:
         assert self.j1939 is not None
@@ -572,10 +568,7 @@ class Keypad(Device):
         has: "lost"/"back" from the heartbeat (§18), "boot-up" (power-on: the LEDs are
         restored), "address lost" and "moved" (§20, J-5)."""
         if kind == HEARD:
-            if self.alive is False:
-                self.health.emit(HealthEvent(address, BACK, now))
-            self.alive = True
-            self._rearm()
+            self.heard(now)  # "back" names the address (health_id)
             return
         self.health.emit(HealthEvent(address, kind, now))
         if kind == BOOT_UP:
@@ -588,14 +581,10 @@ class Keypad(Device):
             if self.restore and self.confirmed:
                 self.host.spawn(self._restore_j1939)
 
-    def _lost(self) -> None:
-        if self.j1939 is None:
-            super()._lost()
-            return
-        self._watch = None
-        if self.alive is not False:
-            self.alive = False
-            self.health.emit(HealthEvent(self.j1939.address, LOST, self.host.clock()))
+    @property
+    def health_id(self) -> int:
+        """The node id; in J1939 mode the keypad's address (what "lost" and "back" name)."""
+        return self.node_id if self.j1939 is None else self.j1939.address
 
     def identity(self) -> Any:
         """The CANopen :class:`Identity` (1000h, 1018h, 100Bh, ...) or, in J1939 mode, a
@@ -608,7 +597,7 @@ class Keypad(Device):
 
     def _restore_j1939(self) -> None:
         with self._picture_lock:
-            self._flush(force=True)
+            self._send_changes(force=True)
             if self._indicator is not None:
                 self.set_brightness(self._indicator)
         # outside the picture lock: set_backlight takes the command lock first
@@ -619,14 +608,14 @@ class Keypad(Device):
 
     # -- recovery ---------------------------------------------------------------------------------
 
-    def _on_boot_up(self, now: float) -> None:
+    def booted_up(self, now: float) -> None:
         for timer in self._long_timers.values():
             timer.cancel()
         self._long_timers.clear()
         self.pressed = frozenset()
         self._recover()
 
-    def _on_watchdog_trip(self, now: float) -> None:
+    def watchdog_tripped(self, now: float) -> None:
         self._recover()  # rev 1.5 §26 note 2: the keypad switched its LEDs off
 
     def _recover(self) -> None:
@@ -636,9 +625,9 @@ class Keypad(Device):
             if not self.restore:
                 self._sent = None
                 return
-            self._flush(force=True)  # errata field report: a rebooted keypad forgot its LEDs
+            self._send_changes(force=True)  # errata field report: a rebooted keypad forgot its LEDs
             if self._indicator is not None:
-                self.host.send(self._pdo_frame("indicator_brightness",
+                self.host.send(self.pdo_frame("indicator_brightness",
                                                {"level": self._indicator}))
             if self._backlight_colour is not None:
                 self.host.spawn(self._restore_backlight)  # the colour goes by SDO: off here

@@ -7,6 +7,7 @@ Built as ``Keypad(bus, 0x15, model="pkp-3500-mt")``, ``Keypad.connect(bus, 0x15)
 
 from __future__ import annotations
 
+import threading
 from collections.abc import AsyncIterator, Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -14,8 +15,7 @@ from typing import Any
 import can
 
 from blinkcan.devices.keypad import LEVEL_MAX
-from blinkcan.devices.model import DeviceDescription
-from blinkcan.devices.pkp3500 import GENERATION, MODEL, describe_pkp3500
+from blinkcan.devices.pkp3500 import GENERATION, MODEL
 from blinkcan.host.aio import _AsyncDevice, _iterate
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import Device
@@ -49,7 +49,7 @@ class Pkp3500Keypad(Keypad):
                  **options: Any) -> None:
         if model != MODEL:
             raise ValueError(f"this driver runs model {MODEL!r}, not {model!r}")
-        super().__init__(bus, node_id, generation=GENERATION, **options)
+        super().__init__(bus, node_id, generation=GENERATION, model=MODEL, **options)
         face = self.description.face
         self.encoders = EventSource[EncoderEvent](self.host.scheduler)
         #: the last encoder state each encoder reported: (counter, top)
@@ -57,15 +57,14 @@ class Pkp3500Keypad(Keypad):
         #: volts of IN0..IN3 from the last 495h PDO (10 mV resolution, M44)
         self.analog: dict[int, float] = {}
         self._rings: int | None = None  # the ring LEDs last set, restored after a boot-up
+        #: the ring LEDs are changed and sent under it (by the application's threads and the
+        #: bus thread's restore), so the last ring PDO sent is always the rings as they are
+        self._rings_lock = threading.RLock()
         for encoder in face.encoders:
             layout = self.description.pdo(encoder.pdo)
-            self._unsubscribe.append(self.host.subscribe(
-                layout.cob_id(node_id), self._encoder_handler(encoder.number)))
+            self.listen(layout.cob_id(node_id), self._encoder_handler(encoder.number))
         analog = self.description.pdo("analog_inputs")
-        self._unsubscribe.append(self.host.subscribe(analog.cob_id(node_id), self._on_analog))
-
-    def _describe(self, generation: str | None, node_id: int) -> DeviceDescription:
-        return describe_pkp3500(generation or GENERATION, "cia301", node_id)
+        self.listen(analog.cob_id(node_id), self._on_analog)
 
     @property
     def generation(self) -> str:
@@ -134,7 +133,7 @@ class Pkp3500Keypad(Keypad):
             raise ValueError(f"ring {encoder} has LEDs {ring[0]}..{ring[-1]}, not "
                              f"{sorted(chosen - set(ring))}")
         own = sum(1 << (led - 1) for led in chosen)
-        with self._picture_lock:  # the other ring's LEDs as they are now, not as read before
+        with self._rings_lock:  # the other ring's LEDs as they are now, not as read before
             others = (self._rings or 0) & ~sum(1 << (led - 1) for led in ring)
             self._send_rings(others | own)
 
@@ -143,7 +142,7 @@ class Pkp3500Keypad(Keypad):
         that the next :meth:`set_ring` changes one ring and keeps the other as it is (a program
         started against a keypad lit by someone else). Returns the LEDs lit."""
         word = int(self.read("led_on_rings"))  # no SDO under the picture lock
-        with self._picture_lock:
+        with self._rings_lock:
             self._rings = word
         return item_numbers(word)
 
@@ -157,9 +156,9 @@ class Pkp3500Keypad(Keypad):
         self.write("led_blink_rings", item_mask(leds, "ring LED", 32))
 
     def _send_rings(self, word: int) -> None:
-        with self._picture_lock:
+        with self._rings_lock:
             self._rings = word
-            self.host.send(self._pdo_frame("ring_leds", {"rings": word}))
+            self.host.send(self.pdo_frame("ring_leds", {"rings": word}))
 
     # -- inputs (MT §14, §23, §24) -----------------------------------------------------------------
 
@@ -198,11 +197,11 @@ class Pkp3500Keypad(Keypad):
         check_range("brightness", level, 0, LEVEL_MAX)
         self.write("indicator_brightness", level)
 
-    def _on_boot_up(self, now: float) -> None:
-        super()._on_boot_up(now)
-        with self._picture_lock:
+    def booted_up(self, now: float) -> None:
+        super().booted_up(now)
+        with self._rings_lock:
             if self.restore and self._rings is not None:
-                self.host.send(self._pdo_frame("ring_leds", {"rings": self._rings}))
+                self.host.send(self.pdo_frame("ring_leds", {"rings": self._rings}))
 
 
 class AsyncPkp3500Keypad(_AsyncDevice[Pkp3500Keypad]):

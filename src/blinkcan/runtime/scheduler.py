@@ -185,7 +185,9 @@ class Scheduler(ABC):
         """Stop the loop; calls still queued fail."""
 
     def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
-        return self._push(Timer(check_time("when", when), None, callback))
+        if when.__class__ is not float or when - when:  # not a finite float: check it
+            check_time("when", when)
+        return self._push(Timer(when, None, callback))
 
     def post(self, callback: Callable[[], object]) -> None:
         """Run ``callback`` on the loop as soon as it can, after what was posted before
@@ -212,10 +214,11 @@ class _Heap:
 
     def __init__(self) -> None:
         self.entries: list[tuple[float, int, Timer]] = []
-        self._seq = itertools.count()
+        #: the order of scheduling (shared with the simulated scheduler's calls due now)
+        self.sequence = itertools.count()
 
     def push(self, timer: Timer) -> None:
-        heapq.heappush(self.entries, (timer.due, next(self._seq), timer))
+        heapq.heappush(self.entries, (timer.due, next(self.sequence), timer))
 
     def next_due(self) -> float | None:
         entries = self.entries
@@ -385,6 +388,11 @@ class SimulatedScheduler(Scheduler):
         self._now = check_time("start", start)
         self._failures: list[tuple[Exception, str]] = []
         self._heap = _Heap()
+        #: calls :meth:`defer` made, due at the time they were made (never later than the
+        #: clock): (order of scheduling, callback, arguments); they take their turn among the
+        #: heap's timers by that order
+        self._ready: collections.deque[tuple[int, Callable[..., object], tuple[object, ...]]] = (
+            collections.deque())
         self._depth = 0  # handlers running (waits inside them nest)
         self._base = 0  # depth at which the running background work started
         self._waits = 0
@@ -405,9 +413,16 @@ class SimulatedScheduler(Scheduler):
         return self._depth > self._base
 
     def _push(self, timer: Timer) -> Timer:
-        timer.due = max(timer.due, self._now)
+        if timer.due < self._now:  # noqa: PLR1730 (max() is a call: this runs per timer)
+            timer.due = self._now
         self._heap.push(timer)
         return timer
+
+    def defer(self, callback: Callable[..., object], *args: object) -> None:
+        """``call_soon(lambda: callback(*args))``, without a timer to cancel: the simulated
+        wire hands every frame over this way, and a timer and a closure per frame cost more
+        than the rest of its delivery."""
+        self._ready.append((next(self._heap.sequence), callback, args))
 
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         return action()
@@ -448,7 +463,8 @@ class SimulatedScheduler(Scheduler):
             self._base = base
 
     def next_due(self) -> float | None:
-        return self._heap.next_due()
+        due = self._heap.next_due()
+        return self._now if self._ready else due  # a deferred call is due now
 
     def failed(self, error: Exception, what: str = "a blinkcan handler") -> None:
         """Kept, and raised again by the call that drives the simulation."""
@@ -464,39 +480,68 @@ class SimulatedScheduler(Scheduler):
             log.error("%s also raised at t=%.6f", what, self._now, exc_info=error)
         raise failures[0][0]
 
+    def _pop(self, until: float) -> tuple[Callable[..., object], tuple[object, ...]] | None:
+        """The next event due by ``until``, taken off (a repeating timer re-armed) with the
+        clock moved to it, or None (the clock stays). Timers due now and deferred calls run in
+        the order they were scheduled."""
+        entries = self._heap.entries
+        while entries and entries[0][2].cancelled:
+            heapq.heappop(entries)
+        ready = self._ready
+        if ready and self._now <= until and (
+                not entries or entries[0][0] > self._now or entries[0][1] > ready[0][0]):
+            _, callback, args = ready.popleft()
+            return callback, args
+        if not entries or entries[0][0] > until:
+            return None
+        due, _, timer = heapq.heappop(entries)
+        if due > self._now:  # noqa: PLR1730 (max() is a call: this runs per event)
+            self._now = due
+        if timer.period is not None:
+            timer.rearm(self._now)
+            self._heap.push(timer)
+        return timer.callback, ()
+
+    def _run(self, callback: Callable[..., object], args: tuple[object, ...]) -> None:
+        """Run one event; an exception its handlers raised is raised here once they are done
+        (:meth:`Scheduler.guarded`, inlined: this runs for every event)."""
+        self._depth += 1
+        try:
+            callback(*args)
+        except Exception as error:
+            self.failed(error)
+        finally:
+            self._depth -= 1
+        if not self._depth and self._failures:
+            self.raise_failures()
+
     def step(self, until: float) -> bool:
         """Run the next event due by ``until``; False when there is none (the clock stays).
         An exception the event's handlers raised is raised here once they are done."""
         if until - until and until != math.inf:  # NaN or -inf (+inf: no end)
             check_time("until", until, infinite=True)
-        due = self._heap.next_due()
-        if due is None or due > until:
+        event = self._pop(until)
+        if event is None:
             return False
-        self._now = max(self._now, due)
-        timer = self._heap.pop_due(self._now)
-        if timer is not None:
-            self._depth += 1
-            try:
-                self.guarded(timer.callback)
-            finally:
-                self._depth -= 1
-            if not self._depth:
-                self.raise_failures()
+        self._run(*event)
         return True
 
     def run_until(self, predicate: Callable[[], object] | None, until: float) -> bool:
         """Run events in order until ``predicate()`` is true (True) or the clock reaches
         ``until`` (False; the clock then stands at ``until``; +inf: no end)."""
         check_time("until", until, infinite=True)
+        pop, run = self._pop, self._run
         while True:
             if predicate is not None and predicate():
                 met = True
                 break
-            if not self.step(until):
+            event = pop(until)
+            if event is None:
                 if until != math.inf:  # with no end given, the clock stays at the last event
                     self._now = max(self._now, until)
                 met = bool(predicate()) if predicate is not None else True
                 break
+            run(*event)
         if not self._depth:
             self.raise_failures()
         return met

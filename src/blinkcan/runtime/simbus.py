@@ -40,7 +40,6 @@ import collections
 import logging
 import threading
 from collections.abc import Callable, Sequence
-from functools import partial
 from typing import Any, NamedTuple
 
 import can
@@ -113,6 +112,13 @@ class SimulatedNetwork:
         """Put ``frame`` on the wire; raises ``can.CanOperationError`` when the bus is gone."""
         if not self.up:
             raise can.CanOperationError("the simulated bus is down")
+        if self._rules or self.latency:
+            self._transmit_late(frame, sender)
+        else:
+            self._deliver(frame, sender)
+
+    def _transmit_late(self, frame: Frame, sender: FrameHandler | None) -> None:
+        """``frame`` through the rules, then on the wire after the latency and delays."""
         delay = self.latency
         for rule in self._rules:
             verdict = rule(frame)
@@ -120,25 +126,27 @@ class SimulatedNetwork:
                 return
             if isinstance(verdict, (int, float)):
                 delay += float(verdict)
-        scheduler = self.scheduler
         if delay:
             self.in_flight += 1
-            scheduler.call_later(delay, lambda: self._deliver(frame, sender, True))
-        else:
-            self._deliver(frame, sender, False)
+            self.scheduler.call_later(delay, lambda: self._arrive(frame, sender))
+        elif self.up:
+            self._deliver(frame, sender)
 
-    def _deliver(self, frame: Frame, sender: FrameHandler | None, delayed: bool) -> None:
-        if delayed:
-            self.in_flight -= 1
-        if not self.up:
-            return
+    def _arrive(self, frame: Frame, sender: FrameHandler | None) -> None:
+        self.in_flight -= 1
+        if self.up:
+            self._deliver(frame, sender)
+
+    def _deliver(self, frame: Frame, sender: FrameHandler | None) -> None:
+        """Record ``frame`` and hand it to every other endpoint after what runs now (each
+        endpoint's turn is an event of its own, in order)."""
         scheduler = self.scheduler
         self.frames.append(_timed(TimedFrame, (scheduler.clock(), frame)))
-        handover = self._handover
+        handover, defer = self._handover, scheduler.defer
         for handler in self._endpoints:  # a tuple: an endpoint attached meanwhile waits
             if handler != sender:  # bound methods: equal, not identical, per access
                 self.in_flight += 1
-                scheduler.call_soon(partial(handover, handler, frame))
+                defer(handover, handler, frame)
 
     def _handover(self, handler: FrameHandler, frame: Frame) -> None:
         self.in_flight -= 1

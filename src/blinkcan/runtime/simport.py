@@ -21,13 +21,14 @@ from blinkcan.runtime.simbus import FrameHandler, SimulatedBus
 class SimulatedPort:
     """The port of the simulated endpoint ``bus``."""
 
+    #: send a frame: the endpoint's own send (the emulator calls it for every frame)
+    send: Callable[[Frame], None]
+
     def __init__(self, bus: SimulatedBus) -> None:
         self.bus = bus
         self.scheduler = bus.scheduler
         self.reading = ReadStats()
-
-    def send(self, frame: Frame) -> None:
-        self.bus.send_frame(frame)
+        self.send = bus.send_frame
 
     def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None
                ) -> Callable[[], None]:

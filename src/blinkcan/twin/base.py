@@ -115,6 +115,9 @@ class CanopenTwin:
         self._store.persist = self._save_settings
         self._sdo = SdoServer(self._store)
         self._powered = False
+        #: the heartbeat frame of each NMT state, and of the present one (both follow the node id
+        #: in use: _use_node_id)
+        self._heartbeat_frames = {state: heartbeat_frame(node_id, state) for state in NmtState}
         self._nmt = NmtState.BOOT_UP
         self._bitrate_code = self._store.get_int("baud_rate")
         # registered behaviour (see blinkcan.twin.hooks)
@@ -166,6 +169,7 @@ class CanopenTwin:
     def _nmt(self, state: NmtState) -> None:
         # the gates are kept as booleans: hashing an enum on every frame costs a Python call
         self._nmt_state = state
+        self._heartbeat_frame = self._heartbeat_frames[state]
         self._sdo_allowed = state in SDO_ALLOWED
         self._pdo_allowed = state in PDO_ALLOWED
 
@@ -251,8 +255,13 @@ class CanopenTwin:
         if not self._powered:
             return []
         self._now = now
-        frames: list[Frame] = []
-        frames += [self._heartbeat_frames[self._nmt]] * self._heartbeat.fire(now)
+        heartbeat = self._heartbeat
+        due = heartbeat.due
+        if due is not None and now >= due:
+            owed = heartbeat.fire(now)
+            frames = [self._heartbeat_frame] if owed == 1 else [self._heartbeat_frame] * owed
+        else:
+            frames = []
         deadline = self._consumer_deadline
         if deadline is not None and now >= deadline:
             frames += self._heartbeat_lost(now)
@@ -451,6 +460,7 @@ class CanopenTwin:
         self._node_id = node_id
         self._sdo_tx = SDO_TX + node_id
         self._heartbeat_frames = {state: heartbeat_frame(node_id, state) for state in NmtState}
+        self._heartbeat_frame = self._heartbeat_frames[self._nmt_state]
 
     def _lose_live_state(self) -> None:
         self._watcher = None

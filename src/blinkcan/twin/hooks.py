@@ -69,8 +69,14 @@ class Periodic(Ticker):
         due = self.due
         if due is None or now < due:
             return []
-        frames: list[Frame] = []
-        for _ in range(self.overdue(now)):  # late: the owed periods, late (twin/schedule.py)
+        owed = self.overdue(now)
+        if owed == 1:  # the usual wake-up: the producer's own list, no copy
+            frames = self.produce(now)
+            if self.due == due:  # not stopped, started again or retimed by produce
+                self.fire(now)
+            return frames
+        frames = []
+        for _ in range(owed):  # late: the owed periods, late (twin/schedule.py)
             frames += self.produce(now)
             if self.due != due:  # stopped, started again or retimed by produce
                 return frames

@@ -89,6 +89,12 @@ class Ticker:
     def overdue(self, now: float) -> int:
         """How many of its periods are due by ``now`` (0: not due), at most
         :data:`CATCH_UP_PERIODS`; nothing changes."""
+        due, step = self.due, self._ticks
+        if due is not None and step > 0 and now >= due:  # the usual case first (see fire)
+            origin = self._origin
+            after = origin + (self._count + step) / TICKS_PER_S
+            if origin < after and now < after:
+                return 1
         return min(self._periods_due(now), CATCH_UP_PERIODS)
 
     def fire(self, now: float) -> int:
@@ -97,8 +103,16 @@ class Ticker:
         due = self.due
         if due is None or now < due:
             return 0
-        if self._ticks <= 0:
+        step = self._ticks
+        if step <= 0:
             self.due = None
+            return 1
+        # the usual wake-up, before the next one is due: one owed (what the general path below
+        # finds, computed once; ``at`` inlined, its rounding rule taken when it applies)
+        origin, count = self._origin, self._count + step
+        after = origin + count / TICKS_PER_S
+        if origin < after and now < after:
+            self._count, self.due = count, after
             return 1
         last = self._last_due_count(now)
         owed = min((last - self._count) // self._ticks + 1, CATCH_UP_PERIODS)
@@ -117,6 +131,9 @@ class Ticker:
     def _last_due_count(self, now: float) -> int:
         """The count of the last tick of the schedule at or before ``now`` (the due one is)."""
         step, origin = self._ticks, self._origin
+        after = origin + (self._count + step) / TICKS_PER_S  # at(), inlined: the usual case
+        if origin < after and now < after:
+            return self._count
         periods = math.floor((now - at(origin, self._count)) * TICKS_PER_S / step)
         last = self._count + step * max(0, periods)
         while at(origin, last + step) <= now:  # the estimate rounded down

@@ -92,8 +92,9 @@ class Panel:
     def __init__(self, emulator: Emulator) -> None:
         self.emulator = emulator
         self.decoder = Decoder({t.node_id: t.description for t in emulator.twins})
-        #: the last frames with their meaning, repeated heartbeats folded (decode/eventlog.py)
-        self.log = EventLog(FRAMES_KEPT)
+        #: the last frames with their meaning, repeated heartbeats and periodic frames folded
+        #: (decode/eventlog.py)
+        self.log = EventLog(FRAMES_KEPT, self.decoder)
         self._faces: dict[str, dict[str, Any]] = {}
         previous = emulator.on_frame
 

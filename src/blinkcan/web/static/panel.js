@@ -107,23 +107,41 @@ function knobView(node, encoder, cell) {
   } };
 }
 
-// Analog inputs: a slider per input (0 to the face's full scale), its digital level beside.
+// Inputs: a slider per analog input (0 to the face's full scale), and a switch per digital
+// input showing its level; where one input is both (the face counts it in each), one row.
 function inputsView(node, face) {
   const box = element("div", { class: "inputs" });
   const rows = [];
-  for (let n = 0; n < face.analog_inputs; n++) {
-    const slider = element("input", { type: "range", min: 0, max: face.analog_volts_max, step: 0.01,
+  for (let n = 0; n < Math.max(face.analog_inputs, face.digital_inputs); n++) {
+    const row = { slider: null, value: element("span", { class: "volts" }), level: null };
+    const parts = [element("span", { text: `IN${n}` })];
+    if (n < face.analog_inputs) {
+      row.slider = element("input", { type: "range", min: 0, max: face.analog_volts_max, step: 0.01,
                                       value: 0, "data-test": `analog-${n}` });
-    slider.addEventListener("change", () =>
-      act(node, "set_analog", { input: n, volts: parseFloat(slider.value) }));
-    const value = element("span", { class: "volts" });
-    rows.push({ slider, value });
-    box.appendChild(element("label", {}, [element("span", { text: `IN${n}` }), slider, value]));
+      row.slider.addEventListener("change", () =>
+        act(node, "set_analog", { input: n, volts: parseFloat(row.slider.value) }));
+      parts.push(row.slider, row.value);
+    }
+    if (n < face.digital_inputs) {
+      row.level = element("button", { class: "level", "data-test": `digital-${n}` });
+      row.level.onclick = () => act(node, "set_digital_input",
+                                    { input: n, level: row.level.dataset.level === "high" ? 0 : 1 });
+      parts.push(row.level);
+    }
+    rows.push(row);
+    box.appendChild(element("label", {}, parts));
   }
   return { root: box, update(device) {
     (device.analog_inputs || []).forEach((input, n) => {
-      if (document.activeElement !== rows[n].slider) rows[n].slider.value = input.volts;
-      rows[n].value.textContent = `${input.volts.toFixed(2)} V · ${input.digital ? "high" : "low"}`;
+      const row = rows[n];
+      if (!row) return;
+      if (row.slider && document.activeElement !== row.slider) row.slider.value = input.volts;
+      if (row.slider) row.value.textContent = `${input.volts.toFixed(2)} V`;
+      if (row.level) {
+        row.level.dataset.level = input.digital ? "high" : "low";
+        row.level.textContent = `digital ${row.level.dataset.level}`;
+        row.level.classList.toggle("input-high", input.digital);
+      }
     });
   } };
 }
@@ -135,9 +153,11 @@ function keypadView(node, face) {
   const cells = new Map();  // key number -> its elements
   for (const number of face.grid.flat()) {
     if (!number) { grid.appendChild(element("div", { class: "gap" })); continue; }
-    const led = element("div", { class: "led" });
+    // an LED where the face has one (a knob's cap has its ring instead)
+    const led = face.led_keys.includes(number)
+      ? element("div", { class: "led", "data-test": `led-${number}` }) : null;
     const cell = element("div", { class: "key", "data-test": `key-${number}` },
-                         [led, element("span", { class: "num", text: number })]);
+                         [...(led ? [led] : []), element("span", { class: "num", text: number })]);
     const press = (event) => { event.preventDefault(); act(node, "press", { key: number }); };
     const release = (event) => { event.preventDefault(); act(node, "release", { key: number }); };
     const encoder = face.encoders.find((e) => e.key === number);
@@ -181,6 +201,7 @@ function keypadView(node, face) {
       cell.dataset.phases = key.phases.join(",");
       cell.dataset.colour = colour;
       cell.dataset.shown = shown;
+      if (!led) return;
       led.style.background = LED[shown];
       led.style.opacity = shown === "off" ? 1 : brightness;
       led.style.boxShadow = shown === "off" ? "none" : `0 0 10px ${LED[shown]}`;
