@@ -42,7 +42,7 @@ from blinkcan.protocol.sdo import (
     SEGMENTED_UPLOAD_RESPONSE,
     parse_sdo,
 )
-from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES
+from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES, SdoError, UploadTransfer
 
 _UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
 #: requests that name an object (CiA 301 §7.2.4.3): initiate download, upload, abort
@@ -60,6 +60,12 @@ _JSON_CACHE_SIZE = 16_384
 _CACHE_TRIAL = 512
 #: 29-bit identifiers of other ECUs kept (then they start over): a J1939 bus has a few hundred
 _FOREIGN_KEPT = 512
+#: SDO events kept (then they start over)
+_SDO_KEPT = 4096
+#: objects whose value may name a node's model (Decoder._learn): their events are not kept
+_IDENTITY = frozenset({0x1000, 0x100B})
+#: J1939 keypad frames whose meaning is kept (then they start over)
+_J1939_KEPT = 4096
 #: routes kept: every 11-bit identifier, and 29-bit ones the J1939 keypad may use up to this
 _ROUTES_KEPT = 2048 + 256
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
@@ -144,12 +150,21 @@ TRANSFER_MAX_BYTES = 4096
 
 @dataclass
 class _Transfer:
+    """A node's SDO transfer as the bus shows it. A read is followed by the client's own
+    state machine (protocol/sdo_client.py UploadTransfer) fed the replies the client gets; a
+    write by the count of bytes its segments carried."""
+
     index: int
     subindex: int
     entry: ObjectEntry | None
     writing: bool
     last: float = 0.0
-    buffer: bytearray = field(default_factory=bytearray)
+    written: int = 0
+    upload: UploadTransfer | None = field(default=None, init=False)
+
+    def __post_init__(self) -> None:
+        if not self.writing:
+            self.upload = UploadTransfer(self.index, self.subindex)
 
 
 class Decoder:
@@ -185,6 +200,15 @@ class Decoder:
         self._raw_standard: dict[int, _Raw] = {}
         #: 29-bit identifiers of PGNs the keypad never uses (other ECUs'), with their text
         self._foreign: dict[int, str] = {}
+        #: SDO events that the same frame makes again (an upload request; an expedited upload
+        #: response in the same transfer): [the event's text, node, device, fields; its JSON
+        #: body after the time, once written; the transfer a request opens]
+        self._kept: dict[object, list[Any]] = {}
+        #: the kept entry the last decoded SDO frame used (json_line writes its JSON once)
+        self._served: list[Any] | None = None
+        #: J1939 keypad frames' events as kept SDO ones are, valid while the count of keypad
+        #: addresses they were decoded with (the entry's third item) holds
+        self._j1939_known: dict[Frame, list[Any]] = {}
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
@@ -222,8 +246,8 @@ class Decoder:
             if text is not None:  # the text has no character JSON escapes
                 return (f'{{"time":{time!r},"id":{can_id},"extended":true,"data":"{data.hex()}",'
                         f'"kind":"frame","node":null,"device":null,"text":"{text}"}}')
-            event = self.decode(frame, time)  # J1939: never cached (its meaning has state)
-            return _encode(event.to_json())
+            self._served = None
+            return self._line_of(self.decode(frame, time), time)
         else:
             raw = self._raw_standard.get(can_id)
             if raw is not None:  # a frame no device sends: its line around time and data
@@ -250,11 +274,27 @@ class Decoder:
         line = fast(frame, time) if fast is not None else None
         kind = Kind.PDO
         if line is None:
+            self._served = None
             event = self.decode(frame, time)
-            line, kind = _encode(event.to_json()), event.kind
+            line, kind = self._line_of(event, time), event.kind
         if cached and ((key in self._pure and kind is not Kind.BOOT_UP) or (
                 keyed is not None and kind is Kind.PDO)):
             self._remember(key, cache_key, time, line)
+        return line
+
+    def _line_of(self, event: Event, time: float) -> str:
+        """The event's JSON line; where it is a kept one (``_served``: an SDO or J1939 event
+        the same frame makes again), its JSON after the time is written once."""
+        served = self._served
+        if served is None or served[0][3] is not event.fields:
+            return _encode(event.to_json())
+        body = served[1]
+        if body is not None:
+            return f'{{"time":{time!r},{body}'
+        line = _encode(event.to_json())
+        prefix = f'{{"time":{time!r},'
+        if line.startswith(prefix):
+            served[1] = line[len(prefix):]
         return line
 
     def _remember(self, key: tuple[int, bool], cache_key: object, time: float, line: str
@@ -351,6 +391,7 @@ class Decoder:
             self._cache_stats.pop(key, None)
             self._uncached.discard(key)
         self._json_bodies.clear()
+        self._kept.clear()
 
     def _who(self, node: int) -> str | None:
         device = self.devices.get(node)
@@ -386,6 +427,12 @@ class Decoder:
                      {"state": state})
 
     def _extended(self, frame: Frame, time: float) -> Event:
+        addresses = self.j1939.addresses
+        known = self._j1939_known.get(frame)
+        if known is not None and known[2] == len(addresses):  # the same addresses known
+            self._served = known
+            return _new_tuple(Event, (time, frame, Kind.J1939, *known[0]))
+        before = len(addresses)  # keypad addresses are only ever added
         meaning = self.j1939.decode(frame)
         if meaning is None:
             event = Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
@@ -394,8 +441,14 @@ class Decoder:
                     self._foreign.clear()
                 self._foreign[frame.can_id] = event.text
             return event
-        return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
-                     "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})
+        parts = (meaning.text, meaning.address, "keypad" if meaning.keypad else None,
+                 {"protocol": "j1939", **meaning.fields})
+        if len(addresses) == before:  # nothing learned: this frame means this again, while
+            known_frames = self._j1939_known  # the keypads' addresses stay the same
+            if len(known_frames) >= _J1939_KEPT:
+                known_frames.clear()
+            known_frames[frame] = self._served = [parts, None, before]
+        return _new_tuple(Event, (time, frame, Kind.J1939, *parts))
 
     def _unknown(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
@@ -444,6 +497,21 @@ class Decoder:
 
     def _sdo(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
+        if frame.can_id & 0x780 == SDO_RX:  # an upload request seen before: the same object
+            kept = self._kept.get(frame)
+            if kept is not None:
+                index, sub, entry = kept[2]
+                self._transfers[node] = _Transfer(index, sub, entry, False, time)
+                self._served = kept
+                return _new_tuple(Event, (time, frame, Kind.SDO_READ, *kept[0]))
+        else:  # an expedited upload response seen before to a read of the same object
+            transfer = self._transfers.get(node)
+            if transfer is not None and not transfer.writing:
+                kept = self._kept.get((frame, transfer.index, transfer.subindex))
+                if kept is not None and 0 <= time - transfer.last <= TRANSFER_IDLE_S:
+                    del self._transfers[node]
+                    self._served = kept
+                    return _new_tuple(Event, (time, frame, Kind.SDO_VALUE, *kept[0]))
         data = frame.data
         device = self.devices.get(node)
         kind = device.kind if device is not None else None
@@ -474,7 +542,9 @@ class Decoder:
             fields = {"index": index, "subindex": sub, "object": entry.name if entry else None}
             if ccs == CCS_INITIATE_UPLOAD:
                 self._transfers[node] = _Transfer(index, sub, entry, False, time)
-                return Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
+                event = Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
+                self._keep(frame, event, (index, sub, entry))
+                return event
             if ccs == CCS_ABORT:
                 self._transfers.pop(node, None)
                 code = request.word
@@ -495,7 +565,7 @@ class Decoder:
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO read, next segment", node, kind)
         if ccs == CCS_DOWNLOAD_SEGMENT:  # CiA 301 §7.2.4.3.4
             transfer = self._live_transfer(node, time)
-            if transfer is not None and not self._grow(node, transfer, request.segment_data):
+            if transfer is not None and not self._grow(node, transfer, len(request.segment_data)):
                 return Event(time, frame, Kind.SDO_SEGMENT, f"SDO write segment: over "
                              f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind)
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment", node, kind)
@@ -525,30 +595,47 @@ class Decoder:
             self._transfers.pop(node, None)  # CiA 301 §7.2.4.3.3; errata K3: 43h too
             return Event(time, frame, Kind.SDO_WRITTEN, f"SDO write {name} done", node, kind,
                          fields)
-        if not transfer.writing and scs == SCS_INITIATE_UPLOAD:  # CiA 301 §7.2.4.3.6
-            if command in _UPLOAD_SIZES:  # expedited, size indicated
+        upload = transfer.upload
+        if upload is None or not (command in _UPLOAD_SIZES or command == SEGMENTED_UPLOAD_RESPONSE
+                                  or scs == SCS_UPLOAD_SEGMENT):
+            pass  # not a reply a read is answered with (CiA 301 §7.2.4.3.6, §7.2.4.3.7)
+        elif scs == SCS_UPLOAD_SEGMENT and \
+                upload.received + len(reply.segment_data) > TRANSFER_MAX_BYTES:
+            self._transfers.pop(node, None)
+            return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
+                         f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
+        else:
+            try:
+                upload.on_reply(reply.raw)
+            except SdoError:  # for another object, or a toggle out of step: not this read's
                 self._transfers.pop(node, None)
-                return self._value(frame, time, node, kind, transfer, reply.expedited_data,
-                                   name, fields)
-            if command == SEGMENTED_UPLOAD_RESPONSE:
-                size = reply.word
+                return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+            if upload.done:
+                self._transfers.pop(node, None)
+                event = self._value(frame, time, node, kind, transfer, upload.value, name,
+                                    fields)
+                if scs == SCS_INITIATE_UPLOAD and transfer.index not in _IDENTITY:
+                    self._keep((frame, transfer.index, transfer.subindex), event, None)
+                return event  # an expedited one is kept: no model is learned from it
+            if scs == SCS_INITIATE_UPLOAD:
+                size = upload.size
                 return Event(time, frame, Kind.SDO_SEGMENT,
                              f"SDO read {name}: {size} bytes follow", node, kind,
                              {**fields, "size": size})
-        if scs == SCS_UPLOAD_SEGMENT and not transfer.writing:  # CiA 301 §7.2.4.3.7
-            if not self._grow(node, transfer, reply.segment_data):
-                return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
-                             f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
-            if reply.last:
-                self._transfers.pop(node, None)
-                return self._value(frame, time, node, kind, transfer, bytes(transfer.buffer),
-                                   name, fields)
             return Event(time, frame, Kind.SDO_SEGMENT,
                          f"SDO read {name}: segment {reply.raw[1:8]!r}", node, kind, fields)
         if scs == SCS_DOWNLOAD_SEGMENT and transfer.writing:  # CiA 301 §7.2.4.3.4
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment acknowledged", node,
                          kind, fields)
         return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+
+    def _keep(self, key: object, event: Event, transfer: tuple[int, int, ObjectEntry | None] | None
+              ) -> None:
+        """Remember an SDO event that the same frame (in the same transfer) makes again."""
+        kept = self._kept
+        if len(kept) >= _SDO_KEPT:
+            kept.clear()
+        kept[key] = self._served = [event[3:], None, transfer]
 
     def _live_transfer(self, node: int, time: float) -> _Transfer | None:
         """The node's transfer in progress, unless it went silent (TRANSFER_IDLE_S)."""
@@ -560,12 +647,12 @@ class Decoder:
             transfer.last = time
         return transfer
 
-    def _grow(self, node: int, transfer: _Transfer, segment: bytes) -> bool:
-        """Add a segment; False (and the transfer dropped) past TRANSFER_MAX_BYTES."""
-        if len(transfer.buffer) + len(segment) > TRANSFER_MAX_BYTES:
+    def _grow(self, node: int, transfer: _Transfer, size: int) -> bool:
+        """Count a write segment; False (and the transfer dropped) past TRANSFER_MAX_BYTES."""
+        if transfer.written + size > TRANSFER_MAX_BYTES:
             self._transfers.pop(node, None)
             return False
-        transfer.buffer += segment
+        transfer.written += size
         return True
 
     def _value(self, frame: Frame, time: float, node: int, kind: str | None,

@@ -29,9 +29,24 @@ Describe = Callable[[bytes], Described]
 _MASKS_KEPT = 8192
 
 
+#: per byte of a mask (0..7) and byte value: the item numbers its bits are (bit 0 = item 1)
+_BYTE_ITEMS = [[tuple(8 * position + bit + 1 for bit in range(8) if value >> bit & 1)
+                for value in range(256)] for position in range(8)]
+#: the same as text ("9, 12"), empty for a byte with no bit set
+_BYTE_TEXT = [[", ".join(map(str, items)) for items in row] for row in _BYTE_ITEMS]
+
+
 @lru_cache(maxsize=_MASKS_KEPT)
 def _items(mask: int) -> tuple[int, ...]:
-    return tuple(item_numbers(mask))
+    if mask >> 64:
+        return tuple(item_numbers(mask))
+    found: tuple[int, ...] = ()
+    for row in _BYTE_ITEMS:  # a byte at a time: a table lookup each
+        if not mask:
+            break
+        found += row[mask & 0xFF]
+        mask >>= 8
+    return found
 
 
 def numbers(mask: int, offset: int = 1) -> list[int]:
@@ -48,7 +63,16 @@ def listing(items: list[int]) -> str:
 @lru_cache(maxsize=_MASKS_KEPT)
 def mask_listing(mask: int) -> str:
     """``listing(numbers(mask))``, one lookup for a mask seen before."""
-    return listing(numbers(mask))
+    if mask < 0 or mask >> 64:
+        return listing(numbers(mask))
+    parts = []
+    for row in _BYTE_TEXT:  # a byte at a time: a table lookup each
+        if not mask:
+            break
+        if mask & 0xFF:
+            parts.append(row[mask & 0xFF])
+        mask >>= 8
+    return ", ".join(parts) if parts else "none"
 
 
 class _Kind(NamedTuple):
