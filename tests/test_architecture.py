@@ -254,6 +254,19 @@ def private_uses() -> list[PrivateUse]:
     return sorted(found, key=lambda use: (use.module, use.line, use.name))
 
 
+def _private_imports_in(source: _Source) -> list[PrivateUse]:
+    """``from blinkcan.x import _name`` in another module: a module-level private name
+    (a class, function or constant) reached into from outside its module."""
+    return [PrivateUse(source.module, node.lineno, alias.name, source.resolve(node))
+            for node in ast.walk(source.tree) if isinstance(node, ast.ImportFrom)
+            and source.resolve(node).startswith("blinkcan")
+            for alias in node.names if _private(alias.name)]
+
+
+def private_imports() -> list[PrivateUse]:
+    return [use for source in _sources().values() for use in _private_imports_in(source)]
+
+
 # -- (c) kind strings and counts outside devices/ ----------------------------------------------
 
 def _kinds() -> frozenset[str]:
@@ -353,6 +366,18 @@ def test_no_module_uses_another_modules_private_state() -> None:
     assert [str(use) for use in private_uses()] == []
 
 
+def test_no_module_imports_another_modules_private_name() -> None:
+    assert [str(use) for use in private_imports()] == []
+
+
+def test_the_private_import_count_sees_what_it_counts() -> None:
+    source = _Source("blinkcan.host.pkp3500", PACKAGE / "host" / "pkp3500.py", ast.parse(
+        "from blinkcan.host.aio import _AsyncDevice, AsyncDriver\n"
+        "from .events import _Queue\nfrom os import _exit\n"), False)
+    assert [(use.name, use.owner) for use in _private_imports_in(source)] == [
+        ("_AsyncDevice", "blinkcan.host.aio"), ("_Queue", "blinkcan.host.events")]
+
+
 def test_no_import_cycle_touches_twin() -> None:
     cycles = [cycle for cycle in import_cycles() if any(map(_in_twin, cycle))]
     assert cycles == []
@@ -408,12 +433,12 @@ def test_the_model_switch_count_sees_what_it_counts() -> None:
 
 def report() -> str:
     """The counts for the whole package, one finding a line."""
-    uses = private_uses()
+    uses = private_uses() + private_imports()
     cycles = import_cycles()
     switches = model_switches()
     checks = simulated_bus_checks()
     return "\n".join([
-        f"(a) private attributes of another module's class used: {len(uses)}",
+        f"(a) private attributes or names of another module used: {len(uses)}",
         *(f"    {use}" for use in uses),
         f"(b) import cycles (strongly connected groups of modules): {len(cycles)}",
         *(f"    {' <-> '.join(cycle)}" for cycle in cycles),

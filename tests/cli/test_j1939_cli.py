@@ -139,3 +139,55 @@ def test_j1939_colours_of_their_own(bench: tuple[str, Emulator, KeypadTwin]) -> 
                                       "purple"])
     assert result.exit_code == 2
     assert "yellow/green" in result.output
+
+
+@pytest.mark.parametrize("args", [["restore-defaults", "--yes"], ["inputs"],
+                                  ["read", "node_id"]])
+def test_a_command_j1939_has_not_is_refused_before_the_bus(args: list[str]) -> None:
+    """CANopen-only commands over J1939 are refused with one line naming what works, and
+    nothing is sent (the bus is never opened: the interface named does not exist)."""
+    result = CliRunner().invoke(cli, ["keypad", "--protocol", "j1939", "-i", "no-such-bus",
+                                      *args])
+    assert result.exit_code == 2
+    error = [line for line in result.output.splitlines() if line.startswith("Error:")]
+    assert len(error) == 1
+    assert error[0].startswith(
+        f"Error: {args[0]} has no J1939 command on this keypad; over J1939: info, led, "
+        "backlight, brightness, heartbeat, set-node-id (its source address, §16), set-baud "
+        "(500000 or 250000 bit/s, §15)")
+
+
+def test_set_baud_and_set_node_id_over_j1939(bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    """§15 baud rate (6Fh, at the next power-on) and §16 source address (70h, at once)."""
+    channel, emulator, twin = bench
+    bus = ["-i", "virtual", "-c", channel]
+    refused = CliRunner().invoke(cli, ["keypad", "--protocol", "j1939", *bus, "set-baud",
+                                       "125000", "--yes"])
+    assert refused.exit_code == 2
+    assert "500000" in refused.output
+    assert run("keypad", "--protocol", "j1939", *bus, "set-baud", "500000", "--yes") == \
+        "keypad 21h (J1939): bit rate 500000 bit/s stored, in use after the next power-on\n"
+    assert emulator.run(lambda now: twin.j1939.settings["baud_rate"]) == 0x02  # §15 500k
+    assert run("keypad", "--protocol", "j1939", *bus, "set-node-id", "0x90", "--yes") == \
+        "keypad 21h (J1939): source address 90h stored and in use\n"
+    assert emulator.snapshot(twin)["j1939"]["source_address"] == 0x90
+    assert run("keypad", "--address", "0x90", *bus, "led", "2", "red") == \
+        "keypad 90h (J1939): key 2 red\n"
+    wrong = CliRunner().invoke(cli, ["keypad", "--address", "0x90", *bus, "set-node-id",
+                                     "0xFE", "--yes"])
+    assert wrong.exit_code == 2
+    assert "01h..FDh" in wrong.output
+
+
+def test_info_over_j1939_waits_a_heartbeat_period(
+        bench: tuple[str, Emulator, KeypadTwin]) -> None:
+    """§18: a heartbeat at the default period (100 ms) is heard by info; off, it says how long
+    it listened."""
+    channel, emulator, twin = bench
+    bus = ["-i", "virtual", "-c", channel]
+    off = run("keypad", "--protocol", "j1939", *bus, "info")
+    assert "heartbeat         not heard within 150 ms (off, or slower)" in off
+    emulator.run(lambda now: twin.receive(  # 75h: heartbeat on, 0Ah x 10 ms
+        Frame(0x18EF2100, bytes.fromhex("041B75010AFFFFFF"), extended=True), now))
+    for _ in range(3):  # whenever info starts within the period
+        assert "heartbeat         counter " in run("keypad", "--protocol", "j1939", *bus, "info")

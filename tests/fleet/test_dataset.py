@@ -355,3 +355,57 @@ def test_duckdb_reads_the_files_without_blinkcan(tmp_path: Path, traffic: Traffi
     assert relation is not None
     [(count,)] = relation.fetchall()
     assert count > 1000
+
+
+def _rows(out: Path) -> list[dict[str, Any]]:
+    table = ds.dataset(out, format="parquet", partitioning="hive").to_table()
+    rows: list[dict[str, Any]] = table.sort_by([
+        ("time", "ascending"), ("can_id", "ascending"), ("kind", "ascending"),
+        ("key", "ascending"), ("pin", "ascending")]).to_pylist()
+    return rows
+
+
+def test_row_groups_of_any_size_hold_the_same_rows(tmp_path: Path, traffic: Traffic) -> None:
+    """Rows are gathered a block of frames at a time: a row group may end inside a block, or
+    after any frame of several rows; the rows are the same."""
+    log = write_log(tmp_path / "unit.log", traffic[:400] + traffic[-400:])  # two dates
+    whole = decode_files([log], str(tmp_path / "whole"))
+    assert all(pq.ParquetFile(tmp_path / "whole" / p).num_row_groups == 1
+               for p in dataset_files(tmp_path / "whole"))
+    for size in (1, 7, 300):
+        [result] = decode_files([log], str(tmp_path / f"by-{size}"), rows_per_group=size)
+        assert result.rows == whole[0].rows
+        assert _rows(tmp_path / f"by-{size}") == _rows(tmp_path / "whole")
+        groups = [pq.ParquetFile(tmp_path / f"by-{size}" / p).metadata
+                  for p in dataset_files(tmp_path / f"by-{size}")]
+        assert sum(g.num_row_groups for g in groups) > len(groups)
+        assert max(g.row_group(n).num_rows for g in groups for n in range(g.num_row_groups)) \
+            <= size + 24  # a row group ends at the frame that fills it
+
+
+def test_remote_error_and_fd_frames_among_data_frames(tmp_path: Path, traffic: Traffic
+                                                      ) -> None:
+    """Frames that are not classic data frames (python-can's messages in the reader's columns)
+    are rows at their place, with what their event says."""
+    lines = list(candump_lines(traffic[:300]))
+    odd = {10: "({t:.6f}) can1 70C#R\n", 11: "({t:.6f}) can0 20000004#0000080000000000\n",
+           150: "({t:.6f}) can0 123##1AABBCCDDEEFF00112233\n"}
+    for place in sorted(odd, reverse=True):
+        lines.insert(place, odd[place].format(t=traffic[place][0]))
+    log = tmp_path / "odd.log"
+    log.write_text("".join(lines))
+    for size in (3, 65_536):
+        out = tmp_path / f"lake-{size}"
+        [result] = decode_files([log], str(out), rows_per_group=size)
+        assert result.frames == 303
+        found = events(out, "SELECT channel, can_id, extended, kind, text, data FROM events "
+                       "WHERE kind IN ('remote', 'error') OR text LIKE '%CAN FD%' ORDER BY time, "
+                       "kind")
+        assert found == [  # the first two at one time: by kind
+            ("can0", 0x4, True, "error", "error frame: controller problem", bytes.fromhex(
+                "0000080000000000")),
+            ("can1", 0x70C, False, "remote", "keybox 0Ch: node guarding request", b""),
+            ("can0", 0x123, False, "undecoded", "CAN FD frame 123h, 10 bytes (CAN FD is not "
+             "decoded)", bytes.fromhex("AABBCCDDEEFF0011")),
+        ]
+    assert _rows(tmp_path / "lake-3") == _rows(tmp_path / "lake-65536")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from blinkcan.fleet.sources import read_items
+from blinkcan.fleet.sources import read_columns
 from blinkcan.formats.log_source import MAX_LINE
 from tests.formats.test_log_sources import CANDUMP, _no_newline
 
@@ -19,7 +19,7 @@ def test_a_candump_log_without_newlines_is_refused_in_bounded_memory(tmp_path: P
     try:
         with pytest.raises(ValueError, match=f"^line 1 is over {MAX_LINE} bytes: "
                                              "not a candump log$"):
-            list(read_items(path))
+            list(read_columns(path))
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -29,4 +29,4 @@ def test_a_candump_log_without_newlines_is_refused_in_bounded_memory(tmp_path: P
 def test_each_frame_keeps_its_channel(tmp_path: Path) -> None:
     path = tmp_path / "two.log"
     path.write_text(CANDUMP.replace("can0", "can1", 1))
-    assert [channel for _, _, channel in read_items(path)] == ["can1", "can0"]
+    assert [c for block in read_columns(path) for c in block.channels] == ["can1", "can0"]

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import math
 
+import pyarrow as pa
 import pytest
 from fsspec.implementations.memory import MemoryFileSystem
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import describe_device
@@ -68,3 +71,29 @@ def test_times_and_their_dates(seconds: float, expected: tuple[int | None, str])
     writer = PartitionWriter(MemoryFileSystem(), "/x", "x.parquet", "source")
     writer.time_and_date(1_780_271_000.0)  # a day seen before: the fast path
     assert writer.time_and_date(seconds) == expected
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.one_of(
+    st.floats(1_780_271_000.0, 1_780_272_999.0),  # around a midnight: one date or two
+    st.floats(-1e12, 1e12), st.sampled_from([math.nan, math.inf, -math.inf]),
+    st.floats(86_399.999_999, 86_400.000_001)), min_size=1, max_size=40))
+def test_times_of_a_row_group_are_each_times_own(seconds: list[float]) -> None:
+    """The writer's times of many rows (Arrow's arithmetic where they are of one day) are
+    what each time gives alone."""
+    writer = PartitionWriter(MemoryFileSystem(), "/x", "x.parquet", "source")
+    one = PartitionWriter(MemoryFileSystem(), "/x", "x.parquet", "source")
+    micros, dates = writer.times_and_dates(seconds)
+    expected = [one.time_and_date(s) for s in seconds]
+    as_ints = micros.cast(pa.int64()).to_pylist()
+    assert as_ints == [e[0] for e in expected]
+    assert ([dates] * len(seconds) if isinstance(dates, str) else dates) == \
+        [e[1] for e in expected]
+
+
+def test_times_of_one_day_take_arrows_way() -> None:
+    writer = PartitionWriter(MemoryFileSystem(), "/x", "x.parquet", "source")
+    seconds = [1_780_271_940.0000005, 1_780_271_940.0000015, 1_780_271_999.9999995]
+    micros, dates = writer.times_and_dates(seconds)
+    assert dates == "2026-05-31"  # one date for them all: the vectorised way
+    assert micros.cast(pa.int64()).to_pylist() == [round(s * 1_000_000) for s in seconds]

@@ -272,7 +272,7 @@ def test_demo_starts_with_a_red_backlight_and_key_1_cycles_colours(demo: Bench) 
         demo.replay("press 1\nrelease 1")
         seen.append(demo.twin.snapshot()["backlight"]["colour"])
     assert seen == ["green", "blue", "yellow", "cyan", "magenta", "white", "amber",
-                    "yellow_green", "off", "red"]
+                    "yellow/green", "off", "red"]  # one name per colour (colours.py)
 
 
 def test_demo_key_4_steps_and_pairs_blink_alternately(demo: Bench) -> None:
@@ -369,3 +369,21 @@ def test_an_unpowered_twin_has_a_snapshot() -> None:
     snapshot = KeypadTwin(node_id=0x20).snapshot()
     assert (snapshot["nmt_state"], snapshot["node_id"], snapshot["bitrate"]) == ("off", 0x20,
                                                                               125_000)
+
+
+def test_one_name_for_one_colour_in_the_backlight_and_the_leds() -> None:
+    """The backlight's 09h is "yellow/green", as the J1939 LED colour 09h (§7a, §26)."""
+    from blinkcan.devices.colours import BacklightColour
+    from blinkcan.devices.keypad_j1939 import colour_name
+    from blinkcan.protocol import Frame
+
+    for colour in BacklightColour:
+        assert colour.label == colour_name(int(colour))
+        assert BacklightColour.from_name(colour.label) is colour
+    twin = KeypadTwin(protocol="j1939")
+    twin.power_on(0.0)
+    twin.receive(Frame(0x18EF2100, bytes.fromhex("041B7D09FFFFFFFF"), extended=True), 0.0)
+    twin.receive(Frame(0x18EF2100, bytes.fromhex("041B0103090100FF"), extended=True), 0.0)
+    snapshot = twin.snapshot()
+    assert snapshot["backlight"]["colour"] == "yellow/green"
+    assert snapshot["commanded"][2]["colour"] == "yellow/green"

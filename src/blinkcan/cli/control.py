@@ -33,6 +33,7 @@ from blinkcan.cli.ranges import (
     within,
 )
 from blinkcan.devices.colours import BacklightColour, led_colour
+from blinkcan.devices.keypad_j1939 import BITRATES as J1939_BITRATES
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS, colour_code
 from blinkcan.devices.model import DeviceDescription, Face, Model
 from blinkcan.devices.objects import ObjectEntry
@@ -110,6 +111,8 @@ def _device(target: Target, start: bool = False, check: Check | None = None
     the device (NMT): a bad argument never reaches it."""
     kind, node_id = target
     address = _j1939_address()
+    if address is not None:
+        _refuse_unless_j1939_has(click.get_current_context().info_name or "")
     bus = cli_bus()
     try:
         try:
@@ -133,6 +136,23 @@ def _device(target: Target, start: bool = False, check: Check | None = None
             device.close()
     finally:
         bus.shutdown()
+
+
+#: the commands a keypad in J1939 mode answers from the command line, as said when another is
+#: asked (spec/pkp-2600-si-j1939.md: no SDO, no 1011h restore, no NMT)
+J1939_COMMANDS = {
+    "info": "info", "led": "led", "backlight": "backlight", "brightness": "brightness",
+    "heartbeat": "heartbeat", "set-node-id": "set-node-id (its source address, §16)",
+    "set-baud": "set-baud (500000 or 250000 bit/s, §15)",
+}
+
+
+def _refuse_unless_j1939_has(command: str) -> None:
+    """A command a keypad in J1939 mode has no J1939 message for is refused before the bus is
+    opened, naming what works over J1939."""
+    if command not in J1939_COMMANDS:
+        raise click.UsageError(f"{command} has no J1939 command on this keypad; over J1939: "
+                               f"{', '.join(J1939_COMMANDS.values())}")
 
 
 def _check_found(check: Check, description: DeviceDescription, node_id: int) -> None:
@@ -173,9 +193,12 @@ def _info(device: Any) -> None:
     identity = device.identity()
     if isinstance(identity, J1939Identity):  # §11, §18, §20: what J1939 tells
         click.echo(f"{'address':<17} {identity.address:02X}h (J1939)")
-        for name in ("model", "software_version", "name", "claim", "heartbeat"):
+        for name in ("model", "software_version", "name", "claim"):
             value = getattr(identity, name)
             click.echo(f"{name:<17} {'not heard' if value is None else value}")
+        heartbeat = identity.heartbeat or \
+            f"not heard within {identity.heartbeat_wait * 1000:.0f} ms (off, or slower)"
+        click.echo(f"{'heartbeat':<17} {heartbeat}")
         return
     for name in ("node_id", "model", "model_id", "device_name", "hardware_version",
                  "software_version", "serial_number"):
@@ -318,14 +341,19 @@ for group in (keypad, keybox):
         _done(target, f"heartbeat every {milliseconds} ms" if milliseconds else "heartbeat off")
 
     @group.command("set-node-id")
-    @click.argument("new_id", type=NODE_ID)
+    @click.argument("new_id_text", metavar="NEW_ID")
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
     @node_id_option
     @click.pass_obj
-    def set_node_id(target: Target, new_id: int, yes: bool) -> None:
+    def set_node_id(target: Target, new_id_text: str, yes: bool) -> None:
         """Store a new node id (applies at the next reset; generation 2 keypads: at once).
-        Asks once the device was found and the new id is free."""
+        Over J1939 the keypad's source address (01h..FDh, at once). Asks once the device was
+        found and the new id is free."""
+        if _j1939_address() is not None:
+            _set_j1939_address(target, J1939Address().convert(new_id_text, None, None), yes)
+            return
+        new_id = NODE_ID.convert(new_id_text, None, None)
 
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             within("node id", new_id, entry_spans(descriptions, "node_id"))
@@ -350,6 +378,8 @@ for group in (keypad, keybox):
 
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             rates = sorted({rate for d in descriptions for rate in d.bitrates.values()})
+            if _j1939_address() is not None:  # §15: the J1939 mode's own two codes
+                rates = sorted(J1939_BITRATES.values())
             if bit_rate not in rates:
                 raise ValueError(f"bit rate {bit_rate} bit/s is not one of "
                                  f"{', '.join(map(str, rates))}")
@@ -359,7 +389,8 @@ for group in (keypad, keybox):
             confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
                      "reset", yes)
             device.set_bitrate(bit_rate, confirm=True)
-        _done(target, f"bit rate {bit_rate} bit/s stored, in use after the next reset")
+        after = "reset" if _j1939_address() is None else "power-on"  # J-3
+        _done(target, f"bit rate {bit_rate} bit/s stored, in use after the next {after}")
 
     @group.command("restore-defaults")
     @click.option("--yes", is_flag=True, help="Do not ask.")
@@ -377,6 +408,14 @@ for group in (keypad, keybox):
                      "heartbeat...) goes back to its factory value at the next reset", yes)
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")
+
+
+def _set_j1939_address(target: Target, address: int, yes: bool) -> None:
+    """set-node-id over J1939: the source address (§16, 70h), in use at once (J-3)."""
+    with _device(target) as device:
+        confirm(f"The {target[0]} will move to J1939 address {address:02X}h now", yes)
+        device.set_node_id(address, confirm=True)
+    _done(target, f"source address {address:02X}h stored and in use")
 
 
 def _blink_words(colour: str, blink: str | None) -> str:

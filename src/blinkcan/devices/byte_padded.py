@@ -20,12 +20,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from functools import partial
 
+from blinkcan.devices.common import pdo_mapping
 from blinkcan.devices.keypad import (
     GENERATION_2_FEATURES,
     KIND,
-    _led_masks,
-    _mapping,
     describe_keypad,
+    led_masks,
 )
 from blinkcan.devices.model import DeviceDescription, Face, LedField, Model, Quirks
 from blinkcan.devices.objects import Access, mapping_value, record, u8, u16
@@ -107,16 +107,16 @@ class BytePaddedKeypad:
             model_id={"default": self.model_id},
             backlight_colour={"pdo_mappable": False},  # 515h has no colour byte
         ).with_objects(
-            _led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on", fields),
-            _led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
+            led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on", fields),
+            led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
                        fields),
-            _mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping",
+            pdo_mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping",
                      tuple(mapping_value(0x2001, f.subindex, width) for f in fields)),
-            _mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping",  # 2500-SI p. 32
+            pdo_mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping",  # 2500-SI p. 32
                      tuple(mapping_value(0x2002, f.subindex, width) for f in fields)),
-            _mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping",
+            pdo_mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping",
                      (mapping_value(0x2003, 2, 8),)),
-            _mapping(0x1A00, "TPDO 1 mapping parameter", "tpdo1_mapping",  # 2400-SI p. 32
+            pdo_mapping(0x1A00, "TPDO 1 mapping parameter", "tpdo1_mapping",  # 2400-SI p. 32
                      (mapping_value(0x2000, 1, self.key_bits),)),
             # 2000h/01 as wide as 1A00h/01 maps it (2400-SI p. 32: 8 bits)
             record(0x2000, "digital_inputs", "Digital input module, keys states", (

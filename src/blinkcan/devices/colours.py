@@ -92,7 +92,8 @@ class BacklightColour(IntEnum):
 
     @property
     def label(self) -> str:
-        return self.name.lower()
+        """The colour's one name, as the LEDs' colour codes (§7a) name it: "yellow/green"."""
+        return self.name.lower().replace("_", "/")
 
     @classmethod
     def is_code(cls, code: int) -> bool:

@@ -91,3 +91,12 @@ def identity(vendor_id: int, extra: tuple[Sub, ...] = ()) -> ObjectDef:
     return record(0x1018, "identity", "Identity object",
                   (u32(1, "vendor_id", "Vendor-ID", Access.RO, vendor_id), *extra))
 
+
+def pdo_mapping(index: int, label: str, prefix: str, targets: tuple[int, ...]) -> ObjectDef:
+    """1600h-1603h, 1A00h-1A03h: the mapping entries exactly as the manual prints them
+    (errata P7, M42, M71), read-only; no targets is an empty mapping (sub 00h = 0, 1A03h of
+    the PKP-3500-MT, spec M50)."""
+    return record(index, prefix, label, tuple(
+        u32(i, f"{prefix}_entry_{i}", f"PDO mapping entry {i}", Access.RO, target)
+        for i, target in enumerate(targets, start=1)
+    ), highest=len(targets))

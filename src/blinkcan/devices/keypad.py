@@ -13,6 +13,7 @@ from blinkcan.devices.common import (
     identity,
     identity_strings,
     model_id,
+    pdo_mapping,
     producer_heartbeat_time,
 )
 from blinkcan.devices.model import (
@@ -88,15 +89,6 @@ def _rpdo_parameter(index: int, cob_base: int, label: str) -> ObjectDef:
     ))
 
 
-def _mapping(index: int, label: str, prefix: str, targets: tuple[int, ...]) -> ObjectDef:
-    """1600h-1603h, 1A00h: the mapping entries exactly as the manual prints them (errata P7)."""
-    return record(index, prefix, label, tuple(
-        u32(i, f"{prefix}_entry_{i}", f"PDO mapping entry {i}", Access.RO, target)
-        for i, target in enumerate(targets, start=1)
-    ))
-
-
-
 #: rev 1.1 §16/§17: one 12-bit mask per colour. rev 1.5 §17/§18 (rev 1.3 history): the
 #: sub-indices follow the PDO bytes: red 1-12 + green 1-4, green 5-12, blue 1-12.
 LED_FIELDS: dict[str, tuple[LedField, ...]] = {
@@ -108,7 +100,7 @@ LED_FIELDS: dict[str, tuple[LedField, ...]] = {
 }
 
 
-def _led_masks(index: int, prefix: str, label: str, what: str,
+def led_masks(index: int, prefix: str, label: str, what: str,
                fields: tuple[LedField, ...]) -> ObjectDef:
     """2001h LED on / 2002h LED blink: each sub-index a field of the LED word."""
     return record(index, prefix, label, tuple(
@@ -139,15 +131,15 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
         _rpdo_parameter(0x1401, RPDO2, "RPDO 2 communication parameter (LED blink)"),
         _rpdo_parameter(0x1402, RPDO3, "RPDO 3 communication parameter (indicator brightness)"),
         _rpdo_parameter(0x1403, RPDO4, "RPDO 4 communication parameter (backlight brightness)"),
-        _mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", (
+        pdo_mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", (
             mapping_value(0x2001, 1, 8), mapping_value(0x2001, 2, 8), mapping_value(0x2001, 3, 8),
         )),
-        _mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", (
+        pdo_mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", (
             mapping_value(0x2002, 1, 8), mapping_value(0x2002, 2, 8), mapping_value(0x2002, 3, 8),
         )),
-        _mapping(0x1602, "RPDO 3 mapping parameter", "rpdo3_mapping",  # errata P16
+        pdo_mapping(0x1602, "RPDO 3 mapping parameter", "rpdo3_mapping",  # errata P16
                  (mapping_value(0x2003, 1, 8),)),
-        _mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping",  # errata P17
+        pdo_mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping",  # errata P17
                  (mapping_value(0x2003, 2, 8),)),
         record(0x1800, "tpdo1_parameter", "TPDO 1 communication parameter (key state)", (
             u32(1, "tpdo1_cob_id", "COB-ID used by TPDO", Access.RO, NodeIdRelative(TPDO1)),
@@ -156,14 +148,14 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
             u16(5, "tpdo1_event_timer", "Event timer", Access.RW, 0, valid=_TIMER, stored=True,
                 unit="ms"),
         )),
-        _mapping(0x1A00, "TPDO 1 mapping parameter", "tpdo1_mapping",  # PKP §42, errata P8
+        pdo_mapping(0x1A00, "TPDO 1 mapping parameter", "tpdo1_mapping",  # PKP §42, errata P8
                  (mapping_value(0x2000, 1, 16),)),
         record(0x2000, "digital_inputs", "Digital input module, keys states", (  # PKP §15
             u16(1, "keys_pressed", "Keys pressed", Access.RO, 0, pdo_mappable=True),
         )),
-        _led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on",
+        led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on",
                    LED_FIELDS["1.1"]),
-        _led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
+        led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
                    LED_FIELDS["1.1"]),
         record(0x2003, "brightness", "Brightness level", (  # PKP §18
             u8(1, "indicator_brightness", "Indicator LED brightness", Access.RW, LEVEL_MAX,
@@ -244,16 +236,16 @@ def _rev15_table(base: ObjectTable, factory_node_id: int, quirks: Quirks) -> Obj
     )
     fields = LED_FIELDS["1.5"]
     return table.with_objects(
-        _led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on", fields),
-        _led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
+        led_masks(0x2001, "led_on", "Digital output module, LED on", "LED on", fields),
+        led_masks(0x2002, "led_blink", "Digital output module, LED blink", "LED blink",
                    fields),
-        _mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", (  # rev 1.5 §40
+        pdo_mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", (  # rev 1.5 §40
             mapping_value(0x2001, 1, 16), mapping_value(0x2001, 2, 8),
             mapping_value(0x2001, 3, 16))),
-        _mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", (  # rev 1.5 §41
+        pdo_mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", (  # rev 1.5 §41
             mapping_value(0x2002, 1, 16), mapping_value(0x2002, 2, 8),
             mapping_value(0x2002, 3, 16))),
-        _mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping", (  # rev 1.5 §43
+        pdo_mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping", (  # rev 1.5 §43
             mapping_value(0x2003, 2, 8), mapping_value(0x2003, 3, 8))),
         record(0x1016, "consumer_heartbeat", "Consumer heartbeat time", (  # rev 1.5 §26, G4
             # bits 0-15 time in ms (0 = off, 10..65535), bits 16-23 node 01h-7Fh, 24-31 zero

@@ -35,7 +35,7 @@ BITRATES = {0x02: 500_000, 0x03: 250_000}  # §15; other codes: no change
 #: §7a LED colour codes (also the backlight's, §26, and the nibbles of §7b)
 COLOUR_OFF = 0x00
 COLOUR_CODES: dict[int, str] = {0x00: "off",
-                                 **{int(c): c.label.replace("_", "/") for c in BacklightColour}}
+                                 **{int(c): c.label for c in BacklightColour}}
 NIBBLE_BLINK = 0xF  # §7b: a colour and Fh blinks in that colour
 
 

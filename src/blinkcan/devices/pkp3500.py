@@ -15,6 +15,7 @@ from blinkcan.devices.common import (
     identity,
     identity_strings,
     model_id,
+    pdo_mapping,
     producer_heartbeat_time,
 )
 from blinkcan.devices.keypad import (
@@ -115,15 +116,6 @@ def _tpdo_parameter(index: int, cob_base: int, label: str, type_valid: object = 
     ))
 
 
-def _mapping(index: int, label: str, prefix: str, targets: tuple[int, ...]) -> ObjectDef:
-    """1600h-1603h, 1A00h-1A02h as printed (M42, M71), read-only; no targets: an empty
-    mapping (sub 00h = 0, 1A03h)."""
-    return record(index, prefix, label, tuple(
-        u32(i, f"{prefix}_entry_{i}", f"PDO mapping entry {i}", Access.RO, target)
-        for i, target in enumerate(targets, start=1)
-    ), highest=len(targets))
-
-
 def _led_masks(index: int, prefix: str, label: str, what: str) -> ObjectDef:
     """2001h LED on / 2002h LED blink (MT §20/§21): subs 01h-03h a colour each, 04h the rings."""
     return record(index, prefix, label, (
@@ -177,13 +169,13 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
                         Access.RW, values(0xFE)),  # M70: only FEh
         _rpdo_parameter(0x1403, RPDO4, "RPDO 4 communication parameter (backlight)",
                         Access.RO),
-        _mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", tuple(
+        pdo_mapping(0x1600, "RPDO 1 mapping parameter", "rpdo1_mapping", tuple(
             mapping_value(0x2001, sub, 16) for sub in (1, 2, 3))),  # MT §46
-        _mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", tuple(
+        pdo_mapping(0x1601, "RPDO 2 mapping parameter", "rpdo2_mapping", tuple(
             mapping_value(0x2002, sub, 16) for sub in (1, 2, 3))),  # MT §47
-        _mapping(0x1602, "RPDO 3 mapping parameter", "rpdo3_mapping",
+        pdo_mapping(0x1602, "RPDO 3 mapping parameter", "rpdo3_mapping",
                  (mapping_value(0x2001, 4, 32),)),  # MT §48
-        _mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping",
+        pdo_mapping(0x1603, "RPDO 4 mapping parameter", "rpdo4_mapping",
                  (mapping_value(0x2003, 2, 8), mapping_value(0x2003, 3, 8))),  # MT §49
         _tpdo_parameter(0x1800, TPDO1, "TPDO 1 communication parameter (key state)",
                         _SYNC_TPDO),
@@ -195,19 +187,19 @@ def _table(factory_node_id: int, quirks: Quirks) -> ObjectTable:
             u8(2, "tpdo4_transmission_type", "Analog period (10 ms)", Access.RO,
                ANALOG_PERIOD_DEFAULT),
         )),
-        _mapping(0x1A00, "TPDO 1 mapping parameter", "tpdo1_mapping",
+        pdo_mapping(0x1A00, "TPDO 1 mapping parameter", "tpdo1_mapping",
                  (mapping_value(0x2000, 1, 16),)),  # MT §54, M13
-        _mapping(0x1A01, "TPDO 2 mapping parameter", "tpdo2_mapping", (  # MT §55, M42
+        pdo_mapping(0x1A01, "TPDO 2 mapping parameter", "tpdo2_mapping", (  # MT §55, M42
             mapping_value(0x2000, 2, 8), mapping_value(0x2000, 3, 16),
             mapping_value(0x2000, 6, 8))),
-        _mapping(0x1A02, "TPDO 3 mapping parameter", "tpdo3_mapping", (  # MT §56, M42
+        pdo_mapping(0x1A02, "TPDO 3 mapping parameter", "tpdo3_mapping", (  # MT §56, M42
             mapping_value(0x2000, 4, 8), mapping_value(0x2000, 5, 16),
             mapping_value(0x2000, 7, 8))),
         # M50 as revised (issue 17): the manual has no 1A03h and no object holds the 495h
         # values, but every CANopen master pairs 1803h with 1A03h (python-canopen's
         # RemoteNode.tpdo.read() reads it and aborts on 0602 0000h): 1A03h/00 reads 0, an
         # empty mapping; the 495h PDO is decoded from its layout below
-        _mapping(0x1A03, "TPDO 4 mapping parameter", "tpdo4_mapping", ()),
+        pdo_mapping(0x1A03, "TPDO 4 mapping parameter", "tpdo4_mapping", ()),
         record(0x2000, "digital_inputs", "Digital input module, keys states", (  # MT §19
             u16(1, "keys_pressed", "Keys pressed", Access.RO, 0, pdo_mappable=True),
             *_encoder_entries(),  # type: ignore[arg-type]

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-from blinkcan.decode.decoder import Decoder, Event, Kind
+from blinkcan.decode.decoder import Decoder, Event, Kind, numbers
 from blinkcan.decode.j1939 import colour_name
 from blinkcan.devices.colours import channel_name
 from blinkcan.devices.keypad_j1939 import LedState
@@ -23,7 +23,7 @@ from blinkcan.devices.registry import describe_device
 #: the event kinds of the table, in the order the schema documents them
 KINDS = ("key", "led", "output", "fault", "heartbeat", "nmt", "sdo", "j1939", "pdo", "sync",
          "remote", "error", "undecoded")
-_CHANNEL_BITS = (("red", 1), ("green", 2), ("blue", 4))
+_DARK = (0, 0, 0)
 _LED_STATES = {"led_on": "on", "led_blink": "blink"}
 _COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))
 
@@ -40,9 +40,22 @@ class Detail(NamedTuple):
 
 
 #: the rows of events that carry nothing but their kind (shared: rows are never changed)
-_SIMPLE = {kind: [Detail(name)] for kind, name in ((Kind.SYNC, "sync"), (Kind.REMOTE, "remote"),
-                                                   (Kind.ERROR, "error"),
-                                                   (Kind.FRAME, "undecoded"))}
+SIMPLE_ROWS = {kind: [Detail(name)] for kind, name in (
+    (Kind.SYNC, "sync"), (Kind.REMOTE, "remote"), (Kind.ERROR, "error"),
+    (Kind.FRAME, "undecoded"))}
+
+
+_LED_UNCHANGED = Detail("led", state="unchanged")
+_OUTPUT_UNCHANGED = Detail("output", state="unchanged")
+_new = tuple.__new__  # a Detail without the call to its __new__: many rows are made
+
+
+def _mask(items: list[int]) -> int:
+    """The mask of item numbers (1 is bit 0): decode.decoder.numbers the other way."""
+    mask = 0
+    for item in items:
+        mask |= 1 << (item - 1)
+    return mask
 
 
 class Rowed(NamedTuple):
@@ -63,9 +76,10 @@ class EventRows:
 
     def __init__(self, decoder: Decoder) -> None:
         self._decoder = decoder
-        self._leds: dict[tuple[int, str], dict[int, str]] = {}  # (node, pdo) -> key -> colour
-        self._outputs: dict[int, dict[int, str]] = {}  # node -> pin -> "high" / "off"
-        self._faults: dict[int, frozenset[int]] = {}  # node -> pins in FAULT
+        #: (node, pdo) -> the keys lit red, green, blue (masks: bit 0 is key 1)
+        self._leds: dict[tuple[int, str], tuple[int, int, int]] = {}
+        self._outputs: dict[int, int] = {}  # node -> the pins HIGH (a mask: bit 0 is pin 1)
+        self._faults: dict[int, int] = {}  # node -> the pins in FAULT (a mask)
         self._models: dict[str, str] = {}
         self._heartbeats: dict[object, list[Detail]] = {}  # state -> its row (shared)
         self._pdo: dict[str, Callable[[int, dict[str, Any]], list[Detail]]] = {
@@ -77,11 +91,12 @@ class EventRows:
     def rows(self, event: Event) -> Rowed:
         kind = event.kind
         node = event.node_id
-        simple = _SIMPLE.get(kind)
+        simple = SIMPLE_ROWS.get(kind)
         if simple is not None:  # most of a fleet's log: other ECUs' frames
-            return Rowed(node, self._model_of(node), simple)
+            return _new(Rowed, (node, self._model_of(node), simple))
         if kind is Kind.J1939:
-            return Rowed(node, self._model_named(event.device), [self._j1939(event.fields)])
+            return _new(Rowed, (node, self._model_named(event.device),
+                                [self._j1939(event.fields)]))
         if kind is Kind.NMT:
             target = event.fields.get("target") or None
             return Rowed(target, self._model_of(target), [
@@ -91,20 +106,20 @@ class EventRows:
             name = str(event.fields.get("pdo"))
             follow = self._pdo.get(name)
             if follow is not None:
-                return Rowed(node, model, follow(node, event.fields))
+                return _new(Rowed, (node, model, follow(node, event.fields)))
             return Rowed(node, model, [Detail("pdo", state=name, value=_only_int(event.fields))])
         if kind is Kind.HEARTBEAT:
             state = event.fields.get("state")
             details = self._heartbeats.get(state)
             if details is None:
                 details = self._heartbeats[state] = [Detail("heartbeat", state=state)]
-            return Rowed(node, model, details)
+            return _new(Rowed, (node, model, details))
         if kind is Kind.BOOT_UP:
             self._reboot(node)
             return Rowed(node, model, [Detail("heartbeat", state="boot-up")])
         # SDO services: the kind of step as the state, the value where it is a number
-        return Rowed(node, model, [Detail("sdo", state=kind.value,
-                                          value=_int_value(event.fields.get("value")))])
+        return _new(Rowed, (node, model, [_new(Detail, (
+            "sdo", None, None, kind.value, None, _int_value(event.fields.get("value"))))]))
 
     # -- models -----------------------------------------------------------------------------
 
@@ -133,44 +148,56 @@ class EventRows:
             self._faults.pop(node, None)
 
     def _keys(self, node: int, fields: dict[str, Any]) -> list[Detail]:
-        details = [Detail("key", key=key, state="pressed") for key in fields["pressed"]]
-        details += [Detail("key", key=key, state="released") for key in fields["released"]]
-        return details or [Detail("key", state="held", value=len(fields["held"]))]
+        pressed, released = fields["pressed"], fields["released"]
+        if not (pressed or released):
+            return [_new(Detail, ("key", None, None, "held", None, len(fields["held"])))]
+        return [_new(Detail, ("key", key, None, "pressed", None, None)) for key in pressed] + \
+            [_new(Detail, ("key", key, None, "released", None, None)) for key in released]
 
     def _led_picture(self, node: int, fields: dict[str, Any]) -> list[Detail]:
+        """A row per key whose colour changed (the picture as three masks, red, green and
+        blue, of the keys lit: the changes are the bits that differ; a key's colour code is
+        its red, green and blue bits, devices/colours.py)."""
         name = str(fields["pdo"])
         state = _LED_STATES[name]
-        lit: dict[int, int] = {}
-        for channel, bit in _CHANNEL_BITS:
-            for key in fields.get(channel, ()):
-                lit[key] = lit.get(key, 0) | bit
-        before = self._leds.setdefault((node, name), {})
+        lit = (_mask(fields.get("red", ())), _mask(fields.get("green", ())),
+               _mask(fields.get("blue", ())))
+        place = (node, name)
+        before = self._leds.get(place, _DARK)
+        changed = (lit[0] ^ before[0]) | (lit[1] ^ before[1]) | (lit[2] ^ before[2])
+        if not changed:
+            return [_LED_UNCHANGED]
+        self._leds[place] = lit
+        red, green, blue = lit
         details = []
-        for key in sorted(lit.keys() | before.keys()):
-            colour = _COLOUR_NAMES[lit.get(key, 0)]
-            if before.get(key, "off") != colour:
-                before[key] = colour
-                details.append(Detail("led", key=key, state=state, colour=colour))
-        return details or [Detail("led", state="unchanged")]
+        for key in numbers(changed):
+            bit = 1 << (key - 1)
+            colour = _COLOUR_NAMES[(1 if red & bit else 0) | (2 if green & bit else 0)
+                                   | (4 if blue & bit else 0)]
+            details.append(_new(Detail, ("led", key, None, state, colour, None)))
+        return details
 
     def _output_states(self, node: int, fields: dict[str, Any]) -> list[Detail]:
-        high = set(fields["high"])
-        before = self._outputs.setdefault(node, {})
-        details = []
-        for pin in sorted(high | set(fields["off"]) | set(before)):
-            state = "high" if pin in high else "off"  # KBX §17: the decoder applied OFF wins
-            if before.get(pin, "off") != state:
-                before[pin] = state
-                details.append(Detail("output", pin=pin, state=state))
-        return details or [Detail("output", state="unchanged")]
+        """A row per pin that went HIGH or OFF (KBX §17: the decoder applied OFF wins)."""
+        high = _mask(fields["high"])
+        changed = high ^ self._outputs.get(node, 0)
+        if not changed:
+            return [_OUTPUT_UNCHANGED]
+        self._outputs[node] = high
+        return [_new(Detail, ("output", None, pin, "high" if high >> (pin - 1) & 1 else "off",
+                              None, None)) for pin in numbers(changed)]
 
     def _fault_pins(self, node: int, fields: dict[str, Any]) -> list[Detail]:
-        now = frozenset(fields["faults"])
-        before = self._faults.get(node, frozenset())
+        faults = fields["faults"]
+        now = _mask(faults)
+        before = self._faults.get(node, 0)
         self._faults[node] = now
-        details = [Detail("fault", pin=pin, state="fault") for pin in sorted(now - before)]
-        details += [Detail("fault", pin=pin, state="cleared") for pin in sorted(before - now)]
-        return details or [Detail("fault", state="unchanged", value=len(now))]
+        if now == before:
+            return [_new(Detail, ("fault", None, None, "unchanged", None, len(faults)))]
+        return [_new(Detail, ("fault", None, pin, "fault", None, None))
+                for pin in numbers(now & ~before)] + \
+            [_new(Detail, ("fault", None, pin, "cleared", None, None))
+             for pin in numbers(before & ~now)]
 
     # -- J1939 --------------------------------------------------------------------------------
 
@@ -178,10 +205,10 @@ class EventRows:
     def _j1939(fields: dict[str, Any]) -> Detail:
         message, command = fields.get("message"), fields.get("command")
         if message == "key":
-            return Detail("key", key=fields["key"],
-                          state="pressed" if fields["pressed"] else "released")
+            return _new(Detail, ("key", fields["key"], None,
+                                 "pressed" if fields["pressed"] else "released", None, None))
         if message == "heartbeat":  # spec/pkp-2600-si-j1939.md §18: counter and keys held
-            return Detail("heartbeat", state="j1939", value=fields["counter"])
+            return _new(Detail, ("heartbeat", None, None, "j1939", None, fields["counter"]))
         if command == "single_led":  # §7a
             state = LedState(fields["state"]).name.lower() if fields["state"] in \
                 LedState._value2member_map_ else f"state {fields['state']:02X}h"

@@ -26,19 +26,17 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import can
 from fsspec import AbstractFileSystem
 from fsspec.core import url_to_fs
 
 from blinkcan import __version__
-from blinkcan.decode.decoder import Decoder, Event
+from blinkcan.decode.decoder import Decoder
 from blinkcan.devices.registry import describe_device
-from blinkcan.fleet.rows import EventRows
-from blinkcan.fleet.schema import ROWS_PER_GROUP, UNKNOWN
-from blinkcan.fleet.sources import read_items
-from blinkcan.fleet.writer import PartitionWriter, int64_or_none
-from blinkcan.formats.logs import LogError, describe_frame, frame_kind
-from blinkcan.protocol.frame import Frame
+from blinkcan.fleet.frames import FrameDecoder, Segment
+from blinkcan.fleet.schema import ROWS_PER_GROUP
+from blinkcan.fleet.sources import read_columns
+from blinkcan.fleet.writer import PartitionWriter
+from blinkcan.formats.logs import LogError
 
 META = "_blinkcan"
 #: how often (in frames) a local task reports its progress
@@ -62,13 +60,6 @@ class FileResult:
 
 def source_key(source: str) -> str:
     return hashlib.sha256(source.encode()).hexdigest()[:20]
-
-
-def _other_event(decoder: Decoder, message: can.Message) -> Event:
-    """A remote, error or CAN FD frame as ``blinkcan decode`` shows it."""
-    return decoder.decode_other(frame_kind(message), message.timestamp, message.arbitration_id,
-                                message.is_extended_id, message.dlc, bytes(message.data),
-                                describe_frame(message))
 
 
 def make_decoder(devices: Mapping[int, str] | None) -> Decoder:
@@ -181,50 +172,25 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
 
 def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] | None,
                  progress: Callable[[int], None] | None) -> int:
-    decoder = make_decoder(devices)
-    rows = EventRows(decoder).rows
-    decode = decoder.decode
-    time_and_date, columns_of = writer.time_and_date, writer.columns
-    appenders: dict[tuple[str, str], tuple[Callable[[Any], None], ...]] = {}
-    limit, buffered = writer.rows_per_group, 0
-    frames = 0
-    for timestamp, item, channel in read_items(path):
-        event = decode(item, timestamp) if isinstance(item, Frame) else \
-            _other_event(decoder, item)
-        frame = event.frame
-        micros, date = time_and_date(timestamp)
-        node, model, details = rows(event)
-        partition = (model or UNKNOWN, date)
-        appends = appenders.get(partition)
-        if appends is None:  # the partition's columns' appends, bound once (columnar rows)
-            appends = appenders[partition] = tuple(c.append for c in columns_of(partition))
-        (time_, channel_, can_id_, extended_, node_, kind_, key_, pin_, state_, colour_,
-         value_, text_, data_) = appends
-        text, can_id, extended, data = str(event), frame.can_id, frame.extended, frame.data
-        for kind, key, pin, state, colour, value in details:
-            time_(micros)
-            channel_(channel)
-            can_id_(can_id)
-            extended_(extended)
-            node_(node)
-            kind_(kind)
-            key_(key)
-            pin_(pin)
-            state_(state)
-            colour_(colour)
-            value_(value if value is None else int64_or_none(value))
-            text_(text)
-            data_(data)
-        buffered += len(details)
-        if buffered >= limit:
-            writer.flush()
-            buffered = 0
-        frames += 1
-        if progress is not None and not frames % PROGRESS_EVERY:
-            progress(PROGRESS_EVERY)
-    if progress is not None:
-        progress(frames % PROGRESS_EVERY)
-    return frames
+    frames = FrameDecoder(make_decoder(devices))
+    segment = Segment()
+    limit = writer.rows_per_group
+    count = reported = 0
+    for block in read_columns(path):
+        position, size = 0, len(block)
+        while position < size:
+            position = frames.decode(block, position, segment, limit)
+            if segment.rows >= limit:
+                writer.write(segment)
+                segment.clear()
+        count += size
+        if progress is not None and count - reported >= PROGRESS_EVERY:
+            progress(count - reported)
+            reported = count
+    writer.write(segment)
+    if progress is not None and count > reported:
+        progress(count - reported)
+    return count
 
 
 def _reason(error: BaseException) -> str:

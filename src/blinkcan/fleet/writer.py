@@ -1,10 +1,12 @@
 """Rows into Parquet files, one per (model, date) partition, in row groups of bounded size.
 
-Rows are gathered column by column (a Python list per column and partition, appended to by
-the caller: no tuple per row, no transposing); at ``rows_per_group`` rows in all the
-partitions' columns become Arrow arrays, once per row group, and a row group each, so memory
-stays the same whatever the log's size. Files go to a folder of the caller's choice (the
-caller renames them into the dataset once the whole log is decoded).
+The caller gathers a row group's rows column by column (:class:`~blinkcan.fleet.frames.Segment`:
+a list per column, per frame, and a detail per row); :meth:`PartitionWriter.write` makes each
+column one Arrow array (the frame's columns repeated for its rows by one ``take``), the times
+with Arrow's arithmetic, and writes each partition's rows as a row group (one stable sort by
+partition, then slices), so memory stays the same whatever the log's size. Files go to a
+folder of the caller's choice (the caller renames them into the dataset once the whole log is
+decoded).
 """
 
 from __future__ import annotations
@@ -14,9 +16,12 @@ import math
 from typing import Any
 
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 from fsspec import AbstractFileSystem
 
+from blinkcan.fleet.frames import Segment
+from blinkcan.fleet.rows import Detail
 from blinkcan.fleet.schema import ROWS_PER_GROUP, SCHEMA, UNKNOWN
 
 _EPOCH_ORDINAL = datetime.date(1970, 1, 1).toordinal()
@@ -25,6 +30,10 @@ _DAY_S = 86_400
 _EARLIEST_S, _LATEST_S = -62_135_596_800, 253_402_300_800
 _INT64 = 1 << 63
 _COLUMNS = [field.name for field in SCHEMA if field.name != "source"]
+_SOURCE = SCHEMA.get_field_index("source")
+_TIME = SCHEMA.field("time").type
+#: a row's detail (rows.Detail) as the schema's columns
+_DETAILS = pa.struct([SCHEMA.field(name) for name in Detail._fields])
 
 
 def partition_path(model: str, date: str) -> str:
@@ -32,7 +41,7 @@ def partition_path(model: str, date: str) -> str:
 
 
 class PartitionWriter:
-    """Appends rows to the partitions of one source file; :meth:`close` says which files."""
+    """Writes the rows of one source file to its partitions; :meth:`close` says which files."""
 
     def __init__(self, fs: AbstractFileSystem, folder: str, name: str, source: str,
                  rows_per_group: int = ROWS_PER_GROUP) -> None:
@@ -40,10 +49,7 @@ class PartitionWriter:
             raise ValueError(f"rows_per_group must be 1 or more, not {rows_per_group}")
         self._fs, self._folder, self._name, self._source = fs, folder, name, source
         self._rows_per_group = rows_per_group
-        #: partition -> its columns so far (the schema's but ``source``, in its order)
-        self._buffers: dict[tuple[str, str], list[list[Any]]] = {}
         self._writers: dict[tuple[str, str], tuple[Any, pq.ParquetWriter]] = {}
-        self._buffered = 0
         self._days: dict[int, str] = {}
         self._day = (0.0, 0.0, UNKNOWN)  # the day of the last time: [start, end) and its date
         #: rows written so far
@@ -58,53 +64,80 @@ class PartitionWriter:
         if not (math.isfinite(seconds) and _EARLIEST_S <= seconds < _LATEST_S):
             return None, UNKNOWN
         day = int(seconds // _DAY_S)
+        self._day = (day * _DAY_S, (day + 1) * _DAY_S, self._date(day))
+        return round(seconds * 1_000_000), self._day[2]
+
+    def _date(self, day: int) -> str:
         date = self._days.get(day)
         if date is None:
             date = self._days[day] = datetime.date.fromordinal(_EPOCH_ORDINAL + day).isoformat()
-        self._day = (day * _DAY_S, (day + 1) * _DAY_S, date)
-        return round(seconds * 1_000_000), date
+        return date
+
+    def times_and_dates(self, seconds: list[float]) -> tuple[pa.Array, str | list[str]]:
+        """:meth:`time_and_date` of many times: the microseconds as an Arrow timestamp array,
+        and the date of them all where they are of one day (a log's mostly are), else each
+        time's date. The same figures either way (Arrow rounds half to even, as Python)."""
+        times = pa.array(seconds, pa.float64())
+        if seconds and pc.all(pc.is_finite(times)).as_py():
+            low, high = min(seconds), max(seconds)
+            day = int(low // _DAY_S)
+            if low >= _EARLIEST_S and high < _LATEST_S and \
+                    day * _DAY_S <= low and high < (day + 1) * _DAY_S:
+                micros = pc.round(pc.multiply(times, 1_000_000.0), round_mode="half_to_even")
+                return pc.cast(pc.cast(micros, pa.int64()), _TIME), self._date(day)
+        pairs = [self.time_and_date(s) for s in seconds]
+        return pa.array([p[0] for p in pairs], _TIME), [p[1] for p in pairs]
 
     @property
     def rows_per_group(self) -> int:
         return self._rows_per_group
 
-    def columns(self, partition: tuple[str, str]) -> list[list[Any]]:
-        """The partition's column lists (the schema's columns but ``source``, in its order),
-        for the caller to append a row to; it calls :meth:`added` with how many it appended
-        (or :meth:`flush` itself). The lists stay the same for the writer's life."""
-        columns = self._buffers.get(partition)
-        if columns is None:
-            columns = self._buffers[partition] = [[] for _ in _COLUMNS]
-        return columns
-
-    def added(self, rows: int) -> None:
-        """``rows`` rows were appended to :meth:`columns`: a row group when enough."""
-        self._buffered += rows
-        if self._buffered >= self._rows_per_group:
-            self.flush()
-
-    def append(self, partition: tuple[str, str], row: tuple[Any, ...]) -> None:
-        """A row of the partition: the values of the schema's columns but ``source``, in its
-        order."""
-        for column, value in zip(self.columns(partition), row, strict=True):
-            column.append(value)
-        self.added(1)
-
-    def flush(self) -> None:
-        """Every partition's rows so far as a row group."""
-        for partition, columns in self._buffers.items():
-            count = len(columns[0])
-            if not count:
-                continue
-            arrays = [pa.array(values, type=SCHEMA.field(name).type)
-                      for name, values in zip(_COLUMNS, columns, strict=True)]
-            arrays.insert(SCHEMA.get_field_index("source"),
-                          pa.repeat(pa.scalar(self._source, pa.string()), count))
-            self._writer(partition).write_table(pa.Table.from_arrays(arrays, schema=SCHEMA))
-            self.rows += count
-            for column in columns:
-                column.clear()  # the same lists: the caller's appends stay bound to them
-        self._buffered = 0
+    def write(self, segment: Segment) -> None:
+        """The segment's rows, a row group in each partition it has rows in."""
+        frames = len(segment)
+        if not frames:
+            return
+        per_frame = segment.details
+        index: pa.Array | None = None
+        if segment.rows == frames:
+            details = [rows[0] for rows in per_frame]
+        else:  # a frame of several rows: its columns repeated for each
+            details = [detail for rows in per_frame for detail in rows]
+            index = pa.array([n for n, rows in enumerate(per_frame) for _ in rows], pa.int32())
+        micros, dates = self.times_and_dates(segment.times)
+        frame_columns = {
+            "time": micros, "channel": pa.array(segment.channels, pa.string()),
+            "can_id": pa.array(segment.ids, pa.int32()),
+            "extended": pa.array(segment.extended, pa.bool_()),
+            "node": pa.array(segment.nodes, pa.int16()),
+            "text": pa.array(segment.texts, pa.string()),
+            "data": pa.array(segment.data, pa.binary()),
+        }
+        row_columns = _detail_columns(details)
+        partitions, codes = _partitions(segment.models, dates)
+        if index is not None:
+            frame_columns = {name: array.take(index) for name, array in frame_columns.items()}
+        count = len(details)
+        arrays = [frame_columns[name] if name in frame_columns else row_columns[name]
+                  for name in _COLUMNS]
+        arrays.insert(_SOURCE, pa.repeat(pa.scalar(self._source, pa.string()), count))
+        table = pa.Table.from_arrays(arrays, schema=SCHEMA)
+        if len(partitions) == 1:
+            self._writer(partitions[0]).write_table(table)
+        else:
+            code_array = pa.array(codes, pa.int32())
+            if index is not None:
+                code_array = code_array.take(index)
+            table = table.take(pc.sort_indices(code_array))  # stable: each keeps its order
+            counts = pc.value_counts(code_array)
+            sizes = dict(zip(counts.field("values").to_pylist(),
+                             counts.field("counts").to_pylist(), strict=True))
+            offset = 0
+            for code, partition in enumerate(partitions):
+                size = sizes[code]
+                self._writer(partition).write_table(table.slice(offset, size))
+                offset += size
+        self.rows += count
 
     def _writer(self, partition: tuple[str, str]) -> pq.ParquetWriter:
         entry = self._writers.get(partition)
@@ -116,8 +149,7 @@ class PartitionWriter:
         return entry[1]
 
     def close(self) -> list[str]:
-        """Write what is left and close the files; their paths relative to the folder."""
-        self.flush()
+        """Close the files; their paths relative to the folder."""
         written = []
         for partition, (stream, writer) in sorted(self._writers.items()):
             writer.close()
@@ -138,3 +170,31 @@ class PartitionWriter:
 
 def int64_or_none(value: int | None) -> int | None:
     return value if value is None or -_INT64 <= value < _INT64 else None
+
+
+def _detail_columns(details: list[Detail]) -> dict[str, pa.Array]:
+    """The rows' details as their columns (one conversion: the tuples as a struct array); a
+    value int64 cannot hold is null (rare: an SDO value of a generic node's domain)."""
+    try:
+        struct = pa.array(details, _DETAILS)
+    except (OverflowError, pa.ArrowInvalid):
+        struct = pa.array([d._replace(value=int64_or_none(d.value)) for d in details],
+                          _DETAILS)
+    return {name: struct.field(name) for name in Detail._fields}
+
+
+def _partitions(models: list[str | None], dates: str | list[str]
+                ) -> tuple[list[tuple[str, str]], list[int]]:
+    """The partitions of a segment's frames, in the order they first come, and each frame's
+    (its index in them)."""
+    keys: list[tuple[str | None, str]]
+    if isinstance(dates, str):  # one date: the model says which (a lookup per frame)
+        found = {model: (model or UNKNOWN, dates) for model in dict.fromkeys(models)}
+        partitions = list(dict.fromkeys(found.values()))
+        index = {partition: n for n, partition in enumerate(partitions)}
+        codes = {model: index[partition] for model, partition in found.items()}
+        return partitions, list(map(codes.__getitem__, models))
+    keys = list(zip(models, dates, strict=True))
+    partitions = list(dict.fromkeys((model or UNKNOWN, date) for model, date in keys))
+    index = {partition: n for n, partition in enumerate(partitions)}
+    return partitions, [index[model or UNKNOWN, date] for model, date in keys]

@@ -18,9 +18,10 @@ file without newlines is refused at its first line, never read whole.
 from __future__ import annotations
 
 import io
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, TextIO
 
+from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.log_source import bounded_line_blocks, bounded_lines
 from blinkcan.protocol.frame import Frame
 
@@ -114,53 +115,73 @@ def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
     ``can.Message`` python-can reads for anything else (remote, error, CAN FD). Lines over
     MAX_LINE raise :class:`~blinkcan.formats.log_source.LineTooLongError`."""
-    return _read_blocks(bounded_line_blocks(stream, "candump"))
-
-
-def read_candump_lines(lines: Iterable[str]) -> Iterator[tuple[float, Frame | can.Message]]:
-    """:func:`read_candump` of lines the caller reads, one pulled per frame yielded (so the
-    caller knows the line of each frame); bound them with
-    :func:`~blinkcan.formats.log_source.bounded_lines`."""
-    return _read_blocks((lines,))
-
-
-def _read_blocks(blocks: Iterable[Iterable[str]]) -> Iterator[tuple[float, Frame | can.Message]]:
     new = _new_tuple
+    for block in read_candump_columns(stream):
+        others = block.others
+        if not others:
+            for timestamp, can_id, data, extended in zip(block.times, block.ids, block.data,
+                                                          block.extended, strict=True):
+                yield timestamp, new(Frame, (can_id, data, extended))
+            continue
+        for row, (timestamp, can_id, data, extended) in enumerate(zip(
+                block.times, block.ids, block.data, block.extended, strict=True)):
+            other = others.get(row)
+            yield timestamp, new(Frame, (can_id, data, extended)) if other is None else other
+
+
+def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
+    """The log as :class:`~blinkcan.formats.columns.FrameColumns`, a block of lines at a time,
+    each frame's channel the line's; a line that cannot be read raises once the frames before
+    it are yielded."""
     fromhex = bytes.fromhex
     idents: dict[str, tuple[int, bool] | None] = {}
-    for lines in blocks:
-        for line in lines:
-            fields = line.split()
-            count = len(fields)
-            if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
-                stamp = fields[0]
-                ident, _, data = fields[2].partition("#")
-                plain = idents.get(ident, _UNSEEN)
-                if plain is _UNSEEN:
-                    if len(idents) >= _IDENTS_KEPT:
-                        idents.clear()
-                    plain = idents[ident] = _plain_id(ident)
-                size = len(data)
-                if plain is not None and stamp[0] == "(" and size <= 16 and not size & 1 \
-                        and data[:1] not in _NOT_DATA:
-                    try:
-                        payload = fromhex(data)
-                        timestamp = float(stamp[1:-1])
-                    except ValueError:
-                        pass
-                    else:
-                        if timestamp - timestamp:  # nan or inf: x - x is 0.0 for finite x
-                            _not_finite(stamp)
-                        can_id, extended = plain
-                        yield timestamp, new(Frame, (can_id, payload, extended))
-                        continue
-            if not fields:
-                continue
-            message = _python_can(line)
-            if message is not None:
-                if message.timestamp - message.timestamp:
-                    _not_finite(fields[0])
-                yield message.timestamp, message
+    for lines in bounded_line_blocks(stream, "candump"):
+        columns = FrameColumns()
+        add_time, add_channel, add_id = (columns.times.append, columns.channels.append,
+                                         columns.ids.append)
+        add_extended, add_data = columns.extended.append, columns.data.append
+        try:
+            for line in lines:
+                fields = line.split()
+                count = len(fields)
+                if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
+                    stamp = fields[0]
+                    ident, _, data = fields[2].partition("#")
+                    plain = idents.get(ident, _UNSEEN)
+                    if plain is _UNSEEN:
+                        if len(idents) >= _IDENTS_KEPT:
+                            idents.clear()
+                        plain = idents[ident] = _plain_id(ident)
+                    size = len(data)
+                    if plain is not None and stamp[0] == "(" and size <= 16 and not size & 1 \
+                            and data[:1] not in _NOT_DATA:
+                        try:
+                            payload = fromhex(data)
+                            timestamp = float(stamp[1:-1])
+                        except ValueError:
+                            pass
+                        else:
+                            if timestamp - timestamp:  # nan or inf: x - x is 0.0 if finite
+                                _not_finite(stamp)
+                            add_time(timestamp)
+                            add_channel(fields[1])
+                            add_id(plain[0])
+                            add_extended(plain[1])
+                            add_data(payload)
+                            continue
+                if not fields:
+                    continue
+                message = _python_can(line)
+                if message is not None:
+                    if message.timestamp - message.timestamp:
+                        _not_finite(fields[0])
+                    columns.add_other(message, fields[1] if count > 1 else None)
+        except Exception:
+            if columns.times:  # the frames before the line, then what is wrong with it
+                yield columns
+            raise
+        if columns.times:
+            yield columns
 
 
 def _not_finite(stamp: str) -> None:

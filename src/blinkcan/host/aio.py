@@ -28,7 +28,7 @@ E = TypeVar("E")
 D = TypeVar("D", bound=Device)
 
 
-def _iterate(opened: _AsyncDevice[Any], source: Callable[[Any], EventSource[E]],
+def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
              timeout: float | None) -> AsyncIterator[E]:
     """Events from the moment of this call on (from the moment the driver is open, if it is
     still opening). A subscription whose event loop has closed removes itself."""
@@ -51,7 +51,7 @@ def _iterate(opened: _AsyncDevice[Any], source: Callable[[Any], EventSource[E]],
     return _drain(opened, subscribe, removers, waiting, source, timeout)
 
 
-async def _drain(opened: _AsyncDevice[Any], subscribe: Callable[[Any], None],
+async def _drain(opened: AsyncDriver[Any], subscribe: Callable[[Any], None],
                  removers: list[Callable[[], None]], waiting: asyncio.Queue[E],
                  source: Callable[[Any], EventSource[E]], timeout: float | None
                  ) -> AsyncIterator[E]:
@@ -76,10 +76,13 @@ async def _drain(opened: _AsyncDevice[Any], subscribe: Callable[[Any], None],
             remove()
 
 
-class _AsyncDevice(Generic[D]):
+class AsyncDriver(Generic[D]):
     """Wraps a blocking driver: its methods and properties become coroutines, run in a worker
     thread, so the event loop never blocks. Built inside a running loop, the driver opens in
-    a worker thread too (``await x.open()`` or the first awaited call waits for it)."""
+    a worker thread too (``await x.open()`` or the first awaited call waits for it).
+
+    The base of every asyncio face: a model's face names its blocking driver in ``_driver``
+    and turns each of its event sources into an async iterator with :meth:`stream`."""
 
     _driver: Callable[..., D]
 
@@ -129,8 +132,15 @@ class _AsyncDevice(Generic[D]):
             return call
         return getattr(self.device, name)  # callbacks register at once; values as they are
 
+    def stream(self, source: Callable[[D], EventSource[E]], timeout: float | None = None
+               ) -> AsyncIterator[E]:
+        """The events of the driver's source ``source(driver)`` (its ``keys``, ``health``...)
+        from this call on, as an async iterator; it ends when the driver closes, or after
+        ``timeout`` seconds without an event."""
+        return _iterate(self, source, timeout)
+
     def health_events(self, timeout: float | None = None) -> AsyncIterator[Any]:
-        return _iterate(self, lambda device: device.health, timeout)
+        return self.stream(lambda device: device.health, timeout)
 
     async def __aenter__(self) -> Any:
         return await self.open()
@@ -140,22 +150,22 @@ class _AsyncDevice(Generic[D]):
         await asyncio.to_thread(self.device.close)
 
 
-class AsyncKeypad(_AsyncDevice[Keypad]):
+class AsyncKeypad(AsyncDriver[Keypad]):
     _driver = Keypad
 
     def events(self, timeout: float | None = None) -> AsyncIterator[KeyEvent]:
-        return _iterate(self, lambda device: device.keys, timeout)
+        return self.stream(lambda device: device.keys, timeout)
 
 
-class AsyncKeybox(_AsyncDevice[Keybox]):
+class AsyncKeybox(AsyncDriver[Keybox]):
     _driver = Keybox
 
     def fault_events(self, timeout: float | None = None) -> AsyncIterator[FaultEvent]:
-        return _iterate(self, lambda device: device.faults, timeout)
+        return self.stream(lambda device: device.faults, timeout)
 
 
 async def async_scan(*args: Any, **kwargs: Any) -> list[Found]:
     return await asyncio.to_thread(scan, *args, **kwargs)
 
 
-__all__ = ["AsyncKeybox", "AsyncKeypad", "async_scan"]
+__all__ = ["AsyncDriver", "AsyncKeybox", "AsyncKeypad", "async_scan"]

@@ -85,7 +85,7 @@ class KeypadGoneError(NoDeviceError):
 class J1939Identity:
     """What a keypad in J1939 mode tells about itself: its source address, software revision
     (§11), NAME (§20, hex; None when it has not claimed an address), claim state, and its last
-    heartbeat (§18; None when none was heard)."""
+    heartbeat (§18; None when none was heard within ``heartbeat_wait`` seconds)."""
 
     address: int
     model: str
@@ -93,6 +93,14 @@ class J1939Identity:
     name: str | None
     claim: str
     heartbeat: str | None
+    heartbeat_wait: float = 0.0
+
+
+def heartbeat_period_default() -> float:
+    """Seconds between heartbeats at the keypad's default period (§18, 75h: 0Ah x 10 ms)."""
+    period = next(f for f in command("heartbeat").fields if f.name == "period")
+    assert period.default is not None
+    return period.default * TIME_UNIT_S
 
 
 class J1939KeypadLink:
@@ -123,6 +131,7 @@ class J1939KeypadLink:
         self._revision_signal = host.signal()
         self._revision_lock = threading.Lock()
         self._heard_signal = host.signal()
+        self._heartbeat_signal = host.signal()
         #: the keypad's NAME once it claimed an address (§20), else None
         self.name: bytes | None = None
         #: "not claimed" (address claim off, §20), "claimed", or "lost to <NAME>"
@@ -202,8 +211,17 @@ class J1939KeypadLink:
                                    f"{timeout} s")
             return self._revision
 
-    def identity(self, model: str, timeout: float = 0.5) -> J1939Identity:
+    def identity(self, model: str, timeout: float = 0.5,
+                 heartbeat_wait: float | None = None) -> J1939Identity:
+        """What the keypad tells (J1939Identity); its heartbeat, when none was heard yet, is
+        waited for up to ``heartbeat_wait`` seconds (default: one and a half periods at the
+        keypad's default period, §18), so a heartbeat that is on is not called "not heard"."""
         revision = self.software_revision(timeout)
+        # one period and a half: a heartbeat due as the wait starts may come a little late
+        wait = 1.5 * heartbeat_period_default() if heartbeat_wait is None else heartbeat_wait
+        if self.heartbeat is None and wait > 0:
+            self._heartbeat_signal.clear()
+            self.host.wait(self._heartbeat_signal, wait)
         heartbeat = None
         if self.heartbeat is not None:
             counter, keys = self.heartbeat
@@ -211,7 +229,7 @@ class J1939KeypadLink:
             heartbeat = f"counter {counter:02X}h, keys held: {', '.join(held) or 'none'}"
         return J1939Identity(self.address, model, revision,
                              self.name.hex(" ").upper() if self.name is not None else None,
-                             self.claim, heartbeat)
+                             self.claim, heartbeat, wait)
 
     def _on_frame(self, frame: Frame, now: float) -> None:
         ident = parse_id(frame.can_id)
@@ -237,6 +255,7 @@ class J1939KeypadLink:
             self._heard_signal.set()
             before = self.heartbeat
             self.heartbeat = (data[3], data[4] | (data[5] & 0x0F) << 8)
+            self._heartbeat_signal.set()
             self._on_health(HEARD, self.address, now)
             if data[3] == 0 and before is not None and before[0] != 0xFF:  # J-6: no wrap
                 self._on_health(BOOT_UP, self.address, now)

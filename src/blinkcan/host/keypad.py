@@ -33,6 +33,7 @@ from blinkcan.devices.keypad import (
     SHOW_FAST_FLASH,
     SHOW_OFF,
 )
+from blinkcan.devices.keypad_j1939 import BITRATES as J1939_BITRATES
 from blinkcan.devices.keypad_j1939 import (
     DEFAULT_ADDRESS,
     DEFAULT_HOST_ADDRESS,
@@ -594,6 +595,48 @@ class Keypad(Device):
         if self.j1939 is not None:
             return self.j1939.identity(self.description.title, self.sdo.timeout)
         return super().identity()
+
+    def set_node_id(self, node_id: int, *, confirm: bool = False) -> None:
+        """Store a new node id (Device.set_node_id); in J1939 mode the keypad's source address
+        instead (§16, 70h: 01h-FDh, in use at once, J-3; its identifier kept), refused when a
+        keypad answers at the new address, and this driver follows the keypad there."""
+        if self.j1939 is None:
+            super().set_node_id(node_id, confirm=confirm)
+            return
+        address = next(f for f in j1939_command("source_address").fields if f.name == "address")
+        if not address.accepts(node_id):
+            raise ValueError(f"a J1939 source address is {address.valid}, not {node_id:#04x}")
+        if not confirm:
+            raise ValueError("changing the source address moves the keypad on the bus at once: "
+                             "pass confirm=True")
+        if node_id == self.j1939.address:
+            return
+        probe = J1939KeypadLink(self.host, node_id, lambda key, pressed, now: None)
+        try:
+            probe.software_revision(0.2)
+        except TimeoutError:
+            pass  # nobody answers there: free
+        else:
+            raise ValueError(f"J1939 address {node_id:02X}h is taken: a keypad answers there")
+        finally:
+            probe.close()
+        self.j1939.send("source_address", node_id, 0xFF)  # FFh: the identifier unchanged
+        self.j1939.address = node_id
+
+    def set_bitrate(self, bitrate: int, *, confirm: bool = False) -> None:
+        """Store a bit rate (Device.set_bitrate); in J1939 mode with the §15 codes (6Fh: 500 or
+        250 kbit/s), in use at the next power-on (J-3)."""
+        if self.j1939 is None:
+            super().set_bitrate(bitrate, confirm=confirm)
+            return
+        codes = {rate: code for code, rate in J1939_BITRATES.items()}
+        if bitrate not in codes:
+            raise ValueError(f"in J1939 mode the keypad runs at "
+                             f"{', '.join(map(str, sorted(codes)))} bit/s, not {bitrate}")
+        if not confirm:
+            raise ValueError("changing the bit rate takes the device off this bus at its next "
+                             "power-on: pass confirm=True")
+        self.j1939.send("baud_rate", codes[bitrate])
 
     def _restore_j1939(self) -> None:
         with self._picture_lock:

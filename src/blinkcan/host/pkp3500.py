@@ -16,7 +16,7 @@ import can
 
 from blinkcan.devices.keypad import LEVEL_MAX
 from blinkcan.devices.pkp3500 import GENERATION, MODEL
-from blinkcan.host.aio import _AsyncDevice, _iterate
+from blinkcan.host.aio import AsyncDriver
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
@@ -204,14 +204,14 @@ class Pkp3500Keypad(Keypad):
                 self.host.send(self.pdo_frame("ring_leds", {"rings": self._rings}))
 
 
-class AsyncPkp3500Keypad(_AsyncDevice[Pkp3500Keypad]):
+class AsyncPkp3500Keypad(AsyncDriver[Pkp3500Keypad]):
     """The asyncio face, as ``AsyncKeypad``: ``await keypad.set_ring(1, [1, 2])``,
     ``async for event in keypad.encoder_events()``."""
 
     _driver = Pkp3500Keypad
 
     def events(self, timeout: float | None = None) -> AsyncIterator[KeyEvent]:
-        return _iterate(self, lambda device: device.keys, timeout)
+        return self.stream(lambda device: device.keys, timeout)
 
     def encoder_events(self, timeout: float | None = None) -> AsyncIterator[EncoderEvent]:
-        return _iterate(self, lambda device: device.encoders, timeout)
+        return self.stream(lambda device: device.encoders, timeout)

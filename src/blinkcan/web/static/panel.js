@@ -7,7 +7,7 @@ const LED = { off: "#111", red: "#ff3030", green: "#22dd44", blue: "#3a6bff", ye
               "yellow/green": "#b0e020" };
 const BACKLIGHT = { off: null, red: "#ff3030", green: "#22dd44", blue: "#3a6bff", yellow: "#ffd820",
                     cyan: "#20e0e0", magenta: "#e030e0", white: "#f0f4ff", amber: "#ffaa00",
-                    yellow_green: "#b0e020" };
+                    "yellow/green": "#b0e020" };
 const hex = (n) => n.toString(16).toUpperCase().padStart(2, "0") + "h";
 let latest = null;
 

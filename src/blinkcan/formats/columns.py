@@ -1,0 +1,42 @@
+"""A log's frames a block at a time, as columns: what a columnar consumer (the fleet's Parquet
+writer) reads without an object per frame.
+
+Classic data frames are plain values in the lists; a frame that is not one (remote, error,
+CAN FD) keeps python-can's message in ``others`` at its position, its time and channel in the
+lists beside the others' and its identifier, flag and data as the message has them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # python-can loads where a log needs it: a candump log reads without it
+    import can
+
+
+@dataclass
+class FrameColumns:
+    """A block of frames, in the log's order: row ``n`` is ``times[n]``, ``ids[n]``, ..."""
+
+    times: list[float] = field(default_factory=list)
+    #: the log's channel of each frame (None where the format has none)
+    channels: list[str | None] = field(default_factory=list)
+    ids: list[int] = field(default_factory=list)
+    extended: list[bool] = field(default_factory=list)
+    data: list[bytes] = field(default_factory=list)
+    #: the rows that are not classic data frames: position -> python-can's message
+    others: dict[int, can.Message] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    def add_other(self, message: can.Message, channel: str | None) -> None:
+        """A frame that is not a classic data frame, as python-can read it."""
+        self.others[len(self.times)] = message
+        self.times.append(message.timestamp)
+        self.channels.append(channel)
+        self.ids.append(message.arbitration_id)
+        self.extended.append(message.is_extended_id)
+        self.data.append(bytes(message.data))
+
