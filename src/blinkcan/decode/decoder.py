@@ -18,7 +18,13 @@ from typing import Any, NamedTuple
 
 import orjson
 
-from blinkcan.decode.describers import keyed_signal, pdo_describer
+from blinkcan.decode.describers import (  # listing, mask_listing, numbers: kept importable here
+    keyed_signal,
+    listing,
+    mask_listing,
+    numbers,
+    pdo_describer,
+)
 from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
@@ -713,3 +719,7 @@ def error_event(time: float, error_class: int, data: bytes) -> Event:
 
 def _show(value: int | str) -> str:
     return repr(value) if isinstance(value, str) else f"{value:X}h"
+
+
+__all__ = ["ERROR_CLASSES", "TRANSFER_IDLE_S", "TRANSFER_MAX_BYTES", "Decoder", "Event", "Kind",
+           "error_event", "listing", "mask_listing", "numbers"]
