@@ -449,10 +449,11 @@ class Decoder:
             return event
         parts = (meaning.text, meaning.address, "keypad" if meaning.keypad else None,
                  {"protocol": "j1939", **meaning.fields})
-        if len(addresses) == before:  # nothing learned: this frame means this again, while
-            known_frames = self._j1939_known  # the keypads' addresses stay the same
-            if len(known_frames) >= _J1939_KEPT:
-                known_frames.clear()
+        known_frames = self._j1939_known
+        # nothing learned: this frame means this again while the keypads' addresses stay the
+        # same. Full, the frames kept stay (those seen first repeat: commands, key messages;
+        # a heartbeat's counter never does), and are only replaced by themselves
+        if len(addresses) == before and (len(known_frames) < _J1939_KEPT or known is not None):
             known_frames[frame] = self._served = [parts, None, before]
         return _new_tuple(Event, (time, frame, Kind.J1939, *parts))
 
