@@ -29,11 +29,18 @@ Describe = Callable[[bytes], Described]
 _MASKS_KEPT = 8192
 
 
-#: per byte of a mask (0..7) and byte value: the item numbers its bits are (bit 0 = item 1)
-_BYTE_ITEMS = [[tuple(8 * position + bit + 1 for bit in range(8) if value >> bit & 1)
-                for value in range(256)] for position in range(8)]
-#: the same as text ("9, 12"), empty for a byte with no bit set
-_BYTE_TEXT = [[", ".join(map(str, items)) for items in row] for row in _BYTE_ITEMS]
+@lru_cache(maxsize=8)
+def _byte_items(position: int) -> tuple[tuple[int, ...], ...]:
+    """Per value of byte ``position`` of a mask: the item numbers its bits are (bit 0 = item
+    1). Made when first needed (start-up: most runs never need a mask's third byte)."""
+    return tuple(tuple(8 * position + bit + 1 for bit in range(8) if value >> bit & 1)
+                 for value in range(256))
+
+
+@lru_cache(maxsize=8)
+def _byte_text(position: int) -> tuple[str, ...]:
+    """The same as text ("9, 12"), empty for a byte with no bit set."""
+    return tuple(", ".join(map(str, items)) for items in _byte_items(position))
 
 
 @lru_cache(maxsize=_MASKS_KEPT)
@@ -41,11 +48,11 @@ def _items(mask: int) -> tuple[int, ...]:
     if mask >> 64:
         return tuple(item_numbers(mask))
     found: tuple[int, ...] = ()
-    for row in _BYTE_ITEMS:  # a byte at a time: a table lookup each
-        if not mask:
-            break
-        found += row[mask & 0xFF]
+    position = 0
+    while mask:  # a byte at a time: a table lookup each
+        found += _byte_items(position)[mask & 0xFF]
         mask >>= 8
+        position += 1
     return found
 
 
@@ -66,12 +73,12 @@ def mask_listing(mask: int) -> str:
     if mask < 0 or mask >> 64:
         return listing(numbers(mask))
     parts = []
-    for row in _BYTE_TEXT:  # a byte at a time: a table lookup each
-        if not mask:
-            break
+    position = 0
+    while mask:  # a byte at a time: a table lookup each
         if mask & 0xFF:
-            parts.append(row[mask & 0xFF])
+            parts.append(_byte_text(position)[mask & 0xFF])
         mask >>= 8
+        position += 1
     return ", ".join(parts) if parts else "none"
 
 
