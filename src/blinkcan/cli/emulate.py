@@ -32,6 +32,7 @@ from blinkcan.cli.bus_options import (
 from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.extras import install_command
 from blinkcan.cli.render import output_console
+from blinkcan.cli.typed_commands import typed_commands
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.formats.nvm_file import nvm_file
@@ -131,7 +132,8 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
             quiet: bool, absolute: bool) -> None:
     """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
     (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5: the newer
-    firmware, manual rev 1.5).
+    firmware, manual rev 1.5). Commands typed on its input act on the devices as hands do
+    (press 3, 16h turn 1 +5, 0Ch blow-fuse 4, keybox power-cycle; help lists them).
 
     \b
     blinkcan emulate keypad keybox
@@ -164,7 +166,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
-        with emulator, panel(emulator, web, console):
+        with emulator, panel(emulator, web, console), typed_commands(emulator, console):
             threading.Event().wait()
     except KeyboardInterrupt:
         console.print("stopped")

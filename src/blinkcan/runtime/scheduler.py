@@ -388,6 +388,7 @@ class SimulatedScheduler(Scheduler):
         self._now = check_time("start", start)
         self._failures: list[tuple[Exception, str]] = []
         self._heap = _Heap()
+        self._sequence = self._heap.sequence
         #: calls :meth:`defer` made, due at the time they were made (never later than the
         #: clock): (order of scheduling, callback, arguments); they take their turn among the
         #: heap's timers by that order
@@ -422,7 +423,7 @@ class SimulatedScheduler(Scheduler):
         """``call_soon(lambda: callback(*args))``, without a timer to cancel: the simulated
         wire hands every frame over this way, and a timer and a closure per frame cost more
         than the rest of its delivery."""
-        self._ready.append((next(self._heap.sequence), callback, args))
+        self._ready.append((next(self._sequence), callback, args))
 
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         return action()
@@ -530,18 +531,33 @@ class SimulatedScheduler(Scheduler):
         """Run events in order until ``predicate()`` is true (True) or the clock reaches
         ``until`` (False; the clock then stands at ``until``; +inf: no end)."""
         check_time("until", until, infinite=True)
-        pop, run = self._pop, self._run
+        entries, ready, pop = self._heap.entries, self._ready, self._pop
         while True:
             if predicate is not None and predicate():
                 met = True
                 break
-            event = pop(until)
-            if event is None:
-                if until != math.inf:  # with no end given, the clock stays at the last event
-                    self._now = max(self._now, until)
-                met = bool(predicate()) if predicate is not None else True
-                break
-            run(*event)
+            # _pop and _run, inlined (this loop runs every event of a simulation); first the
+            # usual event, a deferred call with no timer due before it
+            if ready and self._now <= until and (
+                    not entries or entries[0][0] > self._now or entries[0][1] > ready[0][0]):
+                _, callback, args = ready.popleft()
+            else:
+                event = pop(until)
+                if event is None:
+                    if until != math.inf:  # with no end given, the clock stays at the last event
+                        self._now = max(self._now, until)
+                    met = bool(predicate()) if predicate is not None else True
+                    break
+                callback, args = event
+            self._depth += 1
+            try:
+                callback(*args)
+            except Exception as error:
+                self.failed(error)
+            finally:
+                self._depth -= 1
+            if not self._depth and self._failures:
+                self.raise_failures()
         if not self._depth:
             self.raise_failures()
         return met

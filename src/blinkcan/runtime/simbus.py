@@ -110,12 +110,29 @@ class SimulatedNetwork:
 
     def transmit(self, frame: Frame, sender: FrameHandler | None) -> None:
         """Put ``frame`` on the wire; raises ``can.CanOperationError`` when the bus is gone."""
-        if not self.up:
-            raise can.CanOperationError("the simulated bus is down")
-        if self._rules or self.latency:
-            self._transmit_late(frame, sender)
-        else:
-            self._deliver(frame, sender)
+        self.sender(sender)(frame)
+
+    def sender(self, handler: FrameHandler | None) -> Callable[[Frame], None]:
+        """``transmit(frame, handler)`` as a function of the frame: the send of the endpoint
+        attached as ``handler``, made once (every frame of a simulation comes this way)."""
+        scheduler = self.scheduler
+        defer, clock, handover = scheduler.defer, scheduler.clock, self._handover
+
+        def send(frame: Frame) -> None:
+            if not self.up:
+                raise can.CanOperationError("the simulated bus is down")
+            if self._rules or self.latency:
+                self._transmit_late(frame, handler)
+                return
+            # _deliver, inlined
+            now = clock()
+            self.frames.append(_timed(TimedFrame, (now, frame)))
+            for endpoint in self._endpoints:  # a tuple: an endpoint attached meanwhile waits
+                if endpoint != handler:  # bound methods: equal, not identical, per access
+                    self.in_flight += 1
+                    defer(handover, endpoint, frame, now)
+
+        return send
 
     def _transmit_late(self, frame: Frame, sender: FrameHandler | None) -> None:
         """``frame`` through the rules, then on the wire after the latency and delays."""
@@ -139,19 +156,21 @@ class SimulatedNetwork:
 
     def _deliver(self, frame: Frame, sender: FrameHandler | None) -> None:
         """Record ``frame`` and hand it to every other endpoint after what runs now (each
-        endpoint's turn is an event of its own, in order)."""
+        endpoint's turn is an event of its own, in order, at this same time)."""
         scheduler = self.scheduler
-        self.frames.append(_timed(TimedFrame, (scheduler.clock(), frame)))
-        handover, defer = self._handover, scheduler.defer
-        for handler in self._endpoints:  # a tuple: an endpoint attached meanwhile waits
-            if handler != sender:  # bound methods: equal, not identical, per access
+        now = scheduler.clock()
+        self.frames.append(_timed(TimedFrame, (now, frame)))
+        for handler in self._endpoints:
+            if handler != sender:
                 self.in_flight += 1
-                defer(handover, handler, frame)
+                scheduler.defer(self._handover, handler, frame, now)
 
-    def _handover(self, handler: FrameHandler, frame: Frame) -> None:
+    def _handover(self, handler: FrameHandler, frame: Frame, now: float) -> None:
+        """``frame`` reaches the endpoint of ``handler`` (at ``now``: a deferred call runs at
+        the time it was made)."""
         self.in_flight -= 1
         if self.up:
-            handler(frame, self.scheduler.clock())
+            handler(frame, now)
 
 
 class SimulatedBus(can.BusABC):
@@ -163,6 +182,8 @@ class SimulatedBus(can.BusABC):
     virtual clock.
     """
 
+    send_frame: Callable[[Frame], None]
+
     def __init__(self, network: SimulatedNetwork, channel: str = "simulated",
                  **kwargs: Any) -> None:
         super().__init__(channel=channel, **kwargs)
@@ -172,6 +193,8 @@ class SimulatedBus(can.BusABC):
         self._received: collections.deque[TimedFrame] = collections.deque(maxlen=100_000)
         self._listeners: list[FrameHandler] = []
         self._detach = network.attach(self._on_frame)
+        #: put a frame on the wire as this endpoint's (not heard back here)
+        self.send_frame = network.sender(self._on_frame)
         #: the can.Notifiers this bus delivers to (stopped ones are dropped on the next frame)
         self._notifiers: list[can.Notifier] = []
         #: every notifier adopted (their threads are recognised until they stop)
@@ -269,9 +292,6 @@ class SimulatedBus(can.BusABC):
         return True
 
     # -- sending and receiving --------------------------------------------------------------
-
-    def send_frame(self, frame: Frame) -> None:
-        self.network.transmit(frame, self._on_frame)
 
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         frame = to_frame(msg)

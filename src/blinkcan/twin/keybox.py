@@ -170,10 +170,10 @@ class KeyboxTwin(CanopenTwin):
     def _fault_frame(self) -> Frame:
         """The fault PDO for the present FAULT mask; cached, the periodic message repeats it."""
         frame = self._fault_frame_cache
-        cob_id = self._fault_pdo.cob_id(self.node_id)
-        if frame is None or frame.can_id != cob_id:
+        layout = self._fault_pdo
+        if frame is None or frame.can_id != layout.cob_base + self.node_id:  # cob_id(), inlined
             faults = self.objects.get_int("output_fault_mask")
-            frame = Frame(cob_id, self._fault_pdo.encode({"faults": faults}))
+            frame = Frame(layout.cob_id(self.node_id), layout.encode({"faults": faults}))
             self._fault_frame_cache = frame
         return frame
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import asyncio
 import json
 import time
-from collections.abc import AsyncIterator, Callable, Collection
+from collections.abc import AsyncIterator, Collection
 from dataclasses import asdict
 from importlib import resources
 from typing import Any
@@ -27,64 +27,15 @@ from starlette.staticfiles import StaticFiles
 
 from blinkcan.decode import Decoder
 from blinkcan.decode.eventlog import EventLog
-from blinkcan.devices.model import Face
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin
+from blinkcan.twin.actions import ACTIONS, actions_of
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.web.guard import REQUEST_TIMEOUT_S, BodyError, Guard, json_body
 
 MAX_UPDATES_PER_S = 30
 FRAMES_KEPT = 20
-
-#: action -> (the part of the face it acts on, what it does with (twin, value, now)); a device
-#: has the action when its face has that part ("key": keys, "pin": pins; None: every device)
-ACTIONS: dict[str, tuple[str | None, Callable[[Any, Any, float], object]]] = {
-    "press": ("key", lambda t, v, now: t.press(v, now)),
-    "release": ("key", lambda t, v, now: t.release(v, now)),
-    "blow_fuse": ("pin", lambda t, v, now: t.blow_fuse(v, now)),
-    "replace_fuse": ("pin", lambda t, v, now: t.replace_fuse(v, now)),
-    "input_high": ("pin", lambda t, v, now: t.set_input(v, True, now)),
-    "input_low": ("pin", lambda t, v, now: t.set_input(v, False, now)),
-    "power_off": (None, lambda t, v, now: t.power_off()),
-    "power_on": (None, lambda t, v, now: t.power_on(now)),
-}
-#: argument -> how many of it a model's face has
-_COUNTS: dict[str, Callable[[Face], int]] = {"key": lambda f: f.keys, "pin": lambda f: f.pins}
-_TICKS_PER_ACTION = 64  # a drag or scroll sends at most this many ticks at once
-
-#: actions on what a face has besides keys and pins (knobs, inputs):
-#: action -> (argument -> its valid range on a face, what it does with (twin, arguments, now))
-FACE_ACTIONS: dict[str, tuple[dict[str, Callable[[Face], tuple[float, float]]],
-                              Callable[[Any, dict[str, Any], float], object]]] = {
-    "turn": ({"encoder": lambda f: (1, len(f.encoders)),
-              "ticks": lambda f: (-_TICKS_PER_ACTION, _TICKS_PER_ACTION)},
-             lambda t, a, now: t.turn(a["encoder"], a["ticks"], now)),
-    "set_analog": ({"input": lambda f: (0, f.analog_inputs - 1),
-                    "volts": lambda f: (0.0, f.analog_volts_max)},
-                   lambda t, a, now: t.set_analog(a["input"], a["volts"], now)),
-    "set_digital_input": ({"input": lambda f: (0, f.digital_inputs - 1),
-                           "level": lambda f: (0, 1)},
-                          lambda t, a, now: t.set_digital_input(a["input"], bool(a["level"]),
-                                                                now)),
-}
-
-
-def _face_arguments(face: Face, action: str, request: dict[str, Any]) -> dict[str, Any]:
-    """The arguments of a face action, each checked against the device's face."""
-    ranges, _ = FACE_ACTIONS[action]
-    arguments = {}
-    for name, valid in ranges.items():
-        low, high = valid(face)
-        if high < low:
-            raise ValueError(f"this device has nothing for {action!r}")
-        value = request.get(name)
-        number = (int, float) if isinstance(low, float) else (int,)
-        if isinstance(value, bool) or not isinstance(value, number) or not low <= value <= high:
-            raise ValueError(f"{name} must be {low}..{high}, not {value!r}")
-        arguments[name] = value
-    return arguments
-
 
 class Panel:
     """Everything the page shows, gathered from the emulator."""
@@ -131,30 +82,21 @@ class Panel:
         raise ValueError(f"no device with node id {node_id!r}; the panel has {nodes}")
 
     def act(self, request: dict[str, Any]) -> None:
-        """Validate and carry out one action (ValueError with the reason)."""
+        """Validate and carry out one action (ValueError with the reason): the actions and
+        their arguments are the device's face's (twin/actions.py)."""
         if not isinstance(request, dict):
-            raise ValueError("send a JSON object: {node, action, key|pin}")
+            raise ValueError("send a JSON object: {node, action, key|pin|...}")
         twin = self.twin(request.get("node"))
-        action = request.get("action")
-        if action in FACE_ACTIONS:
-            arguments = _face_arguments(twin.description.face, action, request)
-            perform_face = FACE_ACTIONS[action][1]
-            self.emulator.run(lambda now: perform_face(twin, arguments, now))
-            return
-        if action not in ACTIONS:
-            known = ", ".join([*ACTIONS, *FACE_ACTIONS])
-            raise ValueError(f"unknown action {action!r}; known: {known}")
-        argument, perform = ACTIONS[action]
-        value = None
-        if argument is not None:
-            low, high = 1, _COUNTS[argument](twin.description.face)
-            if high < low:
-                raise ValueError(f"a {twin.description.title} has no action {action!r} "
-                                 f"(it has no {argument}s)")
-            value = request.get(argument)
-            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-                raise ValueError(f"{argument} must be {low}..{high}, not {value!r}")
-        self.emulator.run(lambda now: perform(twin, value, now))
+        name = request.get("action")
+        action = ACTIONS.get(name) if isinstance(name, str) else None
+        if action is None:
+            raise ValueError(f"unknown action {name!r}; known: {', '.join(ACTIONS)}")
+        face = twin.description.face
+        if not action.fits(face):
+            raise ValueError(f"a {twin.description.title} has nothing for {name!r}; it has "
+                             f"{', '.join(a.name for a in actions_of(face))}")
+        arguments = action.check(face, request)
+        self.emulator.run(lambda now: action.perform(twin, arguments, now))
 
 
 def create_app(emulator: Emulator, hosts: Collection[str] | None = ("127.0.0.1",),
