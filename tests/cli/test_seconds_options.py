@@ -28,3 +28,15 @@ def test_a_non_finite_number_of_seconds_is_a_usage_error(tmp_path: Path, command
     [error] = result.output.splitlines()
     assert "finite number of seconds" in error, error
     assert not out.exists()  # refused before anything was written
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "1e400"])
+@pytest.mark.parametrize(("option", "unit"), [("--speed", "times the pace"),
+                                              ("--duration", "seconds")])
+def test_monitor_refuses_a_non_finite_speed_or_duration(tmp_path: Path, option: str, unit: str,
+                                                        value: str) -> None:
+    log = tmp_path / "bus.log"
+    log.write_text("(1.000000) vcan0 18A#0000000001\n")
+    result = CliRunner().invoke(cli, ["monitor", "--file", str(log), option, value])
+    assert result.exit_code == 2, result.output
+    assert f"finite number of {unit}" in result.output.splitlines()[-1]
