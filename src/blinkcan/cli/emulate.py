@@ -30,6 +30,7 @@ from blinkcan.cli.bus_options import (
     parse_node_id,
 )
 from blinkcan.cli.clock import ABSOLUTE, Clock
+from blinkcan.cli.command_socket import command_socket
 from blinkcan.cli.extras import install_command
 from blinkcan.cli.render import output_console
 from blinkcan.cli.typed_commands import typed_commands
@@ -166,7 +167,8 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
-        with emulator, panel(emulator, web, console), typed_commands(emulator, console):
+        with emulator, panel(emulator, web, console), \
+                typed_commands(emulator, console) as commands, command_socket(commands, console):
             threading.Event().wait()
     except KeyboardInterrupt:
         console.print("stopped")
