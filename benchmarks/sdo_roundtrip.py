@@ -1,24 +1,36 @@
-"""SDO round trips on one virtual bus: the blinkcan driver against a twin in the Emulator,
-beside python-canopen's RemoteNode against its LocalNode, same object dictionary, same run.
+"""SDO round trips: the blinkcan driver (HostBus) against a twin in the Emulator, beside
+python-canopen's RemoteNode against its LocalNode, same object dictionary, same run; in one
+process on python-can's virtual bus, and across processes on udp_multicast (hop limit 0: the
+servers in a child process).
 
 Expedited reads (1000h) and 20-byte segmented uploads (a string object added for the benchmark
-to the keypad table, so both servers hold it). Target (DESIGN.md): >= 1.0x the anchor, and
->= 85 % of a same-shape Notifier echo (the floor: no SDO work at all).
+to the keypad table, so both servers hold it). The floor is a same-shape echo: a Notifier
+callback answers, a Notifier wakes the caller through an Event, no SDO work at all. The three
+run in alternating blocks, so all see the same machine load; figures are round trips per CPU
+second of the processes involved (the machine is shared; wall figures printed after), medians
+with ranges over the blocks. Targets (DESIGN.md): >= 1.0x the anchor, >= 85 % of the floor.
 Also the latency from a key-state frame on the bus to the application's callback.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import random
 import statistics
+import subprocess
+import sys
 import threading
 import time
 import uuid
 from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 import can
 import canopen
 
+from benchmarks.measure import ratio_text, ratios, spread
 from blinkcan.devices import describe_keypad
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import text, var
@@ -38,93 +50,184 @@ def _description() -> DeviceDescription:
     return dataclasses.replace(base, table=base.table.with_objects(extra))
 
 
-def _timed(call: Callable[[], object], count: int) -> tuple[float, list[float]]:
-    latencies = []
-    start = time.perf_counter()
-    for _ in range(count):
-        begin = time.perf_counter()
-        call()
-        latencies.append(time.perf_counter() - begin)
-    return count / (time.perf_counter() - start), latencies
+class _Echo(can.Listener):
+    """The floor's server side: answers a request from the Notifier's callback, as the
+    Emulator answers from its reader's thread (runtime/scheduler.py ``deliver``)."""
+
+    def __init__(self, bus: can.BusABC) -> None:
+        self.bus = bus
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if msg.arbitration_id == 0x600 + NODE:  # not its own echoed reply (udp_multicast)
+            self.bus.send(can.Message(arbitration_id=0x580 + NODE, data=msg.data,
+                                      is_extended_id=False))
 
 
-def _summary(rate: float, latencies: list[float]) -> str:
-    ordered = sorted(latencies)
-    p99 = ordered[int(len(ordered) * 0.99)]
-    return (f"{rate:>8,.0f}/s  p50 {statistics.median(ordered) * 1e6:5.0f} us  "
-            f"p99 {p99 * 1e6:5.0f} us")
+class _Waker(can.Listener):
+    """The floor's client side: a Notifier wakes the caller through an Event, as both SDO
+    clients do."""
+
+    def __init__(self) -> None:
+        self.arrived = threading.Event()
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if msg.arbitration_id == 0x580 + NODE:  # not its own echoed request (udp_multicast)
+            self.arrived.set()
 
 
-def measure(count: int, block: int = 250) -> dict[str, tuple[float, list[float]]]:
-    """Both setups alive at once on two virtual channels, measured in alternating blocks so
-    both see the same machine load."""
+def _floor_call(bus: can.BusABC) -> tuple[Callable[[], object], Callable[[], None]]:
+    """A same-shape echo round trip with no SDO work: the floor any SDO pair pays."""
+    waker = _Waker()
+    notifier = can.Notifier(bus, [waker], timeout=0.1)
+    request = can.Message(arbitration_id=0x600 + NODE, data=bytes(8), is_extended_id=False)
+
+    def call() -> None:
+        waker.arrived.clear()
+        bus.send(request)
+        waker.arrived.wait(1)
+
+    return call, notifier.stop
+
+
+def _servers(description: DeviceDescription, ours: can.BusABC, anchor: canopen.Network,
+             floor: can.BusABC) -> contextlib.ExitStack:
+    """The three server sides: our twin in the Emulator, python-canopen's LocalNode, the
+    echo. Closed with the returned stack."""
+    stack = contextlib.ExitStack()
+    stack.enter_context(Emulator(ours, [CanopenTwin(description, NODE)]))
+    anchor.add_node(canopen.LocalNode(NODE, object_dictionary(description, NODE)))
+    stack.callback(can.Notifier(floor, [_Echo(floor)], timeout=0.1).stop)
+    return stack
+
+
+#: a measure: name -> (round trips, CPU seconds, wall seconds), per block
+Blocks = dict[str, list[tuple[int, float, float]]]
+
+
+def _blocks(calls: dict[str, Callable[[], object]], count: int, block: int,
+            other_cpu: Callable[[], float] = lambda: 0.0) -> Blocks:
+    """Every call ``count`` times in blocks of ``block``, the setups alternating so that all
+    see the same machine load; CPU is this process's plus ``other_cpu()`` (a server process)."""
+    results: Blocks = {name: [] for name in calls}
+    for _ in range(max(1, count // block)):
+        for name, call in calls.items():
+            n = block // 2 if "segmented" in name else block
+            other, cpu, wall = other_cpu(), time.process_time(), time.perf_counter()
+            for _ in range(n):
+                call()
+            wall = time.perf_counter() - wall
+            cpu = time.process_time() - cpu + other_cpu() - other
+            results[name].append((n, cpu, wall))
+    return results
+
+
+def in_one_process(count: int, block: int = 250) -> Blocks:
+    """Ours, python-canopen's pair and the floor alive at once on three virtual channels."""
     description = _description()
-    ours_channel, anchor_channel = f"rt-ours-{uuid.uuid4().hex}", f"rt-anchor-{uuid.uuid4().hex}"
-    device_bus, host_bus = (can.Bus(interface="virtual", channel=ours_channel) for _ in range(2))
+    channels = [f"rt-{uuid.uuid4().hex}" for _ in range(3)]
+    device_bus, host_bus = (can.Bus(interface="virtual", channel=channels[0]) for _ in range(2))
     server, client = canopen.Network(), canopen.Network()
-    server.connect(interface="virtual", channel=anchor_channel)
-    client.connect(interface="virtual", channel=anchor_channel)
-    twin = CanopenTwin(description, NODE)
-    totals: dict[str, list[float]] = {}
-    latencies: dict[str, list[float]] = {}
+    server.connect(interface="virtual", channel=channels[1])
+    client.connect(interface="virtual", channel=channels[1])
+    echo_bus, caller_bus = (can.Bus(interface="virtual", channel=channels[2]) for _ in range(2))
+    floor, stop_floor = _floor_call(caller_bus)
     try:
-        with Emulator(device_bus, [twin]), HostBus(host_bus) as host:
+        with _servers(description, device_bus, server, echo_bus), HostBus(host_bus) as host:
             sdo = host.sdo(NODE)
-            server.add_node(canopen.LocalNode(NODE, object_dictionary(description, NODE)))
             remote = canopen.RemoteNode(NODE, object_dictionary(description, NODE))
             client.add_node(remote)
-            calls = {
+            assert sdo.upload(0x2300, 0) == remote.sdo.upload(0x2300, 0) == TWENTY.encode()
+            return _blocks({
                 "ours expedited": lambda: sdo.upload(0x1000, 0),
                 "anchor expedited": lambda: remote.sdo.upload(0x1000, 0),
+                "floor": floor,
                 "ours segmented": lambda: sdo.upload(0x2300, 0),
                 "anchor segmented": lambda: remote.sdo.upload(0x2300, 0),
-            }
-            assert sdo.upload(0x2300, 0) == remote.sdo.upload(0x2300, 0) == TWENTY.encode()
-            for _ in range(max(1, count // block)):
-                for name, call in calls.items():
-                    n = block if "expedited" in name else block // 2
-                    rate, lat = _timed(call, n)
-                    totals.setdefault(name, []).append(n / rate)
-                    latencies.setdefault(name, []).extend(lat)
+            }, count, block)
     finally:
+        stop_floor()
         client.disconnect()
         server.disconnect()
+        for bus in (device_bus, host_bus, echo_bus, caller_bus):
+            bus.shutdown()
+
+
+def _multicast_kwargs(address: str) -> dict[str, Any]:
+    group, port = address.split(":")
+    return {"interface": "udp_multicast", "channel": group, "port": int(port), "hop_limit": 0}
+
+
+def serve(ours: str, anchor: str, floor: str) -> None:
+    """The server sides in a process of their own, on udp_multicast ``group:port`` addresses
+    (hop limit 0: this machine only). Answers "cpu" on stdin with its CPU seconds; stops at
+    the end of stdin."""
+    description = _description()
+    device_bus, echo_bus = can.Bus(**_multicast_kwargs(ours)), can.Bus(**_multicast_kwargs(floor))
+    server = canopen.Network()
+    server.connect(**_multicast_kwargs(anchor))
+    try:
+        with _servers(description, device_bus, server, echo_bus):
+            print("ready", flush=True)
+            for line in sys.stdin:
+                if line.strip() != "cpu":
+                    break
+                print(time.process_time(), flush=True)
+    finally:
+        server.disconnect()
         device_bus.shutdown()
+        echo_bus.shutdown()
+
+
+def across_processes(count: int, block: int = 250) -> Blocks | None:
+    """The same three pairs, each server in a child process on udp_multicast; CPU counts
+    both processes. None where udp_multicast is not available."""
+    addresses = [f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}:"
+                 f"{random.randint(40000, 60000)}" for _ in range(3)]
+    try:
+        host_bus, caller_bus = (can.Bus(**_multicast_kwargs(addresses[i])) for i in (0, 2))
+    except (OSError, ImportError, can.CanError):
+        return None
+    child = subprocess.Popen(
+        [sys.executable, "-c", "import sys; from benchmarks.sdo_roundtrip import serve; "
+         "serve(*sys.argv[1:])", *addresses],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+        cwd=Path(__file__).resolve().parent.parent)
+    assert child.stdin is not None
+    assert child.stdout is not None
+    stdin, stdout = child.stdin, child.stdout
+
+    def child_cpu() -> float:
+        stdin.write("cpu\n")
+        stdin.flush()
+        return float(stdout.readline())
+
+    client = canopen.Network()
+    floor, stop_floor = _floor_call(caller_bus)
+    try:
+        if stdout.readline().strip() != "ready":
+            raise RuntimeError("the server process did not start")
+        client.connect(**_multicast_kwargs(addresses[1]))
+        description = _description()
+        with HostBus(host_bus) as host:
+            sdo = host.sdo(NODE)
+            remote = canopen.RemoteNode(NODE, object_dictionary(description, NODE))
+            client.add_node(remote)
+            assert sdo.upload(0x1000, 0) == remote.sdo.upload(0x1000, 0)
+            return _blocks({
+                "ours expedited": lambda: sdo.upload(0x1000, 0),
+                "anchor expedited": lambda: remote.sdo.upload(0x1000, 0),
+                "floor": floor,
+            }, count, block, child_cpu)
+    finally:
+        stop_floor()
+        client.disconnect()
+        stdin.close()
+        try:
+            child.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            child.kill()
         host_bus.shutdown()
-    return {name: (len(latencies[name]) / sum(totals[name]), latencies[name]) for name in totals}
-
-
-def transport_floor(count: int) -> float:
-    """Round trips/s of a bare echo of the same shape as ours, with no SDO work: the server
-    side answers from a python-can Notifier's callback (the Emulator handles a frame on its
-    Notifier's thread, runtime/emulator.py), the caller sends and waits through a Notifier and
-    an Event (as both SDO clients do). A floor: any SDO server and client pay at least this."""
-    channel = f"floor-{uuid.uuid4().hex}"
-    caller, echo = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
-    arrived = threading.Event()
-
-    class Echo(can.Listener):
-        def on_message_received(self, msg: can.Message) -> None:
-            echo.send(can.Message(arbitration_id=0x595, data=msg.data, is_extended_id=False))
-
-    class Waker(can.Listener):
-        def on_message_received(self, msg: can.Message) -> None:
-            arrived.set()
-
-    echo_notifier = can.Notifier(echo, [Echo()], timeout=0.1)
-    notifier = can.Notifier(caller, [Waker()], timeout=0.1)
-    request = can.Message(arbitration_id=0x615, data=bytes(8), is_extended_id=False)
-    start = time.perf_counter()
-    for _ in range(count):
-        arrived.clear()
-        caller.send(request)
-        arrived.wait(1)
-    rate = count / (time.perf_counter() - start)
-    notifier.stop()
-    echo_notifier.stop()
-    caller.shutdown()
-    echo.shutdown()
-    return rate
+        caller_bus.shutdown()
 
 
 def key_latency(presses: int) -> list[float]:
@@ -157,20 +260,40 @@ def key_latency(presses: int) -> list[float]:
     return [b - a for a, b in zip(sent, seen, strict=False)]
 
 
-def main(smoke: bool = False) -> None:
-    count = 300 if smoke else 5000
-    results = measure(count)
-    print("SDO round trips on a virtual bus (target >= 1.0x the anchor)")
+def _rates(blocks: list[tuple[int, float, float]], per: int) -> list[float]:
+    """Round trips per CPU second (per=1) or per wall second (per=2), block by block."""
+    return [block[0] / block[per] for block in blocks]
+
+
+def _report(title: str, results: Blocks) -> None:
+    print(f"  {title}: round trips per CPU second of the processes, median (range) of "
+          f"{len(results['floor'])} interleaved blocks; per wall second after")
+    floor = _rates(results["floor"], 1)
     for kind in ("expedited", "segmented"):
-        ours, anchor = results[f"ours {kind}"], results[f"anchor {kind}"]
+        if f"ours {kind}" not in results:
+            continue
+        ours, anchor = (_rates(results[f"{who} {kind}"], 1) for who in ("ours", "anchor"))
         label = "expedited 1000h" if kind == "expedited" else "20-byte segmented"
-        print(f"  {label:<18} blinkcan {_summary(*ours)}")
-        print(f"  {'':<18} canopen  {_summary(*anchor)}   ratio {ours[0] / anchor[0]:.2f}x")
-    floor = transport_floor(count)
-    expedited = results["ours expedited"][0]
-    print(f"  floor (a same-shape Notifier echo, no SDO): {floor:,.0f}/s; blinkcan reaches "
-          f"{expedited / floor:.0%} of it (target >= 85 %), python-canopen "
-          f"{results['anchor expedited'][0] / floor:.0%}")
+        print(f"    {label:<18} blinkcan {spread(ours):>24}/s  python-canopen "
+              f"{spread(anchor):>24}/s  ratio {ratio_text(anchor, ours)} (target >= 1.0x)")
+        print(f"    {'':<18} wall     {spread(_rates(results[f'ours {kind}'], 2)):>24}/s  "
+              f"{'':<14} {spread(_rates(results[f'anchor {kind}'], 2)):>24}/s")
+    ours, anchor = (_rates(results[f"{who} expedited"], 1) for who in ("ours", "anchor"))
+    print(f"    floor (a same-shape Notifier echo, no SDO) {spread(floor)}/s: blinkcan "
+          f"{spread(ratios(floor, ours), 100, '.0f')} % of it (target >= 85 %), "
+          f"python-canopen {spread(ratios(floor, anchor), 100, '.0f')} %")
+
+
+def main(smoke: bool = False) -> None:
+    count = 300 if smoke else 6000
+    print("SDO round trips: blinkcan (HostBus <-> twin in the Emulator) beside python-canopen "
+          "(RemoteNode <-> LocalNode), same object dictionary, same run")
+    _report("in one process (virtual bus)", in_one_process(count))
+    across = across_processes(count // 2)
+    if across is None:
+        print("  across processes: udp_multicast is not available here (skipped)")
+    else:
+        _report("across processes (udp_multicast, hop limit 0)", across)
     latencies = sorted(key_latency(50 if smoke else 500))
     if latencies:
         print(f"  key-state frame to callback: p50 {statistics.median(latencies) * 1e6:.0f} us, "

@@ -359,7 +359,7 @@ CLI_CHECKS: dict[str, Callable[[Case, dict[str, Any]], list[CliCheck]]] = {
         CliCheck(("heartbeat", "100"), lambda t: _heartbeat_ms(case, t) == 100)],
     "write": lambda case, s: [
         CliCheck(("write", "producer_heartbeat_time", "250"),
-                 lambda t: _heartbeat_ms(case, t) == 250)],
+                 lambda t: _heartbeat_ms(case, t) == 250)] if case.canopen else [],
     "read": lambda case, s: [
         CliCheck(("read", "vendor_id"), says=str(case.description.table["vendor_id"].default))
     ] if case.canopen else [],  # J1939 mode answers no SDO
@@ -392,16 +392,18 @@ CLI_CHECKS: dict[str, Callable[[Case, dict[str, Any]], list[CliCheck]]] = {
     "inputs": lambda case, s: [
         CliCheck(("inputs",), says="IN0:") for _ in range(
             min(1, case.description.face.analog_inputs + case.description.face.digital_inputs))],
-    "set-baud": lambda case, s: [
-        CliCheck(("set-baud", str(s["bitrate"]), "--yes"), says=f"bit rate {s['bitrate']}")
-    ] if case.canopen else [],  # a CANopen setting
+    "set-baud": lambda case, s: [  # the rate in use: nothing changes at the next reset
+        CliCheck(("set-baud", str(s["bitrate"]), "--yes"), says=f"bit rate {s['bitrate']}")],
     "restore-defaults": lambda case, s: [
         CliCheck(("restore-defaults", "--yes"), says="factory defaults restored")
     ] if case.canopen and "restore_all_parameters" in case.description.table else [],
-    "set-node-id": lambda case, s: [
+    "set-node-id": lambda case, s: [  # over another protocol: its address
         CliCheck(("set-node-id", str(_free_node(s["node_id"])), "--yes"),
-                 lambda t: t["settings"]["node_id"] == _free_node(s["node_id"]))
-    ] if case.canopen else [],
+                 _field_is(("settings", "node_id"), _free_node(s["node_id"])))
+    ] if case.canopen else [
+        CliCheck(("set-node-id", str(_free_node(s[case.protocol]["source_address"])), "--yes"),
+                 _field_is((case.protocol, "source_address"),
+                           _free_node(s[case.protocol]["source_address"])))],
 }
 
 #: commands of the command line that do not name a device model, and why
@@ -442,12 +444,31 @@ def test_every_cli_command_is_checked_for_every_case() -> None:
     assert top == (set(CLI_CHECKS) - group_commands) | set(NOT_PER_DEVICE) | set(ELSEWHERE)
 
 
+def _in_canopen(case: Case) -> Case:
+    return Case(case.model, case.generation, case.quirks, "canopen")
+
+
+def _refused(case: Case, snapshot: dict[str, Any], group: list[str]) -> list[str]:
+    """The device group's commands that do not apply to the case in its protocol although they
+    apply in CANopen: the command line refuses them (a usage error, before the bus)."""
+    if case.canopen:
+        return []
+    return [name for name in group if name in CLI_CHECKS and not CLI_CHECKS[name](case, snapshot)
+            and CLI_CHECKS[name](_in_canopen(case), snapshot)
+            and not CLI_CHECKS[name](_in_canopen(case), snapshot)[0].top_level]
+
+
 @pytest.mark.parametrize("case", cases("cli"))
 def test_the_cli_commands_that_apply_work(case: Case) -> None:
     failures = []
     with _live(case) as (bus, emulator, twin, where):
         before = emulator.run(lambda now: twin.snapshot())
         group = _subcommands(case.model.kind)
+        for name in _refused(case, before, group):  # what the protocol has no message for
+            words = [case.model.kind, *where, *CLI_CHECKS[name](_in_canopen(case), before)[0].words]
+            result = _run(*words, *bus)
+            if result.exit_code != 2 or not result.output.startswith("Error: "):
+                failures.append(f"{name} in {case.protocol}: not refused: {result.output}")
         for name, checks in CLI_CHECKS.items():
             for check in checks(case, before):
                 if not check.top_level and name not in group:

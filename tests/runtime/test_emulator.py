@@ -143,6 +143,47 @@ def test_a_twin_that_raises_does_not_stop_the_emulator(channel: str, host: can.B
         device_bus.shutdown()
 
 
+def test_twins_are_only_called_on_the_emulators_loop_one_call_at_a_time(
+        channel: str, host: can.BusABC) -> None:
+    """Frames from the reader (run at once when the loop is idle), heartbeats and calls
+    from the test's thread all reach the twin as the loop's work, never two at a time."""
+    outside: list[str] = []
+    busy = [False]
+
+    class Watched(KeypadTwin):
+        def _watch(self, what: str) -> None:
+            if not emulator.scheduler.in_loop or busy[0]:
+                outside.append(what)
+
+        def receive(self, frame: Frame, now: float) -> list[Frame]:
+            self._watch("receive")
+            busy[0] = True
+            try:
+                return super().receive(frame, now)
+            finally:
+                busy[0] = False
+
+        def advance(self, now: float) -> list[Frame]:
+            self._watch("advance")
+            return super().advance(now)
+
+    twin = Watched(settings={"producer_heartbeat_time": 10})
+    device_bus = can.Bus(interface="virtual", channel=channel)
+    try:
+        with Emulator(device_bus, [twin]) as emulator:
+            wait_for(host, 0x715)
+            read = to_message(Frame(0x615, bytes.fromhex("4000100000000000")))
+            for _ in range(50):
+                host.send(read)
+                emulator.press(twin, 1)
+                emulator.release(twin, 1)
+                assert wait_for(host, 0x595).data[0] == 0x43
+            assert emulator.stats.frames_received >= 50
+    finally:
+        device_bus.shutdown()
+    assert outside == []
+
+
 def test_two_keypads_on_one_bus_and_a_power_cycle(channel: str, host: can.BusABC) -> None:
     first, second = KeypadTwin(0x15), KeypadTwin(0x16)
     device_bus = can.Bus(interface="virtual", channel=channel)

@@ -7,8 +7,9 @@ already reads it (a python-canopen ``Network``'s, the application's) is joined, 
 
 The bus is a transport port (``runtime.port``: python-can's or the simulated one, never asked
 which). Handlers and timers run on the port's scheduler (``runtime.scheduler``), one at a
-time, so drivers need no locks for their state: a thread of its own on real buses, the
-simulation itself in virtual time (``blinkcan.testing.Rig``). SDO replies take a fast path:
+time, so drivers need no locks for their state: a loop of its own on real buses (its thread,
+or the reader's while it holds the loop to run a frame's handlers), the simulation itself in
+virtual time (``blinkcan.testing.Rig``). SDO replies take a fast path:
 they are handed to the waiting caller straight from the port's reader. An exception in a
 handler is logged with its traceback and the loop goes on; in simulated time it is raised
 again from the call that ran the simulation (``Scheduler.guarded``), so a test sees it.
@@ -240,11 +241,7 @@ class HostBus:
             if fast is not None:
                 fast(frame, now)
         if extended or frame.can_id in self._handlers:
-            scheduler = self.scheduler
-            if scheduler.in_loop:
-                self._dispatch(frame, now)
-            else:
-                scheduler.post(lambda: self._dispatch(frame, now))
+            self.scheduler.deliver(self._dispatch, frame, now)
 
     def _dispatch(self, frame: Frame, now: float) -> None:
         handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())

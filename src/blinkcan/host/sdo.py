@@ -189,16 +189,14 @@ class SdoChannel:
             self.host.send(Frame(self._request_id, request))
             self.host.wait(self._signal, timeout)
         finally:
-            with self._state_lock:
+            with self._state_lock:  # no reply is taken after this
                 self._awaiting = False
                 self._accept = None
-        with self._state_lock:
-            if self.host.closed:
-                raise SdoError("the bus was shut down", self.node_id,
-                               int.from_bytes(request[1:3], "little"), request[3])
-            if not self._signal.is_set():
-                return None
-            return self._reply
+                arrived, reply = self._signal.is_set(), self._reply
+        if self.host.closed:
+            raise SdoError("the bus was shut down", self.node_id,
+                           int.from_bytes(request[1:3], "little"), request[3])
+        return reply if arrived else None
 
     def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
         request: bytes | None = transfer.start()

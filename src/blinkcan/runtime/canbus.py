@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import collections
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -16,6 +17,7 @@ from blinkcan.protocol.frame import Frame
 
 log = logging.getLogger(__name__)
 _MAX_BACKOFF = 1.0
+_new_tuple = tuple.__new__
 
 
 def to_message(frame: Frame, timestamp: float = 0.0) -> can.Message:
@@ -35,8 +37,8 @@ def to_frame(message: can.Message) -> Frame | None:
     data = message.data
     if len(data) > 8:
         return None
-    # python-can checked the identifier; Frame.trusted skips checking it again
-    return Frame.trusted(message.arbitration_id, bytes(data), message.is_extended_id)
+    # python-can checked the identifier: no checks again (Frame.trusted, inlined: every frame)
+    return _new_tuple(Frame, (message.arbitration_id, bytes(data), message.is_extended_id))
 
 
 def open_bus(interface: str | None = None, channel: str | None = None,
@@ -73,56 +75,62 @@ class OwnFrames:
     """Recognises a bus's own frames when the bus echoes them (see :func:`echoes_own_frames`).
 
     Frames sent are remembered by content for ``window`` seconds; a received frame equal to one
-    of them is the echo and is consumed. An equal frame from another node within that window is
-    indistinguishable from the echo; it is consumed instead and the echo passes: the receiver
-    sees the same content either way. Thread-safe: senders and the reader may differ.
+    of them is the echo and is consumed (the oldest of equal ones first). An equal frame from
+    another node within that window is indistinguishable from the echo; it is consumed instead
+    and the echo passes: the receiver sees the same content either way. Thread-safe: senders and
+    the reader may differ. Every frame sent and received passes here: the reader takes no lock
+    (a dict lookup, and a deque's atomic popleft for an echo); senders take one, and forget the
+    frames whose echoes never came once a window.
     """
 
     def __init__(self, bus: can.BusABC, window: float = 2.0) -> None:
         self.active = echoes_own_frames(bus)
         self.window = window
-        self._pending: collections.Counter[tuple[int, bytes, bool]] = collections.Counter()
-        self._order: collections.deque[tuple[float, tuple[int, bytes, bool]]] = (
-            collections.deque())
+        #: frame -> the times it was sent, oldest first, echo not yet seen (the reader only
+        #: pops from a deque; only senders, under the lock, add and remove keys)
+        self._pending: dict[Frame, collections.deque[float]] = {}
+        self._sweep_at = -math.inf
         self._lock = threading.Lock()
 
     def sent(self, frame: Frame, now: float) -> None:
         if not self.active:
             return
-        key = (frame.can_id, frame.data, frame.extended)
         with self._lock:
-            self._expire(now)
-            self._pending[key] += 1
-            self._order.append((now, key))
+            times = self._pending.get(frame)
+            if times is None:
+                self._pending[frame] = collections.deque((now,))
+            else:
+                times.append(now)
+            if now >= self._sweep_at:
+                self._sweep(now)
 
     def is_echo(self, frame: Frame, now: float) -> bool:
         if not self.active:
             return False
-        key = (frame.can_id, frame.data, frame.extended)
-        with self._lock:
-            self._expire(now)
-            count = self._pending.get(key, 0)
-            if not count:
+        times = self._pending.get(frame)
+        if not times:  # never sent (it is there before its echo can come back)
+            return False
+        window = self.window
+        while True:
+            try:
+                sent_at = times.popleft()
+            except IndexError:
                 return False
-            if count == 1:
-                del self._pending[key]
-            else:
-                self._pending[key] = count - 1
-            for i, (_, pending) in enumerate(self._order):
-                if pending == key:
-                    del self._order[i]
-                    break
-            return True
+            if now - sent_at <= window:
+                return True
+            # older than the window: that echo never came; the next one may be this
 
-    def _expire(self, now: float) -> None:
-        order, pending = self._order, self._pending
-        while order and now - order[0][0] > self.window:
-            _, key = order.popleft()
-            count = pending.get(key, 0)
-            if count <= 1:
-                pending.pop(key, None)
-            else:
-                pending[key] = count - 1
+    def _sweep(self, now: float) -> None:
+        """Forget the frames whose every echo is in or older than the window's past."""
+        self._sweep_at = now + self.window
+        window = self.window
+        pending = self._pending
+        for frame, times in list(pending.items()):
+            try:
+                if now - times[-1] > window:
+                    del pending[frame]
+            except IndexError:  # all echoes came
+                del pending[frame]
 
 
 @dataclass

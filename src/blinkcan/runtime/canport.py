@@ -27,13 +27,14 @@ class _PortListener(can.Listener):
 
     def __init__(self, port: CanBusPort) -> None:
         self.port = port
+        self.clock = port.clock
 
     def on_message_received(self, msg: can.Message) -> None:
         frame = to_frame(msg)
         if frame is None:
             return
         port = self.port
-        now = port.scheduler.clock()
+        now = self.clock()
         own = port.own
         if own.active and own.is_echo(frame, now):
             return
@@ -51,6 +52,7 @@ class CanBusPort:
     def __init__(self, bus: can.BusABC, *, notifier: can.Notifier | None = None,
                  clock: Callable[[], float] = time.monotonic, name: str = "blinkcan") -> None:
         self.bus = bus
+        self.clock = clock
         self.scheduler = RealTimeScheduler(name, clock)
         self.reading = ReadStats()
         self.own = OwnFrames(bus)
@@ -62,7 +64,7 @@ class CanBusPort:
         self._listener = _PortListener(self)
 
     def send(self, frame: Frame) -> None:
-        now = self.scheduler.clock()
+        now = self.clock()
         own = self.own
         if own.active:
             own.sent(frame, now)

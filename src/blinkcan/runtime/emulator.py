@@ -3,14 +3,24 @@
 The emulator runs on a transport port (``runtime.port``: python-can's or the simulated one,
 never asked which) and its scheduler (``runtime.scheduler``). Twins are only ever called on
 the scheduler's loop, one call at a time, so nothing needs a lock: on a python-can bus the
-reader thread posts each frame to the loop (a thread of its own, in real time); on a simulated
-bus the simulation itself is the loop, in virtual time, with no thread at all
-(``blinkcan.testing``).
+reader thread hands each frame to the loop (``scheduler.deliver``: run at once on the reader's
+thread, holding the loop, when the loop is idle, else queued after what was posted before;
+timers run on the loop's own thread); on a simulated bus the simulation itself is the loop,
+in virtual time, with no thread at all (``blinkcan.testing``).
 Rules:
 - Frames a twin sends go on the bus and, because a bus does not echo its own frames, are also
   delivered to the other twins of this emulator that listen to that COB-ID.
 - Timers come from ``twin.next_deadline()``: one scheduler timer per twin; lateness is
   recorded.
+- Real devices are not in phase: each powers up at its own moment, so their periodic frames
+  do not all fall due at once. The emulator powers each twin up (at :meth:`Emulator.start`
+  and :meth:`Emulator.add`) as if it had booted a per-node fraction of ``power_up_spread``
+  earlier (:func:`power_up_phase`): its schedules start out of phase with the others', while
+  its boot-up frame still goes out at once and it answers at once. The fraction is fixed per
+  node id (a golden-ratio sequence: any set of nodes spreads evenly), so runs repeat; a
+  power-up asked for by the caller (:meth:`Emulator.power_on`) happens exactly when asked.
+  ``power_up_spread=0`` keeps every twin in phase (``blinkcan.testing.Rig`` does: a test's
+  timeline is what it says).
 - With ``response_delay`` > 0 a twin's reply leaves that long after the request, and an SDO
   request that reaches a twin still busy answering the previous one is dropped, as real keypads
   do (errata.md, field reports).
@@ -50,6 +60,17 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 #: real time: how long a twin whose deadline did not move waits before it is asked again
 _STUCK_RETRY_S = 0.001
+#: the window power-up phases spread over: the shortest period the devices' object ranges
+#: allow (heartbeat and PDO periods from 10 ms), so no twin starts with a period already owed
+DEFAULT_POWER_UP_SPREAD = 0.01
+_GOLDEN_FRACTION = (5 ** 0.5 - 1) / 2
+
+
+def power_up_phase(node_id: int, spread: float) -> float:
+    """How much earlier than its power-up the twin at ``node_id`` is taken to have booted: a
+    fraction of ``spread`` fixed per node, n x golden ratio (mod 1), so that nodes of any
+    number and numbering spread evenly over it."""
+    return spread * ((node_id * _GOLDEN_FRACTION) % 1.0)
 
 
 @dataclass
@@ -77,8 +98,11 @@ class Emulator:
         response_delay: float = 0.0,
         notifier: can.Notifier | None = None,
         clock: Callable[[], float] = time.monotonic,
+        power_up_spread: float = DEFAULT_POWER_UP_SPREAD,
     ) -> None:
         check_time("response_delay", response_delay, 0)
+        #: twins powered up here boot out of phase over this many seconds (module docstring)
+        self.power_up_spread = check_time("power_up_spread", power_up_spread, 0)
         taken = take_port(bus, notifier=notifier, clock=clock, name="blinkcan-emulator")
         #: the python-can bus given (None when made on a port)
         self.bus: can.BusABC | None = taken.bus
@@ -114,7 +138,7 @@ class Emulator:
             raise RuntimeError("emulator already started")
         self._running = True
         self.scheduler.start()
-        self._detach = self.port.listen(self._on_frame)
+        self._detach = self.port.listen(partial(self.scheduler.deliver, self._received))
         self.run(self._power_on_all)
         return self
 
@@ -162,7 +186,7 @@ class Emulator:
             self._index_dirty = True
             if self._running:
                 index = len(self.twins) - 1
-                frames = self._call(index, twin.power_on, now)
+                frames = self._call(index, twin.power_on, now - self._phase(twin))
                 self._reschedule(index)
                 self._emit(index, frames, now)
             return []
@@ -204,20 +228,13 @@ class Emulator:
 
     def _power_on_all(self, now: float) -> list[Frame]:
         for i, twin in enumerate(self.twins):
-            frames = self._call(i, twin.power_on, now)
+            frames = self._call(i, twin.power_on, now - self._phase(twin))
             self._reschedule(i)
             self._emit(i, frames, now)
         return []
 
-    def _on_frame(self, frame: Frame, now: float) -> None:
-        """A frame from the port, in its receiving context: on the loop, to the twins."""
-        scheduler = self.scheduler
-        if scheduler.in_loop:
-            self._received(frame, now)
-        else:
-            scheduler.post(partial(self._received, frame, now))
-
     def _received(self, frame: Frame, now: float) -> None:
+        """A frame from the port, on the loop (``scheduler.deliver``): to the twins."""
         if not self._running:
             return
         self.stats.frames_received += 1
@@ -238,13 +255,21 @@ class Emulator:
         try:
             return method(*args)
         except Exception as error:
-            self.stats.twin_errors += 1
-            self.scheduler.failed(error, f"twin {self._name(i)}")
+            self._twin_failed(i, error)
             return []
+
+    def _twin_failed(self, i: int, error: Exception) -> None:
+        self.stats.twin_errors += 1
+        self.scheduler.failed(error, f"twin {self._name(i)}")
 
     def _deliver(self, frame: Frame, source: int | None, now: float) -> None:
         """Give ``frame`` to every twin listening to its COB-ID except its sender."""
-        targets = self._targets(frame)
+        if frame.extended:
+            targets: Iterable[int] = range(len(self.twins))
+        else:
+            if self._index_dirty:
+                self._refresh_index()
+            targets = self._index.get(frame.can_id, ())
         for i in targets:
             if i == source:
                 continue
@@ -261,19 +286,18 @@ class Emulator:
                     self._delayed[key] = self.scheduler.call_at(
                         now + self.response_delay, partial(self._reply_due, key, i, replies))
             else:
-                replies = self._call(i, twin.receive, frame, now)
+                try:  # self._call, inlined: every frame a twin hears comes this way
+                    replies = twin.receive(frame, now)
+                except Exception as error:
+                    self._twin_failed(i, error)
+                    replies = []
                 self._reschedule(i)
-                self._emit(i, replies, now)
+                if replies:
+                    self._emit(i, replies, now)
 
     def _reply_due(self, key: int, i: int, replies: list[Frame]) -> None:
         if self._delayed.pop(key, None) is not None and self._running:
             self._emit(i, replies, self._clock())
-
-    def _targets(self, frame: Frame) -> Iterable[int]:
-        if frame.extended:
-            return range(len(self.twins))
-        self._refresh_index()
-        return self._index.get(frame.can_id, ())
 
     def _refresh_index(self) -> None:
         """Rebuild COB-ID -> twins after any twin's routes changed (a boot, a new node id)."""
@@ -305,7 +329,8 @@ class Emulator:
                 if self._failing_sends == 1:  # a shut-down bus fails every frame: log once
                     log.warning("send failed for %r: %s (further failures are counted, "
                                 "reported when it sends again or stops)", frame, error)
-            self._deliver(frame, source, now)
+            if self._index_dirty or frame.extended or frame.can_id in self._index:
+                self._deliver(frame, source, now)  # to the twins that listen (often none)
 
     def _reschedule(self, i: int) -> None:
         """After any call into twin ``i``: its next deadline, and whether its routes changed
@@ -356,6 +381,10 @@ class Emulator:
             self._stuck_reported.add(i)
             log.error("%s; asking it again every %g s", message, _STUCK_RETRY_S)
         self._plan(i, now + _STUCK_RETRY_S)
+
+    def _phase(self, twin: CanopenTwin) -> float:
+        spread = self.power_up_spread
+        return power_up_phase(twin.node_id, spread) if spread else 0.0
 
     def _name(self, i: int) -> str:
         twin = self.twins[i]

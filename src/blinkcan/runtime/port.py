@@ -32,8 +32,8 @@ class Port(Protocol):
 
     Handlers run in the port's receiving context: the reader thread of a real bus, the
     simulation itself on a simulated one (then ``scheduler.in_loop`` is true there). A
-    handler must be quick; work that touches its owner's state goes to ``scheduler.post``
-    unless ``scheduler.in_loop``.
+    handler must be quick; work that touches its owner's state goes through
+    ``scheduler.deliver`` (on the loop: at once when it is idle, else queued).
     """
 
     @property

@@ -3,7 +3,9 @@
 Two implementations share one interface:
 
 - :class:`RealTimeScheduler`: an owning thread, a queue for other threads' calls and a timer
-  heap on ``time.monotonic``. This is what runs on real buses (and python-can's ``virtual``).
+  heap on ``time.monotonic``; a frame a reader thread delivers while the loop is idle runs at
+  once on that thread, which holds the loop meanwhile (no thread hop per frame). This is what
+  runs on real buses (and python-can's ``virtual``).
 - :class:`SimulatedScheduler`: no thread and no sleeping. A virtual clock jumps from one due
   event to the next; events due at the same instant run in the order they were scheduled, so a
   scenario gives the same frames at the same times on every run. A caller that waits (a driver
@@ -37,6 +39,8 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Hashable
 from concurrent.futures import Future, ThreadPoolExecutor
+from functools import partial
+from threading import get_ident
 from typing import Any, Protocol, TypeVar
 
 from blinkcan.errors import BlinkcanError
@@ -77,6 +81,41 @@ class Flag:
 
     def is_set(self) -> bool:
         return self._set
+
+
+class Wakeup:
+    """A :class:`Signal` for threads, set from any thread, waking every waiter: a lock that
+    is released while set. Lighter than ``threading.Event`` (no condition, no lock made per
+    wait): every SDO request of a driver waits on one."""
+
+    __slots__ = ("_unset",)
+
+    def __init__(self) -> None:
+        self._unset = threading.Lock()
+        self._unset.acquire()
+
+    def set(self) -> None:
+        try:  # noqa: SIM105 (every SDO reply passes here: suppress() costs a context manager)
+            self._unset.release()
+        except RuntimeError:  # set already
+            pass
+
+    def clear(self) -> None:
+        self._unset.acquire(blocking=False)
+
+    def is_set(self) -> bool:
+        return not self._unset.locked()
+
+    def wait(self, timeout: float) -> bool:
+        """True once set, False after ``timeout`` seconds."""
+        unset = self._unset
+        if not (unset.acquire(timeout=timeout) if timeout > 0 else unset.acquire(False)):
+            return False
+        try:  # noqa: SIM105 (as in set)
+            unset.release()  # it stays set: every other waiter wakes too
+        except RuntimeError:  # set again meanwhile
+            pass
+        return True
 
 
 class Timer:
@@ -194,6 +233,14 @@ class Scheduler(ABC):
         (from any thread; cheaper than a timer: frames from the reader come this way)."""
         self.call_soon(callback)
 
+    def deliver(self, callback: Callable[..., object], *args: object) -> None:
+        """Run ``callback(*args)`` on the loop, from a port's receiving context (a frame):
+        at once when already there, else as soon as it can, after what was posted before."""
+        if self.in_loop:
+            callback(*args)
+        else:
+            self.post(partial(callback, *args))
+
     def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(self.clock() + check_time("delay", delay), None, callback))
 
@@ -241,13 +288,23 @@ class _Heap:
 
 
 class RealTimeScheduler(Scheduler):
-    """An owning thread: timers on the wall clock, other threads' calls through a queue."""
+    """An owning loop on the wall clock: a thread of its own runs the timers and the calls
+    other threads post; a frame from a reader thread runs at once on that thread when the
+    loop is idle (:meth:`deliver`). Whoever runs the loop's work holds the loop meanwhile,
+    so that work stays one call at a time, in order, as on one thread."""
 
     def __init__(self, name: str = "blinkcan", clock: Callable[[], float] = time.monotonic
                  ) -> None:
         self.name = name
         self._clock = clock
+        #: wakes the loop: timers to schedule, a call posted, the stop
         self._inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        #: calls posted and actions to run, in order: ``(callback, None)``, ``(action, future)``
+        self._calls: collections.deque[tuple[Callable[[], Any], Future[Any] | None]] = (
+            collections.deque())
+        #: held by the thread that runs the loop's work (its thread, or a reader delivering)
+        self._held = threading.Lock()
+        self._owner: int | None = None
         self._heap = _Heap()
         self._thread: threading.Thread | None = None
         self._workers: ThreadPoolExecutor | None = None
@@ -263,7 +320,7 @@ class RealTimeScheduler(Scheduler):
 
     @property
     def in_loop(self) -> bool:
-        return threading.current_thread() is self._thread
+        return self._owner == get_ident()
 
     def start(self) -> None:
         if self._thread is None:
@@ -275,39 +332,70 @@ class RealTimeScheduler(Scheduler):
         if thread is None:
             return
         self._inbox.put(_STOP)
-        if threading.current_thread() is not thread:
+        if not self.in_loop and threading.current_thread() is not thread:
             thread.join(timeout=5)
         if self._workers is not None:
             self._workers.shutdown(wait=False, cancel_futures=True)
             self._workers = None
         while True:  # calls still queued will never run: fail them now
             try:
-                item = self._inbox.get_nowait()
+                _, future = self._calls.popleft()
+            except IndexError:
+                break
+            if future is not None:
+                future.set_exception(RuntimeError(f"{self.name} was stopped"))
+        while True:
+            try:
+                self._inbox.get_nowait()
             except queue.Empty:
                 break
-            if isinstance(item, tuple) and isinstance(item[1], Future):
-                item[1].set_exception(RuntimeError(f"{self.name} was stopped"))
 
     def _push(self, timer: Timer) -> Timer:
         self._inbox.put(timer)
         return timer
 
     def post(self, callback: Callable[[], object]) -> None:
-        self._inbox.put((_POSTED, callback))
+        self._calls.append((callback, None))
+        self._inbox.put(_POSTED)
+
+    def deliver(self, callback: Callable[..., object], *args: object) -> None:
+        """Run ``callback(*args)`` on the loop: at once on this thread when it is the loop's
+        or the loop is idle with nothing posted before (this thread holds the loop
+        meanwhile: no thread hop), else posted. An exception reaches the caller."""
+        me = get_ident()
+        if self._owner == me:
+            callback(*args)
+            return
+        held = self._held
+        if self._thread is not None and not self._calls and held.acquire(False):
+            try:
+                if not self._calls:  # nothing posted before still waits: order kept
+                    self._owner = me
+                    try:
+                        callback(*args)
+                    finally:
+                        self._owner = None
+                    return
+            finally:
+                held.release()
+        self.post(partial(callback, *args))
 
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         if self._thread is None or self.in_loop:
             return action()
         future: Future[T] = Future()
-        self._inbox.put((action, future))
+        self._calls.append((action, future))
+        self._inbox.put(_POSTED)
         return future.result(timeout)
 
     def signal(self) -> Signal:
-        return threading.Event()
+        return Wakeup()
 
     def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
-        assert isinstance(signal, threading.Event)
-        return signal.wait(check_time("timeout", timeout))
+        assert isinstance(signal, (Wakeup, threading.Event))
+        if timeout.__class__ is not float or timeout - timeout:  # not a finite float: check
+            check_time("timeout", timeout)
+        return signal.wait(timeout)
 
     def sleep(self, seconds: float) -> None:
         time.sleep(check_time("seconds", seconds, 0))
@@ -335,36 +423,49 @@ class RealTimeScheduler(Scheduler):
             log.debug("%s: work dropped, the scheduler is stopped", self.name)
 
     def _loop(self) -> None:
-        inbox, heap = self._inbox, self._heap
-        while True:
-            due = heap.next_due()
-            wait = _MAX_IDLE_WAIT if due is None else due - self._clock()
-            item: Any = None
-            if wait > 0:
-                try:
-                    item = inbox.get(timeout=min(wait, _MAX_IDLE_WAIT))
-                except queue.Empty:
-                    item = None
+        inbox, heap, calls, held = self._inbox, self._heap, self._calls, self._held
+        me = get_ident()
+        held.acquire()
+        self._owner = me
+        try:
             while True:
-                if item is _STOP:
+                due = heap.next_due()
+                wait = _MAX_IDLE_WAIT if due is None else due - self._clock()
+                item: Any = None
+                if wait > 0 and not calls:  # idle: a reader may deliver meanwhile
+                    self._owner = None
+                    held.release()
+                    try:
+                        item = inbox.get(timeout=min(wait, _MAX_IDLE_WAIT))
+                    except queue.Empty:
+                        item = None
+                    finally:
+                        held.acquire()
+                        self._owner = me
+                stop = False
+                while True:
+                    if item is _STOP:
+                        stop = True
+                    elif isinstance(item, Timer):
+                        heap.push(item)
+                    try:
+                        item = inbox.get_nowait()
+                    except queue.Empty:
+                        break
+                while calls and not stop:
+                    self._run_call(*calls.popleft())
+                if stop:
                     return
-                if item is not None:
-                    self._handle(item)
-                try:
-                    item = inbox.get_nowait()
-                except queue.Empty:
-                    break
-            now = self._clock()
-            while (timer := heap.pop_due(now)) is not None:
-                self.guarded(timer.callback)
+                now = self._clock()
+                while (timer := heap.pop_due(now)) is not None:
+                    self.guarded(timer.callback)
+        finally:
+            self._owner = None
+            held.release()
 
-    def _handle(self, item: Any) -> None:
-        if isinstance(item, Timer):
-            self._heap.push(item)
-            return
-        action, future = item
-        if action is _POSTED:
-            self.guarded(future)
+    def _run_call(self, action: Callable[[], Any], future: Future[Any] | None) -> None:
+        if future is None:
+            self.guarded(action)
             return
         try:
             future.set_result(action())

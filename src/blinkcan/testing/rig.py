@@ -55,7 +55,9 @@ class Rig:
         self.scheduler = SimulatedScheduler(start)
         self.network = SimulatedNetwork(self.scheduler, latency)
         self._twins_bus = SimulatedBus(self.network, "twins")
-        self.emulator = Emulator(self._twins_bus, [], response_delay=response_delay)
+        # twins in phase: a twin added at t boots at t, as the test says (no power-up spread)
+        self.emulator = Emulator(self._twins_bus, [], response_delay=response_delay,
+                                 power_up_spread=0.0)
         self.emulator.start()
         #: the controller's bus: any python-can code and blinkcan driver takes it
         self.bus = SimulatedBus(self.network, "controller")
