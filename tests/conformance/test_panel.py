@@ -13,9 +13,12 @@ tests/web/) for all of them."""
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import os
 import random
 import shutil
+import signal
 import subprocess
 import sys
 import threading
@@ -90,6 +93,16 @@ def _host_bus(channel: str, port: int) -> can.BusABC:
                     "route run: ip route add 224.0.0.0/4 dev lo")
 
 
+PR_SET_PDEATHSIG = 1  # Linux prctl(2)
+
+
+def _end_with_this_process() -> None:
+    """In the child before it runs: a SIGTERM when this test process ends, however it ends (a
+    killed test run leaves no emulator behind); elsewhere than Linux, the fixture's teardown."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
 def _start(group: list[Case]) -> Emulated:
     channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
     port = random.randint(40000, 60000)
@@ -107,7 +120,8 @@ def _start(group: list[Case]) -> Emulated:
          "--protocol", first.protocol, *(["--web", "127.0.0.1:0"] if web else []), "-q",
          "-i", "udp_multicast", "-c", channel, "--bus-kwargs", f"port={port}", "hop_limit=0"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**environment, "PYTHONUNBUFFERED": "1", "COLUMNS": "200"})
+        env={**environment, "PYTHONUNBUFFERED": "1", "COLUMNS": "200"},
+        preexec_fn=_end_with_this_process)  # noqa: PLW1509 (no lock taken: one libc call)
     emulated = Emulated(nodes, child, host, web)
     stdout = child.stdout
     assert stdout is not None

@@ -21,10 +21,12 @@ from click.testing import CliRunner
 
 from blinkcan.cli.extras import install_command
 from blinkcan.cli.main import cli
+from blinkcan.devices.registry import describe_device
 from blinkcan.fleet import decode_files
 from blinkcan.fleet.query import connect
 from blinkcan.fleet.schema import SCHEMA
 from blinkcan.fleet.task import source_key
+from blinkcan.protocol import Frame
 from tests.fleet.logs import EPOCH, Traffic, candump_lines, fleet_traffic, write_log
 
 #: the columns that say what happened (not where it was logged)
@@ -409,3 +411,18 @@ def test_remote_error_and_fd_frames_among_data_frames(tmp_path: Path, traffic: T
              "decoded)", bytes.fromhex("AABBCCDDEEFF0011")),
         ]
     assert _rows(tmp_path / "lake-3") == _rows(tmp_path / "lake-65536")
+
+
+def test_a_frame_says_who_sent_it_once_its_node_is_known(tmp_path: Path) -> None:
+    """A node learned from its identity (1000h) names the device in the text of the frames
+    the decoder still cannot decode (the same text is not reused for them)."""
+    entry = describe_device("keypad").table.get(0x1000, 0)
+    assert entry is not None
+    assert isinstance(entry.default, int)
+    reply = bytes((0x43, 0x00, 0x10, 0x00)) + entry.default.to_bytes(4, "little")
+    frames = [Frame(0x08A, b"\x01"), Frame(0x60A, bytes.fromhex("4000100000000000")),
+              Frame(0x58A, reply), Frame(0x08A, b"\x01")]
+    log = write_log(tmp_path / "learn.log", [(EPOCH + n, f) for n, f in enumerate(frames)])
+    decode_files([log], str(tmp_path / "lake"), devices={0x15: "keypad"})
+    texts = events(tmp_path / "lake", "SELECT text FROM events WHERE can_id = 138 ORDER BY time")
+    assert texts == [("node 0Ah: frame 08Ah",), ("keypad 0Ah: frame 08Ah",)]

@@ -200,3 +200,27 @@ def test_a_generation_2_keypad_gets_its_leds_back_after_a_watchdog_trip(sim: Rig
     assert trip.state is NmtState.PRE_OPERATIONAL
     sim.wait_until(lambda: sim.emulator.snapshot(sim.keypad)["keys"][6]["colour"] == "red")
     assert sim.emulator.snapshot(sim.keypad)["nmt_state"] == "operational"
+
+
+def test_an_uncertain_off_is_never_switched_back_on_by_a_restore() -> None:
+    # an off(4) the Keybox may not have applied (it was away: SdoTimeoutError, uncertain)
+    # still means "4 must not be on": the restore after its reboot fails safe
+    from blinkcan.host import SdoTimeoutError
+    from blinkcan.testing import Rig as SimulatedRig
+    from blinkcan.twin import KeyboxTwin
+
+    rig = SimulatedRig()
+    try:
+        twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C, restore_outputs=True)
+        keybox.set_outputs(high=[4, 6])
+        rig.power_off(twin)
+        with pytest.raises(SdoTimeoutError):
+            keybox.off(4)
+        assert 4 not in keybox.commanded
+        rig.power_on(twin)
+        rig.advance(2.0)
+        states = {pin["pin"]: pin["state"] for pin in twin.snapshot()["pins"]}
+        assert (states[4], states[6]) == ("off", "high")
+    finally:
+        rig.close()

@@ -13,6 +13,7 @@ import click
 
 from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
+from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.targets import check_target, writing
 from blinkcan.errors import BlinkcanError
 from blinkcan.formats.logs import FrameWriter, LogError, read_messages
@@ -51,7 +52,7 @@ def _raise_stop(signum: int, frame: object) -> None:
 
 @click.command("record")
 @click.argument("target", type=click.Path(dir_okay=False))
-@click.option("--duration", type=click.FloatRange(min=0.0), default=None,
+@click.option("--duration", type=Seconds(), default=None,
               help="Seconds to record (default: Ctrl-C).")
 @click.option("--force", is_flag=True, help="Replace TARGET if it exists.")
 @bus_options

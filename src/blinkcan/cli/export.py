@@ -19,7 +19,7 @@ from blinkcan.formats.eds import eds_text
 @click.command("export", epilog=f"DEVICE: {model_names()}.")
 @click.argument("kind", type=click.Choice(["eds", "dbc"]))
 @click.argument("device", metavar="DEVICE")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="File (default: stdout).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="File (-, or none: stdout).")
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
               show_default=True, help="EDS: the profile whose default values to write.")
 @click.option("--node-id", type=NODE_ID, default=None,
@@ -41,6 +41,8 @@ def command(kind: str, device: str, output: str | None, quirks: str, node_id: in
         description = describe_device(f"{device}@{manual}" if manual else device, quirks)
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="DEVICE") from None
+    if output == "-":  # as click's File and python-can's tools read it: standard output
+        output = None
     if output is not None:
         check_target(output, force)
     if protocol == "j1939" or address is not None:

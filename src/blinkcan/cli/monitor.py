@@ -25,6 +25,7 @@ from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.decode import assumed_text, other_event, parse_devices
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
+from blinkcan.cli.seconds import Factor, Seconds
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.decode.view import BusView
@@ -99,10 +100,10 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
                    "learned from identity traffic).")
 @click.option("--file", "log_file", type=click.Path(dir_okay=False), default=None,
               help="Replay a log file instead of a live bus.")
-@click.option("--speed", type=click.FloatRange(min=0.0), default=1.0, show_default=True,
+@click.option("--speed", type=Factor(), default=1.0, show_default=True,
               help="--file: replay at this many times the log's pace (0: the final state at "
                    "once).")
-@click.option("--duration", type=click.FloatRange(min=0.0), default=None,
+@click.option("--duration", type=Seconds(), default=None,
               help="Stop after this many seconds.")
 @click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True,
               help="Events shown (repeated heartbeats fold into one row).")

@@ -17,6 +17,7 @@ import can
 import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_node_id
+from blinkcan.cli.seconds import Seconds
 from blinkcan.protocol.cob import HEARTBEAT, split_cob_id
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
 from blinkcan.runtime import to_frame, to_message
@@ -51,7 +52,7 @@ def command() -> None:
 def _nmt_command(name: str, code: NmtCommand, words: str) -> None:
     @command.command(name, help=f"NMT {words} to NODE (1..127, or all).")
     @click.argument("node")
-    @click.option("--listen", type=click.FloatRange(min=0.0), default=0.5, show_default=True,
+    @click.option("--listen", type=Seconds(), default=0.5, show_default=True,
                   help="Seconds to listen for the node's boot-up and heartbeat afterwards.")
     @bus_options
     def send(node: str, listen: float) -> None:

@@ -7,11 +7,12 @@ from rich.console import Console
 from rich.table import Table
 
 from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
+from blinkcan.cli.seconds import Seconds
 from blinkcan.host import scan, scan_j1939
 
 
 @click.command("scan")
-@click.option("--listen", type=click.FloatRange(min=0.0), default=0.5, show_default=True,
+@click.option("--listen", type=Seconds(), default=0.5, show_default=True,
               help="Seconds to listen for boot-ups and heartbeats first.")
 @bus_options
 def command(listen: float) -> None:

@@ -13,7 +13,7 @@ import click
 
 def check_target(path: str, force: bool) -> Path:
     """``path`` if it can be written: its directory exists and is writable, and it does not
-    exist yet unless ``force``."""
+    exist yet (not even as a link to nowhere) unless ``force``."""
     target = Path(path)
     directory = target.parent
     if not directory.is_dir():
@@ -22,7 +22,7 @@ def check_target(path: str, force: bool) -> Path:
         raise click.ClickException(f"cannot write {path}: directory {directory} is read-only")
     if target.is_dir():
         raise click.ClickException(f"cannot write {path}: it is a directory")
-    if target.exists() and not force:
+    if (target.exists() or target.is_symlink()) and not force:  # a dangling link is the user's
         raise click.ClickException(f"{path} exists; pass --force to replace it")
     return target
 

@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     import can
 
 _new_tuple = tuple.__new__  # Frame.trusted without the call: the readers checked the frames
+#: texts of undecoded frames kept (then they start over): a log has a few hundred identifiers
+_TEXTS_KEPT = 4096
 
 
 @dataclass
@@ -65,6 +67,8 @@ class FrameDecoder:
     def __init__(self, decoder: Decoder) -> None:
         self._decoder = decoder
         self._rows = EventRows(decoder)
+        #: an undecoded frame's text (str of its event) by the decoder's: (node, device, text)
+        self._texts: dict[str, tuple[int | None, str | None, str]] = {}
 
     def decode(self, block: FrameColumns, start: int, segment: Segment, limit: int) -> int:
         """Decode the block's frames from ``start`` into ``segment`` until it holds ``limit``
@@ -132,26 +136,36 @@ class FrameDecoder:
         add_text, add_details = segment.texts.append, segment.details.append
         simple_rows = SIMPLE_ROWS
         new, frame_type = _new_tuple, Frame
+        texts = self._texts
+        if len(texts) > _TEXTS_KEPT:
+            texts.clear()
         total = segment.rows
         count = 0
         for timestamp, can_id, payload, flag in zip(times, ids, data, extended, strict=True):
             event = decode(new(frame_type, (can_id, payload, flag)), timestamp)
             count += 1
-            simple = simple_rows.get(event[2])  # an Event is a tuple: [2] kind, [4] node
+            simple = simple_rows.get(event.kind)
             if simple is not None:  # most of a fleet's log: other ECUs' frames
-                node = event[4]
+                node = event.node_id
                 device = devices.get(node)  # type: ignore[arg-type]  # None: no device
                 add_node(node)
                 add_model(None if device is None else device.model)
                 add_details(simple)
                 total += 1
+                known = texts.get(event.text)  # str(event) is its device's, node's and text's
+                if known is not None and known[0] == node and known[1] == event.device:
+                    add_text(known[2])
+                else:
+                    text = str(event)
+                    texts[event.text] = (node, event.device, text)
+                    add_text(text)
             else:
                 node, model, details = rows(event)
                 add_node(node)
                 add_model(model)
                 add_details(details)
                 total += len(details)
-            add_text(str(event))
+                add_text(str(event))
             if total >= limit:
                 break
         segment.rows = total

@@ -75,7 +75,7 @@ class EventRows:
     faults to say what changed)."""
 
     def __init__(self, decoder: Decoder) -> None:
-        self._decoder = decoder
+        self._devices = decoder.devices  # the decoder's own: it learns models from the bus
         #: (node, pdo) -> the keys lit red, green, blue (masks: bit 0 is key 1)
         self._leds: dict[tuple[int, str], tuple[int, int, int]] = {}
         self._outputs: dict[int, int] = {}  # node -> the pins HIGH (a mask: bit 0 is pin 1)
@@ -126,7 +126,7 @@ class EventRows:
     def _model_of(self, node: int | None) -> str | None:
         if node is None:
             return None
-        description = self._decoder.device(node)
+        description = self._devices.get(node)
         return description.model if description is not None else None
 
     def _model_named(self, device: str | None) -> str | None:

@@ -19,13 +19,14 @@ import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import BinaryIO, TextIO, cast
-
-import can
+from typing import TYPE_CHECKING, BinaryIO, TextIO, cast
 
 from blinkcan.formats.candump import read_candump_columns
 from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.logs import LogError, frame_kind, read_messages
+
+if TYPE_CHECKING:  # python-can loads where a log needs it: a candump log decodes without it
+    import can
 
 _CANDUMP = ".log"
 #: frames per block of python-can's formats

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import datetime
 import math
+from itertools import accumulate, chain
 from typing import Any
 
 import pyarrow as pa
@@ -98,12 +99,14 @@ class PartitionWriter:
         if not frames:
             return
         per_frame = segment.details
-        index: pa.Array | None = None
+        index: pa.Array | None = None  # the frame of each row, where a frame has several
         if segment.rows == frames:
             details = [rows[0] for rows in per_frame]
-        else:  # a frame of several rows: its columns repeated for each
-            details = [detail for rows in per_frame for detail in rows]
-            index = pa.array([n for n, rows in enumerate(per_frame) for _ in rows], pa.int32())
+        else:
+            details = list(chain.from_iterable(per_frame))
+            offsets = pa.array(list(accumulate(map(len, per_frame), initial=0)), pa.int32())
+            index = pc.list_parent_indices(pa.ListArray.from_arrays(offsets,
+                                                                    pa.nulls(len(details))))
         micros, dates = self.times_and_dates(segment.times)
         frame_columns = {
             "time": micros, "channel": pa.array(segment.channels, pa.string()),
@@ -113,31 +116,31 @@ class PartitionWriter:
             "text": pa.array(segment.texts, pa.string()),
             "data": pa.array(segment.data, pa.binary()),
         }
-        row_columns = _detail_columns(details)
+        row_details = _detail_struct(details)
         partitions, codes = _partitions(segment.models, dates)
-        if index is not None:
-            frame_columns = {name: array.take(index) for name, array in frame_columns.items()}
-        count = len(details)
-        arrays = [frame_columns[name] if name in frame_columns else row_columns[name]
-                  for name in _COLUMNS]
-        arrays.insert(_SOURCE, pa.repeat(pa.scalar(self._source, pa.string()), count))
-        table = pa.Table.from_arrays(arrays, schema=SCHEMA)
-        if len(partitions) == 1:
-            self._writer(partitions[0]).write_table(table)
-        else:
-            code_array = pa.array(codes, pa.int32())
+        sizes = [len(details)]
+        if len(partitions) > 1:  # the rows by partition (a stable sort: each keeps its order)
+            row_codes = pa.array(codes, pa.int32())
             if index is not None:
-                code_array = code_array.take(index)
-            table = table.take(pc.sort_indices(code_array))  # stable: each keeps its order
-            counts = pc.value_counts(code_array)
-            sizes = dict(zip(counts.field("values").to_pylist(),
+                row_codes = row_codes.take(index)
+            order = pc.sort_indices(row_codes)
+            counts = pc.value_counts(row_codes)
+            found = dict(zip(counts.field("values").to_pylist(),
                              counts.field("counts").to_pylist(), strict=True))
-            offset = 0
-            for code, partition in enumerate(partitions):
-                size = sizes[code]
-                self._writer(partition).write_table(table.slice(offset, size))
-                offset += size
-        self.rows += count
+            sizes = [found[code] for code in range(len(partitions))]
+            index = order if index is None else index.take(order)
+            row_details = row_details.take(order)
+        if index is not None:  # each row's frame columns: one take per column
+            frame_columns = {name: array.take(index) for name, array in frame_columns.items()}
+        arrays = [frame_columns[name] if name in frame_columns else row_details.field(name)
+                  for name in _COLUMNS]
+        arrays.insert(_SOURCE, pa.repeat(pa.scalar(self._source, pa.string()), len(details)))
+        table = pa.Table.from_arrays(arrays, schema=SCHEMA)
+        offset = 0
+        for partition, size in zip(partitions, sizes, strict=True):
+            self._writer(partition).write_table(table.slice(offset, size))
+            offset += size
+        self.rows += len(details)
 
     def _writer(self, partition: tuple[str, str]) -> pq.ParquetWriter:
         entry = self._writers.get(partition)
@@ -172,15 +175,13 @@ def int64_or_none(value: int | None) -> int | None:
     return value if value is None or -_INT64 <= value < _INT64 else None
 
 
-def _detail_columns(details: list[Detail]) -> dict[str, pa.Array]:
-    """The rows' details as their columns (one conversion: the tuples as a struct array); a
-    value int64 cannot hold is null (rare: an SDO value of a generic node's domain)."""
+def _detail_struct(details: list[Detail]) -> pa.StructArray:
+    """The rows' details as one struct array (one conversion, a field per column); a value
+    int64 cannot hold is null (rare: an SDO value of a generic node's domain)."""
     try:
-        struct = pa.array(details, _DETAILS)
+        return pa.array(details, _DETAILS)
     except (OverflowError, pa.ArrowInvalid):
-        struct = pa.array([d._replace(value=int64_or_none(d.value)) for d in details],
-                          _DETAILS)
-    return {name: struct.field(name) for name in Detail._fields}
+        return pa.array([d._replace(value=int64_or_none(d.value)) for d in details], _DETAILS)
 
 
 def _partitions(models: list[str | None], dates: str | list[str]

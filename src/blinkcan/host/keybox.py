@@ -127,7 +127,8 @@ class Keybox(Device):
 
     @property
     def commanded(self) -> frozenset[int]:
-        """The pins the application switched HIGH (and not OFF, RESET, or FAULT since)."""
+        """The pins the application switched HIGH (and not OFF, RESET, PWM or FAULT since; an
+        OFF that timed out counts: what may be off is never restored on)."""
         return self._commanded
 
     @property
@@ -155,6 +156,8 @@ class Keybox(Device):
     def _pin(self, pin: int, code: int) -> None:
         check_range("pin", pin, 1, FACE.pins)
         with self._command_lock:
+            if code != PIN_HIGH:
+                self._forget({pin})
             self.write(f"pin_{pin}_state", code)
             self._acknowledged({pin} if code == PIN_HIGH else set(),
                                {pin} if code == PIN_OFF else set(),
@@ -170,11 +173,22 @@ class Keybox(Device):
 
     def _write_masks(self, high_mask: int, off_mask: int) -> None:
         if off_mask:
+            self._forget(_pins(off_mask))
             self.write("output_off_mask", off_mask)
             self._acknowledged(set(), _pins(off_mask), set())
         if high_mask:
             self.write("output_high_mask", high_mask)
             self._acknowledged(_pins(high_mask), set(), set())
+
+    def _forget(self, pins: AbstractSet[int]) -> None:
+        """Pins the application is switching OFF (or RESET, or into PWM) leave ``commanded``
+        before the command is sent, not when it is acknowledged: a command that times out may
+        not have been applied (``SdoTimeoutError.uncertain``), and a restore after the
+        Keybox's reboot must never switch on what the application last asked to be off."""
+        def update() -> None:
+            self._commanded -= pins
+
+        self.host.run(update)
 
     def _acknowledged(self, high: AbstractSet[int], off: AbstractSet[int],
                       reset: AbstractSet[int]) -> None:
@@ -202,6 +216,7 @@ class Keybox(Device):
         check_range("PWM duty", duty, 0, PWM_LEVEL_MAX)
         mask = sum(PWM_BITS[pin] for pin in chosen)
         with self._command_lock:
+            self._forget(chosen)
             self.write("pwm", pwm_register(mask, duty))
             self.host.run(lambda: self._pwm_acknowledged(frozenset(chosen), duty))
 

@@ -515,6 +515,14 @@ class Keypad(Device):
         """Send the key state every ``period`` s as well as on change; 0 = only on change."""
         self.write("tpdo1_event_timer", round(period * 1000))
 
+    def read(self, name: str) -> Value:
+        """An object by its CANopen name (SDO); refused in J1939 mode, which has no SDO."""
+        if self.j1939 is not None:  # spec/pkp-2600-si-j1939.md: the keypad answers no SDO
+            raise ValueError(f"{name} cannot be read in J1939 mode: the keypad answers no SDO "
+                             "there (spec/pkp-2600-si-j1939.md); identity() gives what it "
+                             "reports")
+        return super().read(name)
+
     def write(self, name: str, value: Value) -> None:
         """A setting by its CANopen name; in J1939 mode sent as the J1939 command for it."""
         if self.j1939 is None:

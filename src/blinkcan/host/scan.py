@@ -66,6 +66,10 @@ def _expedited_value(reply: bytes) -> int | None:
     return int.from_bytes(parsed.expedited_data, "little")
 
 
+#: times an identity read (1018h, 100Bh, 1009h, 100Ah) is asked again once 1000h answered
+IDENTITY_RETRIES = 2
+
+
 def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
          node_ids: range = range(NODE_ID_MIN, NODE_ID_MAX + 1)) -> list[Found]:
     """Blink (and other CANopen) devices on ``bus``, by node id."""
@@ -91,6 +95,9 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
                 return Found(node, same.kind if same else None, device_type,
                              heard=node in heard, answers=len(replies))
             value = _expedited_value(replies[0])
+            # the device is there: a reply lost now (a busy bus, a loaded host) is asked again,
+            # so that it never makes a known device "other CANopen" or a blank column
+            channel = host.sdo(node, timeout=timeout, retries=IDENTITY_RETRIES)
             try:
                 device_type = value if value is not None else int.from_bytes(
                     channel.upload(0x1000, 0), "little")
