@@ -125,3 +125,47 @@ def test_a_keypad_pgn_from_a_learned_address_is_still_decoded() -> None:
     assert decoder.decode(heartbeat).kind is Kind.J1939  # §18: only a keypad sends it
     assert decoder.decode(command).kind is Kind.J1939
     assert json.loads(decoder.json_line(command))["kind"] == "j1939"
+
+
+def test_a_kept_j1939_meaning_changes_when_a_keypad_address_is_learned() -> None:
+    """A J1939 frame's meaning depends on which addresses are keypads: one kept from before
+    an address was learned is not used after it."""
+    fast, plain = Decoder(), Decoder()
+    command = Frame(0x18EFFF30, bytes((0x04, 0x1B, 0x02, 0x20, 0xFF, 0xFF, 0xFF, 0xFF)), True)
+    heartbeat = Frame(0x18EFFF30, bytes((0x04, 0x1B, 0xF9, 0x07, 0x00, 0x00, 0xFF, 0x30)), True)
+    kinds = []
+    for n, item in enumerate([command, command, heartbeat, command, command]):
+        event = plain.decode(item, n / 4)
+        assert fast.json_line(item, n / 4) == _encode_event(event)
+        kinds.append(event.kind)
+    # from 30h, not yet a keypad, to all: a command to the keypads; once 30h is a keypad (its
+    # heartbeat), the same frame is its message, one the decoder does not know
+    assert kinds == [Kind.J1939, Kind.J1939, Kind.J1939, Kind.FRAME, Kind.FRAME]
+
+
+def test_kept_sdo_events_follow_the_transfer() -> None:
+    """An upload response seen before means its value again only in a live transfer of the
+    same object: after the idle time, or to a read of another object, it is an unexplained
+    reply."""
+    fast, plain = Decoder({0x15: "keypad"}), Decoder({0x15: "keypad"})
+    read, value = frame("615 40 17 10 00 00 00 00 00"), frame("595 4B 17 10 00 F4 01 00 00")
+    other = frame("615 40 00 18 01 00 00 00 00")
+    script = [(read, 0.0), (value, 0.1), (read, 1.0), (value, 1.1), (other, 2.0), (value, 2.1),
+              (read, 3.0), (value, 3.0 + TRANSFER_IDLE_S + 1)]
+    texts = []
+    for item, time in script:
+        event = plain.decode(item, time)
+        assert fast.json_line(item, time) == _encode_event(event)
+        texts.append(str(event))
+    assert texts[3] == "keypad 15h: SDO value 1017h/00 Producer heartbeat time = 1F4h"
+    # a reply for 1017h/00 to a read of 1800h/01 is not 1800h/01's value (CiA 301 §7.2.4.3.6:
+    # the reply names its object); main said "SDO value 1800h/01 ... = 1F4h"
+    assert texts[5] == "keypad 15h: SDO reply 4Bh"
+    assert texts[7] == "keypad 15h: SDO reply 4Bh"
+
+
+def _encode_event(event: object) -> str:
+    from blinkcan.decode.decoder import Event, _encode
+
+    assert isinstance(event, Event)
+    return _encode(event.to_json())

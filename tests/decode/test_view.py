@@ -74,3 +74,16 @@ def test_a_reset_shows_the_outputs_off() -> None:
     assert bench.output_4() == "high"
     bench.send(Frame(0x000, b"\x82\x0C"), 0.1)  # reset communication
     assert bench.output_4() == "off"
+
+
+def test_the_view_applies_off_wins_to_an_outputs_event() -> None:
+    """KBX §17 (errata K12): a pin in both masks goes OFF. The view reads the rule from
+    devices/ (commanded_outputs), not from the decoder having applied it: an event from
+    elsewhere (a recorded one, another decoder) with both masks set shows the pin OFF."""
+    from blinkcan.decode import Event, Kind
+
+    view = BusView(Decoder({0x0C: "keybox"}))
+    frame = Frame(0x20C, bytes.fromhex("0800080000000000"))
+    view.update(Event(0.0, frame, Kind.PDO, "outputs", 0x0C, "keybox",
+                      {"pdo": "outputs", "off": [4], "high": [4]}))
+    assert view.node(0x0C).outputs[4] == "off"  # main: "high" (the later list won)

@@ -88,3 +88,12 @@ def test_a_4f_reply_for_a_16_bit_value_is_accepted() -> None:
     upload.start()
     assert upload.on_reply(bytes.fromhex("4F00180532000000")) is None
     assert upload.value == b"\x32"
+
+
+def test_an_abort_is_any_command_specifier_4_frame() -> None:
+    """CiA 301 §7.2.4.3.17: an abort is cs = 4; bits 4-0 are not used. A server that sets
+    them still aborts the transfer (main took 81h for "unexpected reply")."""
+    transfer = UploadTransfer(0x1008, 0)
+    transfer.start()
+    with pytest.raises(SdoAbortError, match="06020000h"):
+        transfer.on_reply(bytes.fromhex("8108100000000206"))

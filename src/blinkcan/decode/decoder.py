@@ -14,13 +14,18 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from functools import lru_cache
 from typing import Any, NamedTuple
 
 import orjson
 
+from blinkcan.decode.describers import (  # listing, mask_listing, numbers: kept importable here
+    keyed_signal,
+    listing,
+    mask_listing,
+    numbers,
+    pdo_describer,
+)
 from blinkcan.decode.j1939 import J1939KeypadDecoder
-from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.pdo import PdoLayout
@@ -28,7 +33,6 @@ from blinkcan.devices.registry import describe_device, identify
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState, parse_nmt
 from blinkcan.protocol.sdo import (
     CCS_ABORT,
@@ -44,7 +48,7 @@ from blinkcan.protocol.sdo import (
     SEGMENTED_UPLOAD_RESPONSE,
     parse_sdo,
 )
-from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES
+from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES, SdoError, UploadTransfer
 
 _UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
 #: requests that name an object (CiA 301 §7.2.4.3): initiate download, upload, abort
@@ -62,6 +66,12 @@ _JSON_CACHE_SIZE = 16_384
 _CACHE_TRIAL = 512
 #: 29-bit identifiers of other ECUs kept (then they start over): a J1939 bus has a few hundred
 _FOREIGN_KEPT = 512
+#: SDO events kept (then they start over)
+_SDO_KEPT = 4096
+#: objects whose value may name a node's model (Decoder._learn): their events are not kept
+_IDENTITY = frozenset({0x1000, 0x100B})
+#: J1939 keypad frames whose meaning is kept (then they start over)
+_J1939_KEPT = 4096
 #: routes kept: every 11-bit identifier, and 29-bit ones the J1939 keypad may use up to this
 _ROUTES_KEPT = 2048 + 256
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
@@ -69,10 +79,6 @@ _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
 
 def _encode_text(text: str) -> str:
     return orjson.dumps(text).decode()
-
-
-def _encode_fields(fields: dict[str, Any]) -> str:
-    return _encode(fields)
 
 
 def _encode(document: dict[str, Any]) -> str:
@@ -141,43 +147,6 @@ class Event(NamedTuple):
         }
 
 
-#: masks whose item numbers, listing and JSON are kept (key, LED and pin masks are 12-13 bits,
-#: so a log's masks are found again; a bounded cache keeps memory flat on random ones)
-_MASKS_KEPT = 8192
-
-
-@lru_cache(maxsize=_MASKS_KEPT)
-def _items(mask: int) -> tuple[int, ...]:
-    return tuple(item_numbers(mask))
-
-
-def numbers(mask: int, offset: int = 1) -> list[int]:
-    """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
-    if offset == 1 and mask >= 0:
-        return list(_items(mask))
-    return item_numbers(mask, offset)
-
-
-def listing(items: list[int]) -> str:
-    return ", ".join(map(str, items)) if items else "none"
-
-
-@lru_cache(maxsize=_MASKS_KEPT)
-def mask_listing(mask: int) -> str:
-    """``listing(numbers(mask))``, one lookup for a mask seen before."""
-    return listing(numbers(mask))
-
-
-@lru_cache(maxsize=_MASKS_KEPT)
-def _mask_json(mask: int) -> str:
-    """``numbers(mask)`` as compact JSON, one lookup for a mask seen before."""
-    return _encode_text_list(numbers(mask))
-
-
-def _encode_text_list(items: list[int]) -> str:
-    return orjson.dumps(items).decode()
-
-
 #: an SDO transfer with no frame for this long is over (its client gave up); its state goes
 TRANSFER_IDLE_S = 2.0
 #: a segmented transfer longer than this is no longer followed (no object of these devices is
@@ -187,12 +156,21 @@ TRANSFER_MAX_BYTES = 4096
 
 @dataclass
 class _Transfer:
+    """A node's SDO transfer as the bus shows it. A read is followed by the client's own
+    state machine (protocol/sdo_client.py UploadTransfer) fed the replies the client gets; a
+    write by the count of bytes its segments carried."""
+
     index: int
     subindex: int
     entry: ObjectEntry | None
     writing: bool
     last: float = 0.0
-    buffer: bytearray = field(default_factory=bytearray)
+    written: int = 0
+    upload: UploadTransfer | None = field(default=None, init=False)
+
+    def __post_init__(self) -> None:
+        if not self.writing:
+            self.upload = UploadTransfer(self.index, self.subindex)
 
 
 class Decoder:
@@ -228,6 +206,15 @@ class Decoder:
         self._raw_standard: dict[int, _Raw] = {}
         #: 29-bit identifiers of PGNs the keypad never uses (other ECUs'), with their text
         self._foreign: dict[int, str] = {}
+        #: SDO events that the same frame makes again (an upload request; an expedited upload
+        #: response in the same transfer): [the event's text, node, device, fields; its JSON
+        #: body after the time, once written; the transfer a request opens]
+        self._kept: dict[object, list[Any]] = {}
+        #: the kept entry the last decoded SDO frame used (json_line writes its JSON once)
+        self._served: list[Any] | None = None
+        #: J1939 keypad frames' events as kept SDO ones are, valid while the count of keypad
+        #: addresses they were decoded with (the entry's third item) holds
+        self._j1939_known: dict[Frame, list[Any]] = {}
 
     def device(self, node_id: int) -> DeviceDescription | None:
         return self.devices.get(node_id)
@@ -265,8 +252,8 @@ class Decoder:
             if text is not None:  # the text has no character JSON escapes
                 return (f'{{"time":{time!r},"id":{can_id},"extended":true,"data":"{data.hex()}",'
                         f'"kind":"frame","node":null,"device":null,"text":"{text}"}}')
-            event = self.decode(frame, time)  # J1939: never cached (its meaning has state)
-            return _encode(event.to_json())
+            self._served = None
+            return self._line_of(self.decode(frame, time), time)
         else:
             raw = self._raw_standard.get(can_id)
             if raw is not None:  # a frame no device sends: its line around time and data
@@ -293,11 +280,27 @@ class Decoder:
         line = fast(frame, time) if fast is not None else None
         kind = Kind.PDO
         if line is None:
+            self._served = None
             event = self.decode(frame, time)
-            line, kind = _encode(event.to_json()), event.kind
+            line, kind = self._line_of(event, time), event.kind
         if cached and ((key in self._pure and kind is not Kind.BOOT_UP) or (
                 keyed is not None and kind is Kind.PDO)):
             self._remember(key, cache_key, time, line)
+        return line
+
+    def _line_of(self, event: Event, time: float) -> str:
+        """The event's JSON line; where it is a kept one (``_served``: an SDO or J1939 event
+        the same frame makes again), its JSON after the time is written once."""
+        served = self._served
+        if served is None or served[0][3] is not event.fields:
+            return _encode(event.to_json())
+        body = served[1]
+        if body is not None:
+            return f'{{"time":{time!r},{body}'
+        line = _encode(event.to_json())
+        prefix = f'{{"time":{time!r},'
+        if line.startswith(prefix):
+            served[1] = line[len(prefix):]
         return line
 
     def _remember(self, key: tuple[int, bool], cache_key: object, time: float, line: str
@@ -364,12 +367,13 @@ class Decoder:
         if device is not None:
             for layout in device.pdos:
                 if layout.cob_id(node) == can_id:
-                    if layout.name == "key_state":
+                    keyed = keyed_signal(layout)
+                    if keyed is not None:  # its meaning depends on the keys held before
                         self._pure.discard(key)
-                        keys = layout.signal("keys")
-                        self._keyed[key] = (node, keys.start, keys.mask)
-                    self._json_routes[key] = self._pdo_json_route(layout, node, device.kind)
-                    return self._pdo_route(layout, node, device.kind)
+                        shift, mask = keyed
+                        self._keyed[key] = (node, shift, mask & ((1 << device.face.keys) - 1))
+                    route, self._json_routes[key] = self._pdo_routes(layout, node, device)
+                    return route
         return self._unknown
 
     def _keep_raw(self, event: Event) -> None:
@@ -393,6 +397,7 @@ class Decoder:
             self._cache_stats.pop(key, None)
             self._uncached.discard(key)
         self._json_bodies.clear()
+        self._kept.clear()
 
     def _who(self, node: int) -> str | None:
         device = self.devices.get(node)
@@ -428,6 +433,12 @@ class Decoder:
                      {"state": state})
 
     def _extended(self, frame: Frame, time: float) -> Event:
+        addresses = self.j1939.addresses
+        known = self._j1939_known.get(frame)
+        if known is not None and known[2] == len(addresses):  # the same addresses known
+            self._served = known
+            return _new_tuple(Event, (time, frame, Kind.J1939, *known[0]))
+        before = len(addresses)  # keypad addresses are only ever added
         meaning = self.j1939.decode(frame)
         if meaning is None:
             event = Event(time, frame, Kind.FRAME, f"extended frame {frame.can_id:08X}h")
@@ -436,8 +447,15 @@ class Decoder:
                     self._foreign.clear()
                 self._foreign[frame.can_id] = event.text
             return event
-        return Event(time, frame, Kind.J1939, meaning.text, meaning.address,
-                     "keypad" if meaning.keypad else None, {"protocol": "j1939", **meaning.fields})
+        parts = (meaning.text, meaning.address, "keypad" if meaning.keypad else None,
+                 {"protocol": "j1939", **meaning.fields})
+        known_frames = self._j1939_known
+        # nothing learned: this frame means this again while the keypads' addresses stay the
+        # same. Full, the frames kept stay (those seen first repeat: commands, key messages;
+        # a heartbeat's counter never does), and are only replaced by themselves
+        if len(addresses) == before and (len(known_frames) < _J1939_KEPT or known is not None):
+            known_frames[frame] = self._served = [parts, None, before]
+        return _new_tuple(Event, (time, frame, Kind.J1939, *parts))
 
     def _unknown(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
@@ -448,86 +466,59 @@ class Decoder:
 
     # -- PDOs -------------------------------------------------------------------------------------
 
-    def _pdo_route(self, layout: PdoLayout, node: int, device: str
-                   ) -> Callable[[Frame, float], Event]:
-        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
+    def _pdo_routes(self, layout: PdoLayout, node: int, description: DeviceDescription
+                    ) -> tuple[Callable[[Frame, float], Event],
+                               Callable[[Frame, float], str | None]]:
+        """The PDO's two renderings of one describer (decode/describers.py): its Event, and
+        its JSON line written directly (the same text as the Event's ``to_json``, without
+        the Event and the dict in between; None for a frame too short, which the Event
+        route names)."""
+        describe = pdo_describer(layout, description, node, self._keys)
+        device, name, min_length = description.kind, layout.name, layout.min_length
+        too_short = f"{layout.label}: too short"
 
         def route(frame: Frame, time: float) -> Event:
-            if len(frame.data) < layout.min_length:
-                return Event(time, frame, Kind.FRAME, f"{layout.label}: too short", node, device)
-            values = layout.decode(frame.data)
-            if len(frame.data) < layout.length:  # signals the frame does not carry are absent
-                bits = 8 * len(frame.data)
-                values = {s.name: values[s.name] for s in layout.signals if s.start < bits}
-            text, fields = describe(self, node, values)
-            return Event(time, frame, Kind.PDO, text, node, device,
-                         {"pdo": layout.name, **fields})
+            data = frame.data
+            if len(data) < min_length:
+                return Event(time, frame, Kind.FRAME, too_short, node, device)
+            text, fields = describe(data)
+            return Event(time, frame, Kind.PDO, text, node, device, {"pdo": name, **fields})
 
-        return route
-
-    def _pdo_json_route(self, layout: PdoLayout, node: int, device: str
-                        ) -> Callable[[Frame, float], str | None]:
-        """The PDO's JSON line written directly: the same text as ``to_json`` of its event
-        (tests/decode check both ways agree), without the Event and the dict in between.
-        None for what the event route handles (a short frame)."""
-        describe = _PDO_TEXT.get(layout.name) or _generic_pdo(layout)
-        length, name = layout.length, layout.name
-        decode_values = layout.decode
-        signals = {s.name: (s.start, s.mask) for s in layout.signals}
-        fast = _PDO_JSON.get(name)
-        if fast is not None and not set(fast[0]) <= set(signals):
-            fast = None  # another model's PDO of that name: the Event route describes it
-        if fast is not None:  # the signals it reads, as (shift, mask), in its order
-            names, describe_json = fast
-            (s0, m0), (s1, m1), (s2, m2) = ([signals[n] for n in names] + [(0, 0)] * 3)[:3]
+        head = f',"id":{layout.cob_id(node)},"extended":false,"data":"'
+        middle = f'","kind":"pdo","node":{node},"device":{_encode_text(device)},"text":'
         who = f"{device} {node:02X}h: "
-        head = ""  # the constant part between "time" and "data", made on the first frame
-        middle = (f'","kind":"pdo","node":{node},"device":{_encode_text(device)},"text":')
         pdo = f',"pdo":{_encode_text(name)}'
 
-        def route(frame: Frame, time: float) -> str | None:
-            nonlocal head
+        def json_route(frame: Frame, time: float) -> str | None:
             data = frame.data
-            if len(data) < length:
+            if len(data) < min_length:
                 return None
-            if not head:
-                head = f',"id":{frame.can_id},"extended":false,"data":"'
-            if fast is not None:
-                word = int.from_bytes(data, "little")
-                text, fields_json = describe_json(self, node, (word >> s0) & m0,
-                                                  (word >> s1) & m1, (word >> s2) & m2)
-                return (f'{{"time":{time!r}{head}{data.hex()}{middle}"{who}{text}"'
-                        f'{pdo},{fields_json}}}')  # the texts have no character to escape
-            text, fields = describe(self, node, decode_values(data))
-            rest = _encode_fields(fields)
+            text, fields = describe(data)
+            rest = _encode(fields)
             return (f'{{"time":{time!r}{head}{data.hex()}{middle}{_encode_text(who + text)}'
                     f'{pdo}{"," + rest[1:] if len(rest) > 2 else "}"}')
 
-        return route
-
-    def _key_masks(self, node: int, keys: int) -> tuple[int, int, int]:
-        """(pressed, released, held) masks of a key-state PDO, the keys remembered."""
-        keys &= (1 << self.devices[node].face.keys) - 1
-        before = self._keys.get(node, 0)
-        self._keys[node] = keys
-        return keys & ~before, before & ~keys, keys
-
-    def _key_state(self, node: int, values: dict[str, int]) -> tuple[str, dict[str, Any]]:
-        pressed, released, held = self._key_masks(node, values["keys"])
-        return _key_text(pressed, released, held), {
-            "pressed": numbers(pressed), "released": numbers(released), "held": numbers(held),
-            "tick": values.get("tick")}  # errata P8: frames of 2-4 bytes have none
-
-    def _key_state_json(self, node: int, keys: int, tick: int, _: int) -> tuple[str, str]:
-        pressed, released, held = self._key_masks(node, keys)
-        return _key_text(pressed, released, held), (
-            f'"pressed":{_mask_json(pressed)},"released":{_mask_json(released)},'
-            f'"held":{_mask_json(held)},"tick":{tick}')
+        return route, json_route
 
     # -- SDO --------------------------------------------------------------------------------------
 
     def _sdo(self, frame: Frame, time: float) -> Event:
         node = frame.can_id & 0x7F
+        if frame.can_id & 0x780 == SDO_RX:  # an upload request seen before: the same object
+            kept = self._kept.get(frame)
+            if kept is not None:
+                index, sub, entry = kept[2]
+                self._transfers[node] = _Transfer(index, sub, entry, False, time)
+                self._served = kept
+                return _new_tuple(Event, (time, frame, Kind.SDO_READ, *kept[0]))
+        else:  # an expedited upload response seen before to a read of the same object
+            transfer = self._transfers.get(node)
+            if transfer is not None and not transfer.writing:
+                kept = self._kept.get((frame, transfer.index, transfer.subindex))
+                if kept is not None and 0 <= time - transfer.last <= TRANSFER_IDLE_S:
+                    del self._transfers[node]
+                    self._served = kept
+                    return _new_tuple(Event, (time, frame, Kind.SDO_VALUE, *kept[0]))
         data = frame.data
         device = self.devices.get(node)
         kind = device.kind if device is not None else None
@@ -558,7 +549,9 @@ class Decoder:
             fields = {"index": index, "subindex": sub, "object": entry.name if entry else None}
             if ccs == CCS_INITIATE_UPLOAD:
                 self._transfers[node] = _Transfer(index, sub, entry, False, time)
-                return Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
+                event = Event(time, frame, Kind.SDO_READ, f"SDO read {name}", node, kind, fields)
+                self._keep(frame, event, (index, sub, entry))
+                return event
             if ccs == CCS_ABORT:
                 self._transfers.pop(node, None)
                 code = request.word
@@ -579,7 +572,7 @@ class Decoder:
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO read, next segment", node, kind)
         if ccs == CCS_DOWNLOAD_SEGMENT:  # CiA 301 §7.2.4.3.4
             transfer = self._live_transfer(node, time)
-            if transfer is not None and not self._grow(node, transfer, request.segment_data):
+            if transfer is not None and not self._grow(node, transfer, len(request.segment_data)):
                 return Event(time, frame, Kind.SDO_SEGMENT, f"SDO write segment: over "
                              f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind)
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment", node, kind)
@@ -609,30 +602,47 @@ class Decoder:
             self._transfers.pop(node, None)  # CiA 301 §7.2.4.3.3; errata K3: 43h too
             return Event(time, frame, Kind.SDO_WRITTEN, f"SDO write {name} done", node, kind,
                          fields)
-        if not transfer.writing and scs == SCS_INITIATE_UPLOAD:  # CiA 301 §7.2.4.3.6
-            if command in _UPLOAD_SIZES:  # expedited, size indicated
+        upload = transfer.upload
+        if upload is None or not (command in _UPLOAD_SIZES or command == SEGMENTED_UPLOAD_RESPONSE
+                                  or scs == SCS_UPLOAD_SEGMENT):
+            pass  # not a reply a read is answered with (CiA 301 §7.2.4.3.6, §7.2.4.3.7)
+        elif scs == SCS_UPLOAD_SEGMENT and \
+                upload.received + len(reply.segment_data) > TRANSFER_MAX_BYTES:
+            self._transfers.pop(node, None)
+            return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
+                         f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
+        else:
+            try:
+                upload.on_reply(reply.raw)
+            except SdoError:  # for another object, or a toggle out of step: not this read's
                 self._transfers.pop(node, None)
-                return self._value(frame, time, node, kind, transfer, reply.expedited_data,
-                                   name, fields)
-            if command == SEGMENTED_UPLOAD_RESPONSE:
-                size = reply.word
+                return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+            if upload.done:
+                self._transfers.pop(node, None)
+                event = self._value(frame, time, node, kind, transfer, upload.value, name,
+                                    fields)
+                if scs == SCS_INITIATE_UPLOAD and transfer.index not in _IDENTITY:
+                    self._keep((frame, transfer.index, transfer.subindex), event, None)
+                return event  # an expedited one is kept: no model is learned from it
+            if scs == SCS_INITIATE_UPLOAD:
+                size = upload.size
                 return Event(time, frame, Kind.SDO_SEGMENT,
                              f"SDO read {name}: {size} bytes follow", node, kind,
                              {**fields, "size": size})
-        if scs == SCS_UPLOAD_SEGMENT and not transfer.writing:  # CiA 301 §7.2.4.3.7
-            if not self._grow(node, transfer, reply.segment_data):
-                return Event(time, frame, Kind.SDO_SEGMENT, f"SDO read {name}: over "
-                             f"{TRANSFER_MAX_BYTES} bytes, no longer followed", node, kind, fields)
-            if reply.last:
-                self._transfers.pop(node, None)
-                return self._value(frame, time, node, kind, transfer, bytes(transfer.buffer),
-                                   name, fields)
             return Event(time, frame, Kind.SDO_SEGMENT,
                          f"SDO read {name}: segment {reply.raw[1:8]!r}", node, kind, fields)
         if scs == SCS_DOWNLOAD_SEGMENT and transfer.writing:  # CiA 301 §7.2.4.3.4
             return Event(time, frame, Kind.SDO_SEGMENT, "SDO write segment acknowledged", node,
                          kind, fields)
         return Event(time, frame, Kind.FRAME, f"SDO reply {command:02X}h", node, kind)
+
+    def _keep(self, key: object, event: Event, transfer: tuple[int, int, ObjectEntry | None] | None
+              ) -> None:
+        """Remember an SDO event that the same frame (in the same transfer) makes again."""
+        kept = self._kept
+        if len(kept) >= _SDO_KEPT:
+            kept.clear()
+        kept[key] = self._served = [event[3:], None, transfer]
 
     def _live_transfer(self, node: int, time: float) -> _Transfer | None:
         """The node's transfer in progress, unless it went silent (TRANSFER_IDLE_S)."""
@@ -644,12 +654,12 @@ class Decoder:
             transfer.last = time
         return transfer
 
-    def _grow(self, node: int, transfer: _Transfer, segment: bytes) -> bool:
-        """Add a segment; False (and the transfer dropped) past TRANSFER_MAX_BYTES."""
-        if len(transfer.buffer) + len(segment) > TRANSFER_MAX_BYTES:
+    def _grow(self, node: int, transfer: _Transfer, size: int) -> bool:
+        """Count a write segment; False (and the transfer dropped) past TRANSFER_MAX_BYTES."""
+        if transfer.written + size > TRANSFER_MAX_BYTES:
             self._transfers.pop(node, None)
             return False
-        transfer.buffer += segment
+        transfer.written += size
         return True
 
     def _value(self, frame: Frame, time: float, node: int, kind: str | None,
@@ -712,105 +722,5 @@ def _show(value: int | str) -> str:
     return repr(value) if isinstance(value, str) else f"{value:X}h"
 
 
-def _backlight(values: dict[str, int]) -> tuple[str, dict[str, Any]]:
-    level = values["level"]
-    if level > 0x3F:
-        return f"backlight level {level:02X}h over 3Fh: ignored", {"level": level}
-    if "colour" not in values:  # rev 1.1 §14
-        return f"backlight brightness {level}/63", {"level": level}
-    code = values["colour"]  # rev 1.5 §15: byte 1 is the colour, 00h the default one
-    colour = BacklightColour(code).label if BacklightColour.is_code(code) else "the default colour"
-    return f"backlight {level}/63 in {colour}", {"level": level, "colour": colour}
-
-
-def _generic_pdo(layout: PdoLayout
-                 ) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
-    """Any PDO from its layout alone: masks as item numbers, values scaled to their unit."""
-    signals = {s.name: s for s in layout.signals}
-
-    def describe(decoder: Decoder, node: int, values: dict[str, int]
-                 ) -> tuple[str, dict[str, Any]]:
-        parts: list[str] = []
-        fields: dict[str, Any] = {}
-        for name, raw in values.items():
-            signal = signals[name]
-            if signal.item is not None:
-                items = numbers(raw)
-                fields[name] = items
-                parts.append(f"{signal.item} {listing(items)}")
-            else:
-                value = signal.physical(raw)
-                fields[name] = value
-                shown = f"{value:g} {signal.unit}" if signal.unit else f"{value}"
-                parts.append(f"{signal.label.lower()} {shown}")
-        return f"{layout.label.lower()}: {', '.join(parts)}", fields
-
-    return describe
-
-
-def _key_text(pressed: int, released: int, held: int) -> str:
-    if pressed and released:
-        return f"key {mask_listing(pressed)} pressed; key {mask_listing(released)} released"
-    if pressed:
-        return f"key {mask_listing(pressed)} pressed"
-    if released:
-        return f"key {mask_listing(released)} released"
-    return f"keys held: {mask_listing(held)}"
-
-
-def _led_text(verb: str, red: int, green: int, blue: int) -> str:
-    parts = [f"{colour} {mask_listing(mask)}" for colour, mask in
-             (("red", red), ("green", green), ("blue", blue)) if mask]
-    return f"{verb}: {'; '.join(parts) if parts else 'none'}"
-
-
-def _leds(verb: str) -> Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]:
-    def describe(decoder: Decoder, node: int, values: dict[str, int]
-                 ) -> tuple[str, dict[str, Any]]:
-        red, green, blue = values["red"], values["green"], values["blue"]
-        return (_led_text(verb, red, green, blue),
-                {"red": numbers(red), "green": numbers(green), "blue": numbers(blue)})
-
-    return describe
-
-
-def _leds_json(verb: str) -> Callable[[Decoder, int, int, int, int], tuple[str, str]]:
-    def describe(decoder: Decoder, node: int, red: int, green: int, blue: int
-                 ) -> tuple[str, str]:
-        return (_led_text(verb, red, green, blue), f'"red":{_mask_json(red)},'
-                f'"green":{_mask_json(green)},"blue":{_mask_json(blue)}')
-
-    return describe
-
-
-def _outputs_text(off: int, high: int) -> str:
-    return f"outputs OFF: {mask_listing(off)}; HIGH: {mask_listing(high)}"
-
-
-_PDO_TEXT: dict[str, Callable[[Decoder, int, dict[str, int]], tuple[str, dict[str, Any]]]] = {
-    "key_state": lambda d, n, v: d._key_state(n, v),
-    "led_on": _leds("LEDs on"),
-    "led_blink": _leds("LEDs blink"),
-    "indicator_brightness": lambda d, n, v: (f"indicator brightness {v['level']}/63",
-                                             {"level": v["level"]}),
-    "backlight_brightness": lambda d, n, v: _backlight(v),
-    "outputs": lambda d, n, v: (  # KBX §17: OFF wins
-        _outputs_text(v["off"], v["high"] & ~v["off"]),
-        {"off": numbers(v["off"]), "high": numbers(v["high"] & ~v["off"])}),
-    "faults": lambda d, n, v: (f"outputs in FAULT: {mask_listing(v['faults'])}",
-                               {"faults": numbers(v["faults"])}),
-}
-
-#: the same PDOs written straight to JSON (Decoder._pdo_json_route): the signals each reads,
-#: in order, and (text, the fields as JSON members); the texts are shared with _PDO_TEXT
-_PDO_JSON: dict[str, tuple[tuple[str, ...], Callable[..., tuple[str, str]]]] = {
-    "key_state": (("keys", "tick"), lambda d, n, keys, tick, _: d._key_state_json(n, keys, tick,
-                                                                                   0)),
-    "led_on": (("red", "green", "blue"), _leds_json("LEDs on")),
-    "led_blink": (("red", "green", "blue"), _leds_json("LEDs blink")),
-    "outputs": (("off", "high"), lambda d, n, off, high, _: (  # KBX §17: OFF wins
-        _outputs_text(off, high & ~off),
-        f'"off":{_mask_json(off)},"high":{_mask_json(high & ~off)}')),
-    "faults": (("faults",), lambda d, n, faults, _, __: (
-        f"outputs in FAULT: {mask_listing(faults)}", f'"faults":{_mask_json(faults)}')),
-}
+__all__ = ["ERROR_CLASSES", "TRANSFER_IDLE_S", "TRANSFER_MAX_BYTES", "Decoder", "Event", "Kind",
+           "error_event", "listing", "mask_listing", "numbers"]

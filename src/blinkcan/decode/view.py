@@ -17,8 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
+from blinkcan.decode.describers import numbers
 from blinkcan.devices.colours import Channel, blink_phases, channel_name
-from blinkcan.devices.keybox import PWM_LEVEL_MAX
+from blinkcan.devices.keybox import PWM_LEVEL_MAX, commanded_outputs
 from blinkcan.devices.keypad_j1939 import LedLook, LedState, look_channels, look_phases
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import describe_device
@@ -102,6 +103,11 @@ class NodeView:
             a, b = blink_phases(channels(self.leds, key), channels(self.blink, key))
             found.append((key, channel_name(a), channel_name(b)))
         return found
+
+
+def _mask(pins: object) -> int:
+    """The mask of an event's pin list (pin 1 = bit 0)."""
+    return sum(1 << (pin - 1) for pin in pins)  # type: ignore[attr-defined]
 
 
 def _follow_j1939(view: NodeView, fields: dict[str, object]) -> None:
@@ -195,13 +201,12 @@ class BusView:
             view.blink = {c: list(fields[c]) for c in ("red", "green", "blue")}  # type: ignore[call-overload]
         elif name == "key_state":
             view.held = list(fields["held"])  # type: ignore[call-overload]
-        elif name == "outputs":
-            for pin in fields["off"]:  # type: ignore[attr-defined]
-                if view.outputs.get(pin) != "fault":
-                    view.outputs[pin] = "off"
-            for pin in fields["high"]:  # type: ignore[attr-defined]
-                if view.outputs.get(pin) != "fault":
-                    view.outputs[pin] = "high"
+        elif name == "outputs":  # KBX §17: OFF wins (devices/keybox.py commanded_outputs)
+            off, high = commanded_outputs(_mask(fields["off"]), _mask(fields["high"]))
+            for state, mask in (("off", off), ("high", high)):
+                for pin in numbers(mask):
+                    if view.outputs.get(pin) != "fault":  # FAULT stays latched (KBX §18)
+                        view.outputs[pin] = state
         elif name == "faults":
             for pin in view.face.pin_numbers:
                 if pin in fields["faults"]:  # type: ignore[operator]

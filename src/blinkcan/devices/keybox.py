@@ -56,6 +56,12 @@ PWM_BITS = {pin: 1 << i for i, pin in enumerate(PWM_PINS)}
 PWM_MASK = sum(PWM_BITS.values())
 
 
+def commanded_outputs(off: int, high: int) -> tuple[int, int]:
+    """(pins switched OFF, pins switched HIGH) by an outputs PDO's two masks, or an OFF and a
+    HIGH mask written together: KBX §17, errata K12: OFF wins where a pin is in both."""
+    return off, high & ~off
+
+
 def pwm_register(mask: int, level: int) -> int:
     """The 2009h value of a PWM-pin mask and a duty level (KBX §22)."""
     return mask | level << 8

@@ -98,6 +98,16 @@ class UploadTransfer(_Transfer):
         self._toggle = 0
         self._buffer = bytearray()
 
+    @property
+    def size(self) -> int | None:
+        """The size the server announced (CiA 301 §7.2.4.3.6), None before or where none was."""
+        return self._size if self._size != -1 else None
+
+    @property
+    def received(self) -> int:
+        """How many bytes the segments brought so far."""
+        return len(self._buffer)
+
     def start(self) -> bytes:
         return b"\x40" + self.mux + b"\x00\x00\x00\x00"
 

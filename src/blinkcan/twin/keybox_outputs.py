@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from enum import Enum, IntEnum
 
-from blinkcan.devices.keybox import FACE, PWM_BITS, pwm_register
+from blinkcan.devices.keybox import FACE, PWM_BITS, commanded_outputs, pwm_register
 from blinkcan.protocol.cob import check_range
 from blinkcan.protocol.items import item_numbers
 
@@ -112,7 +112,7 @@ class Outputs:
     def command_masks(self, off: int, high: int) -> list[int]:
         """KBX §17/§21 (errata K12, K20): pins in ``off`` go OFF, pins in ``high`` go HIGH,
         others are unchanged; OFF wins where both are set."""
-        high &= ~off
+        off, high = commanded_outputs(off, high)
         faults: list[int] = []
         for pin in pins_of(off):
             faults += self.command(pin, PinState.OFF)
