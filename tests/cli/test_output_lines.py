@@ -9,11 +9,11 @@ import re
 import signal
 import subprocess
 import sys
-import time
+import threading
 import uuid
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import pytest
 from click.testing import CliRunner
@@ -166,6 +166,31 @@ def test_decode_json_keeps_the_logs_own_timestamps(tmp_path: Path) -> None:
     assert "--json and --parquet keep the log's own timestamps" in refused.output
 
 
+def _lines_until_booted(child: subprocess.Popen[str], devices: int) -> tuple[list[str], str]:
+    """The emulator's output lines: read until every device has booted (however slow the
+    machine), then Ctrl-C and the lines to its end; and its standard error."""
+    lines: list[str] = []
+    booted = threading.Event()
+
+    def read(stream: IO[str]) -> None:
+        for line in stream:
+            lines.append(line.rstrip("\n"))
+            if sum(text.endswith(": boot-up") for text in lines) == devices:
+                booted.set()
+
+    assert child.stdout is not None
+    reader = threading.Thread(target=read, args=(child.stdout,), daemon=True)
+    reader.start()
+    try:
+        booted.wait(60.0)
+        child.send_signal(signal.SIGINT)
+        child.wait(timeout=30)
+        reader.join(timeout=10)
+        return lines, child.stderr.read() if child.stderr else ""
+    finally:
+        child.kill()
+
+
 def test_emulate_in_a_pipe_writes_whole_lines_from_its_start() -> None:
     devices = [f"{m.name}:0x{0x10 + n:02X}" for n, m in enumerate(models())]
     for absolute in ((), ("--absolute",)):
@@ -173,14 +198,9 @@ def test_emulate_in_a_pipe_writes_whole_lines_from_its_start() -> None:
             [sys.executable, "-m", "blinkcan", "emulate", *devices, *absolute,
              "-i", "virtual", "-c", f"emulate-lines-{uuid.uuid4().hex}"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        try:
-            time.sleep(4.0)  # imports, then the boot-ups
-            child.send_signal(signal.SIGINT)
-            out, errors = child.communicate(timeout=20)
-        finally:
-            child.kill()
+        lines, errors = _lines_until_booted(child, len(devices))
         assert child.returncode in (0, 130), errors
-        banner, *frames = [line for line in out.splitlines() if line != "stopped"]
+        banner, *frames = [line for line in lines if line != "stopped"]
         assert banner.endswith("Ctrl-C stops.")  # one line, never wrapped
         for model in models():
             assert model.description().title in banner
