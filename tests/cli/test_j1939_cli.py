@@ -66,7 +66,7 @@ def test_emulate_builds_keypads_in_j1939_mode() -> None:
     assert twins[0].snapshot()["protocol"] == "j1939"
     assert _name(build_twins(("keypad",), None, None, "firmware")[0]) \
         == "PKP-2600-SI keypad 15h, generation 1 (manual rev 1.1)"
-    with pytest.raises(click.UsageError, match="only PKP-2600-SI keypad can"):
+    with pytest.raises(click.UsageError, match="applies to PKP-2600-SI keypad only"):
         build_twins(("keybox",), None, None, "firmware", (), "j1939")
 
 

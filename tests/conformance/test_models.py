@@ -417,6 +417,7 @@ NOT_PER_DEVICE = {
 ELSEWHERE = {
     "scan": "test_the_cli_commands_that_apply_work",
     "emulate": "test_panel.py",
+    "act": "tests/cli/test_typed_commands.py (every case's actions), tests/cli/test_act.py",
     "export": "test_exports.py, test_the_dbc_loads_in_cantools",
     "decode": "test_decode_and_monitor_name_a_session",
     "monitor": "test_decode_and_monitor_name_a_session",

@@ -30,10 +30,13 @@ from blinkcan.cli.bus_options import (
     parse_node_id,
 )
 from blinkcan.cli.clock import ABSOLUTE, Clock
+from blinkcan.cli.command_socket import command_socket
 from blinkcan.cli.extras import install_command
 from blinkcan.cli.render import output_console
+from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.typed_commands import typed_commands
 from blinkcan.decode import Decoder
+from blinkcan.devices.model import Model
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.formats.nvm_file import nvm_file
 from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
@@ -45,6 +48,15 @@ from blinkcan.twin.nvm import NvmError
 from blinkcan.twin.registry import build_twin
 
 
+def _check_applies(option: str, given: bool, chosen: list[Model], having: list[Model]) -> None:
+    """An option that applies to none of the devices asked for is a usage error naming the
+    models it applies to (it would otherwise be silently ignored)."""
+    if given and not chosen:
+        names = ", ".join(m.description().title for m in having)
+        raise click.UsageError(f"{option} applies to {names} only: none of the devices asked "
+                               "for has it")
+
+
 def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
                 quirks: str, low_side: tuple[int, ...] = (),
                 protocol: str = "canopen") -> list[CanopenTwin]:
@@ -52,23 +64,25 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
         raise click.UsageError("--nvm names one file, for one device")
     if node_id is not None and len(devices) != 1:
         raise click.UsageError("--node-id is for one device; write DEVICE:NODE for several")
+    try:
+        chosen = [parse_spec(spec.partition(":")[0])[0] for spec in devices]
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="DEVICE") from None
+    _check_applies("--low-side", bool(low_side),
+                   [m for m in chosen if m.description().face.low_side_capable],
+                   [m for m in models() if m.description().face.low_side_capable])
+    # spec/pkp-2600-si-j1939.md: the PKP-2600-SI's J1939 mode; the other devices stay CANopen
+    _check_applies(f"--protocol {protocol}", protocol != "canopen",
+                   [m for m in chosen if protocol in m.description().features],
+                   [m for m in models() if protocol in m.description().features])
     twins: list[CanopenTwin] = []
-    for spec in devices:
+    for spec, found in zip(devices, chosen, strict=True):
         model, _, node_text = spec.partition(":")
-        try:
-            found = parse_spec(model)[0]
-        except ValueError as error:
-            raise click.BadParameter(str(error), param_hint="DEVICE") from None
         node = parse_node_id(node_text) if node_text else node_id
         options: dict[str, object] = {}
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
-        if protocol != "canopen":  # spec/pkp-2600-si-j1939.md: the PKP-2600-SI's J1939 mode
-            if protocol not in found.description().features:
-                having = ", ".join(m.description().title for m in models()
-                                   if protocol in m.description().features)
-                raise click.UsageError(f"--protocol {protocol}: only {having} can run it, "
-                                       f"not {found.description().title}")
+        if protocol != "canopen" and protocol in found.description().features:
             options["protocol"] = protocol
         try:
             # the file store is opened here, at the edge: the twin layer does no I/O
@@ -113,7 +127,7 @@ def _free_node_id(near: int, taken: set[int]) -> int:
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
               show_default=True,
               help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
-@click.option("--response-delay", type=click.FloatRange(min=0.0), default=0.0,
+@click.option("--response-delay", type=Seconds(), default=0.0,
               show_default=True,
               help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
 @click.option("--low-side", default="", metavar="PINS",
@@ -122,7 +136,8 @@ def _free_node_id(near: int, taken: set[int]) -> int:
               metavar="[HOST:PORT]", help="Serve the front panel (default 127.0.0.1:8080).")
 @click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
               show_default=True,
-              help="Keypads start in this protocol unless --nvm stored another (J1939: "
+              help="Keypads that have it start in this protocol unless --nvm stored another "
+                   "(the others stay CANopen; J1939: "
                    "source address 21h, 250 kbit/s).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @ABSOLUTE
@@ -166,7 +181,8 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
-        with emulator, panel(emulator, web, console), typed_commands(emulator, console):
+        with emulator, panel(emulator, web, console), \
+                typed_commands(emulator, console) as commands, command_socket(commands, console):
             threading.Event().wait()
     except KeyboardInterrupt:
         console.print("stopped")

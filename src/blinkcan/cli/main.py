@@ -29,6 +29,9 @@ log = logging.getLogger(__name__)
 #: its docstring starts); one line registers a subcommand
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "emulate": ("blinkcan.cli.emulate:command", "Run device twins on a CAN bus until Ctrl-C."),
+    "act": ("blinkcan.cli.act:command", "Act on the devices of a running blinkcan emulate: "
+            "press 3, 16h turn 1 -5, 0Ch blow-fuse 4, keybox power-cycle, help, list (what "
+            "emulate reads on its input)."),
     "demo": ("blinkcan.cli.demo:command",
              "A controller on a keypad and a Keybox twin: key N toggles output N, shown live."),
     "decode": ("blinkcan.cli.decode:command", "Decode a log file (any python-can format, or "

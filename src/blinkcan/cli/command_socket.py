@@ -1,0 +1,182 @@
+"""The typed commands of a running ``blinkcan emulate``, reachable from another terminal
+(``blinkcan act``) over a local Unix socket.
+
+Each emulator listens on ``emulate-PID.sock`` in a directory only its user can enter
+(``$XDG_RUNTIME_DIR/blinkcan``, else ``blinkcan-UID`` in the temporary directory; created 0700,
+refused if it belongs to someone else or others may write to it); the socket itself is 0600.
+A client sends one command line and reads the lines the emulator answers until it closes.
+A socket left by an emulator that died (nobody accepts on it, and no process has its id) is
+stale and is removed by the next client that meets it; an emulator removes its own when it
+stops, and a new one takes over a socket left under its own process id.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import socket
+import stat
+import tempfile
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+from rich.console import Console
+
+from blinkcan.cli.typed_commands import MAX_LINE, TypedCommands
+from blinkcan.errors import BlinkcanError
+
+#: seconds a client may take to send its line, and an answer to come (``wait`` counts)
+LINE_TIMEOUT_S = 5.0
+ANSWER_TIMEOUT_S = 600.0
+_ACCEPT_POLL_S = 0.25
+_SOCKET_NAME = re.compile(r"emulate-(\d+)\.sock")
+
+
+class SocketError(BlinkcanError, OSError):
+    """No emulator to talk to, or one that cannot be reached safely."""
+
+
+def runtime_dir(create: bool = True) -> Path:
+    """The private directory the emulators' sockets live in (SocketError if it is not
+    private to this user)."""
+    base = os.environ.get("XDG_RUNTIME_DIR")
+    path = (Path(base) / "blinkcan" if base
+            else Path(tempfile.gettempdir()) / f"blinkcan-{os.getuid()}")
+    if create:
+        with contextlib.suppress(FileExistsError):
+            path.mkdir(mode=0o700)
+    try:
+        info = path.lstat()
+    except FileNotFoundError:
+        return path
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() \
+            or info.st_mode & (stat.S_IRWXG | stat.S_IRWXO):
+        raise SocketError(f"{path} is not a directory private to this user (owner only, "
+                          "mode 0700): not used for the emulator's command socket")
+    return path
+
+
+def supported() -> bool:
+    return hasattr(socket, "AF_UNIX") and hasattr(os, "getuid")
+
+
+@contextlib.contextmanager
+def command_socket(commands: TypedCommands, console: Console) -> Iterator[Path | None]:
+    """While the body runs, answer ``blinkcan act`` on this process's socket (its path; None
+    where the platform has no Unix sockets or no private place for one: a warning says so,
+    and the emulator runs on)."""
+    if not supported():
+        yield None
+        return
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        path = runtime_dir() / f"emulate-{os.getpid()}.sock"
+        path.unlink(missing_ok=True)  # this process id's: an earlier process's, long gone
+        server.bind(str(path))  # in the 0700 directory: no one else reaches it meanwhile
+        path.chmod(0o600)
+        server.listen()
+        server.settimeout(_ACCEPT_POLL_S)
+    except OSError as error:
+        server.close()
+        console.print(f"warning: blinkcan act cannot reach this emulator: {error}",
+                      markup=False, highlight=False)
+        yield None
+        return
+    stopping = threading.Event()
+    thread = threading.Thread(target=_serve, args=(server, commands, stopping),
+                              name="blinkcan-command-socket", daemon=True)
+    thread.start()
+    try:
+        yield path
+    finally:
+        stopping.set()
+        thread.join(timeout=2 * _ACCEPT_POLL_S + 1)
+        server.close()
+        path.unlink(missing_ok=True)
+
+
+def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.Event) -> None:
+    """One client at a time: its line carried out, the answer sent, the connection closed."""
+    while not stopping.is_set():
+        try:
+            connection, _ = server.accept()
+        except TimeoutError:
+            continue
+        except OSError:
+            return
+        with connection:
+            try:
+                connection.settimeout(LINE_TIMEOUT_S)
+                line = _read_line(connection)
+                answer = (commands.execute(line.decode(errors="replace")) if line is not None
+                          else [f"Error: send one command line of at most {MAX_LINE} bytes"])
+                connection.sendall("".join(f"{text}\n" for text in answer).encode())
+            except OSError:  # a client gone, or too slow: the next one
+                continue
+
+
+def _read_line(connection: socket.socket) -> bytes | None:
+    data = b""
+    while b"\n" not in data:
+        chunk = connection.recv(MAX_LINE + 1)
+        if not chunk:
+            break
+        data += chunk
+        if len(data) > MAX_LINE + 1:
+            return None
+    line = data.partition(b"\n")[0]
+    return None if len(line) > MAX_LINE else line
+
+
+def emulators() -> dict[int, Path]:
+    """The running emulators of this user, by process id; stale sockets are removed."""
+    if not supported():
+        raise SocketError("this platform has no Unix sockets: type the commands into "
+                          "blinkcan emulate itself")
+    directory = runtime_dir(create=False)
+    found: dict[int, Path] = {}
+    if not directory.is_dir():
+        return found
+    for path in sorted(directory.iterdir()):
+        match = _SOCKET_NAME.fullmatch(path.name)
+        if match is None:
+            continue
+        try:
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+                probe.settimeout(LINE_TIMEOUT_S)
+                probe.connect(str(path))
+        except (ConnectionRefusedError, FileNotFoundError):
+            if not _alive(int(match.group(1))):  # (alive: it may be starting to listen)
+                path.unlink(missing_ok=True)  # nobody listens: an emulator that died
+            continue
+        except OSError:
+            continue
+        found[int(match.group(1))] = path
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)  # signal 0: only asks whether the process exists
+    except ProcessLookupError:
+        return False
+    except OSError:  # it exists, someone else's
+        return True
+    return True
+
+
+def send(path: Path, line: str, timeout: float = ANSWER_TIMEOUT_S) -> list[str]:
+    """Send one command line to the emulator at ``path``; the lines it answers."""
+    if "\n" in line or len(line.encode()) > MAX_LINE:
+        raise SocketError(f"one command line of at most {MAX_LINE} bytes")
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as client:
+        client.settimeout(timeout)
+        client.connect(str(path))
+        client.sendall(f"{line}\n".encode())
+        client.shutdown(socket.SHUT_WR)
+        data = b""
+        while chunk := client.recv(65536):
+            data += chunk
+    return data.decode(errors="replace").splitlines()
