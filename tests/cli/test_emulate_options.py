@@ -52,3 +52,19 @@ def test_a_protocol_applies_to_the_devices_that_have_it(protocol: str) -> None:
     refused = CliRunner().invoke(cli, ["emulate", *without, "--protocol", protocol, *NO_BUS])
     assert refused.exit_code == 2, refused.output
     assert f"--protocol {protocol} applies to" in refused.output
+
+
+def test_a_j1939_keypad_claims_the_address_its_device_names() -> None:
+    # DEVICE:ADDR in J1939 mode is the source address (§16), as --address is for `keypad`;
+    # it was ignored (every emulated J1939 keypad sat at 21h; found by the attack pass)
+    j1939 = [m.name for m in models() if "j1939" in m.description().features]
+    twins = build_twins(tuple(f"{name}:{0x30 + n:#x}" for n, name in enumerate(j1939)),
+                        None, None, "firmware", (), "j1939")
+    try:
+        for n, twin in enumerate(twins):
+            twin.power_on(0.0)
+            twin.advance(1.0)
+            assert twin.snapshot()["j1939"]["source_address"] == 0x30 + n
+    finally:
+        for twin in twins:
+            twin.close()

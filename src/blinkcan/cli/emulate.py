@@ -36,6 +36,7 @@ from blinkcan.cli.render import output_console
 from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.typed_commands import typed_commands
 from blinkcan.decode import Decoder
+from blinkcan.devices.keypad_j1939 import NVM_PREFIX
 from blinkcan.devices.model import Model
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.formats.nvm_file import nvm_file
@@ -84,6 +85,8 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
             options["low_side"] = low_side
         if protocol != "canopen" and protocol in found.description().features:
             options["protocol"] = protocol
+            if node is not None:  # J1939: DEVICE:ADDR is the source address it claims (§16)
+                options["settings"] = {NVM_PREFIX + "source_address": node}
         try:
             # the file store is opened here, at the edge: the twin layer does no I/O
             store = None if nvm is None else nvm_file(nvm)
@@ -138,7 +141,7 @@ def _free_node_id(near: int, taken: set[int]) -> int:
               show_default=True,
               help="Keypads that have it start in this protocol unless --nvm stored another "
                    "(the others stay CANopen; J1939: "
-                   "source address 21h, 250 kbit/s).")
+                   "source address 21h unless DEVICE:ADDR names one, 250 kbit/s).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @ABSOLUTE
 @bus_options

@@ -49,6 +49,26 @@ from blinkcan.twin.nvm import NvmArgument, open_nvm
 PROTOCOLS = {"canopen": PROTOCOL_CANOPEN, "j1939": PROTOCOL_J1939}
 
 
+def _split_settings(settings: Mapping[str, Value]) -> tuple[dict[str, Value], dict[str, int]]:
+    """``settings`` by object name, and the J1939 stored settings among them by their
+    ``j1939_`` name (``j1939_source_address``: §16 70h, 01h-FDh), checked against the range
+    their command accepts."""
+    canopen: dict[str, Value] = {}
+    j1939: dict[str, int] = {}
+    for name, value in settings.items():
+        if not name.startswith(NVM_PREFIX):
+            canopen[name] = value
+            continue
+        setting = STORED_SETTINGS.get(name[len(NVM_PREFIX):])
+        if setting is None:
+            raise ValueError(f"{name!r} is not a stored J1939 setting; they are "
+                             f"{', '.join(NVM_PREFIX + key for key in sorted(STORED_SETTINGS))}")
+        if not isinstance(value, int) or isinstance(value, bool) or value not in setting.valid:
+            raise ValueError(f"{name} takes {setting.valid}, not {value!r}")
+        j1939[name[len(NVM_PREFIX):]] = value
+    return canopen, j1939
+
+
 class KeypadTwin(CanopenTwin):
     """A PKP-2600-SI that behaves on the bus as the manual describes.
 
@@ -104,9 +124,14 @@ class KeypadTwin(CanopenTwin):
         if protocol == "j1939" and not speaks:
             raise ValueError(f"the {description.model} has no documented J1939 mode")
         self._j1939_keypad = J1939Keypad(j1939_name, {}, self._save_j1939, speaks)
+        canopen_settings, j1939_settings = _split_settings(settings or {})
         fresh = nvm.load() is None  # a corrupt or foreign file fails here
-        super().__init__(description, node_id, nvm, settings, self._j1939_settings_to_store)
+        super().__init__(description, node_id, nvm, canopen_settings,
+                         self._j1939_settings_to_store)
         self._j1939_keypad.settings.update(self._stored_j1939_settings(self.stored_settings()))
+        if j1939_settings:  # as if written earlier by their J1939 commands, like ``settings``
+            self._j1939_keypad.settings.update(j1939_settings)
+            self.save_settings(self._j1939_settings_to_store())
         store = self.objects
         if protocol == "j1939" and fresh:
             store.set("can_protocol", PROTOCOL_J1939)
