@@ -55,3 +55,24 @@ def test_the_frames_before_a_bad_line_come_out_and_the_line_is_named(
     with pytest.raises(ValueError, match=rf"line {at + 1}\b"):
         times.extend(time for block in read_columns(log) for time in block.times)
     assert times == expected
+
+
+def test_a_capture_cut_off_mid_line_is_named_plainly_and_convert_keeps_its_frames(
+        tmp_path: Path) -> None:
+    # a killed candump leaves its last line half written: the message says so in the
+    # user's words (not python-can's "not enough values to unpack"), and convert keeps every
+    # frame before it (it wrote nothing; found by the newcomer pass)
+    from click.testing import CliRunner
+
+    from blinkcan.cli.main import cli
+    from blinkcan.protocol import Frame
+
+    log = tmp_path / "cut.log"
+    log.write_text("(1.000000) can0 18A#0000000001\n(1.100000) can0 18A#0000000000\n(1.2000")
+    for command in (["decode", str(log)], ["convert", str(log), str(tmp_path / "cut.asc")]):
+        result = CliRunner().invoke(cli, command)
+        assert result.exit_code == 1, result.output
+        assert "line 3: '(1.2000' is not a whole candump line" in result.output
+        assert "unpack" not in result.output
+    assert [frame for _, frame in read_log(tmp_path / "cut.asc")] == [
+        Frame(0x18A, bytes([0, 0, 0, 0, 1])), Frame(0x18A, bytes(5))]

@@ -29,10 +29,18 @@ def convert(source: str, target: str, force: bool) -> None:
     format can hold it; what it cannot (e.g. .csv: channel, CAN FD flags) is counted, named
     and explained, one line each."""
     check_target(target, force)
+    unread: LogError | None = None
     try:
         with writing(target), FrameWriter(target, replace=force) as writer:
-            for message in read_messages(source):
-                writer.write_message(message)
+            try:
+                for message in read_messages(source):
+                    writer.write_message(message)
+            except LogError as error:
+                if not writer.count:
+                    raise  # nothing read: no file at all
+                # the frames before the line that cannot be read are kept (a capture cut off
+                # by a killed logger ends so): nothing recorded is lost
+                unread = error
     except LogError as error:
         raise click.ClickException(str(error)) from None
     click.echo(f"{writer.count} frames written to {target}", err=True)
@@ -40,6 +48,9 @@ def convert(source: str, target: str, force: bool) -> None:
         click.echo(skipped, err=True)
     for line in writer.lost_lines():
         click.echo(line, err=True)
+    if unread is not None:
+        raise click.ClickException(f"{unread}; the {writer.count} frames before it are in "
+                                   f"{target}")
 
 
 class _StopError(BlinkcanError):

@@ -39,6 +39,8 @@ def _python_can(line: str) -> can.Message | None:
     from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
 
     fields = line.split()
+    if 0 < len(fields) < 3:  # e.g. the last line of a capture cut off by a killed candump
+        raise _plainly(line, ValueError(line))
     if len(fields) >= 3 and len(fields[2].partition("#")[0]) > 8:
         # candump writes 3 hex digits (11-bit) or 8 (29-bit, with the error flag): python-can
         # would read the flag bits of a longer identifier and call the line an error frame
@@ -46,6 +48,12 @@ def _python_can(line: str) -> can.Message | None:
     reader = CanutilsLogReader(io.StringIO(line))
     message = next(iter(reader), None)
     return restore_error_details(message, line) if message is not None else None
+
+
+def _shown(line: str) -> str:
+    """A line as an error message names it: quoted, at most 40 characters."""
+    text = line.strip()
+    return repr(text if len(text) <= 40 else text[:40] + "...")
 
 
 def restore_error_details(message: can.Message, line: str) -> can.Message:
@@ -99,7 +107,7 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message]:
         except (LineTooLongError, UnicodeDecodeError):
             raise  # they name their place themselves
         except Exception as error:
-            raise _on_line(number[0], error) from error
+            raise _on_line(number[0], _plainly(last[0], error)) from error
         yield message
 
 
@@ -197,6 +205,14 @@ def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
         read += len(lines)
         if columns.times:
             yield columns
+
+
+def _plainly(line: str, error: Exception) -> Exception:
+    """python-can's error for a line, said as a user reads it when the line is not whole
+    (python-can says "not enough values to unpack")."""
+    if 0 < len(line.split()) < 3:
+        return ValueError(f"{_shown(line)} is not a whole candump line ((TIME) CHANNEL ID#DATA)")
+    return error
 
 
 def _on_line(number: int, error: Exception) -> ValueError:
