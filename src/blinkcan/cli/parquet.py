@@ -57,6 +57,10 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                                    markup=False, highlight=False, soft_wrap=True)
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
             frames += result.frames
+        if result.cut_off is not None:
+            progress.console.print(f"{result.source}: {result.cut_off}; the {result.frames:,} "
+                                   "frames before it are in the dataset", markup=False,
+                                   highlight=False, soft_wrap=True)
         progress.advance(task)
         show()
 

@@ -36,6 +36,7 @@ from blinkcan.fleet.frames import FrameDecoder, Segment
 from blinkcan.fleet.schema import ROWS_PER_GROUP
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.writer import PartitionWriter
+from blinkcan.formats.log_source import CutOffError
 from blinkcan.formats.logs import LogError
 
 META = "_blinkcan"
@@ -56,6 +57,9 @@ class FileResult:
     rows: int = 0
     outputs: tuple[str, ...] = ()
     error: str | None = None
+    #: a decoded file's last line that was cut off (a logger killed mid-write): every frame
+    #: before it is in the dataset, the line is named here
+    cut_off: str | None = None
 
 
 def source_key(source: str) -> str:
@@ -155,7 +159,7 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
     attempt = f"{store.temporary}/{store.key}-{uuid.uuid4().hex}"
     writer = PartitionWriter(store.fs, attempt, f"{store.key}.parquet", path, rows_per_group)
     try:
-        frames = _decode_into(writer, path, devices, progress)
+        frames, cut_off = _decode_into(writer, path, devices, progress)
         outputs = writer.close()
     except Exception as error:  # a file that cannot be read (or decoded): named and skipped
         writer.abandon()
@@ -167,16 +171,27 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
         raise
     manifest = {**identity, "outputs": outputs, "frames": frames, "rows": writer.rows}
     store.commit(attempt, outputs, manifest)
-    return FileResult(path, "decoded", frames, writer.rows, tuple(outputs))
+    return FileResult(path, "decoded", frames, writer.rows, tuple(outputs), cut_off=cut_off)
 
 
 def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] | None,
-                 progress: Callable[[int], None] | None) -> int:
+                 progress: Callable[[int], None] | None) -> tuple[int, str | None]:
+    """The frames decoded, and the cut-off last line (a capture ends so when its logger was
+    killed: the frames before it are kept, the file is decoded, the line is named)."""
     frames = FrameDecoder(make_decoder(devices))
     segment = Segment()
     limit = writer.rows_per_group
     count = reported = 0
-    for block in read_columns(path):
+    cut_off = None
+    blocks = read_columns(path)
+    while True:
+        try:
+            block = next(blocks, None)
+        except CutOffError as error:
+            cut_off = str(error)
+            break
+        if block is None:
+            break
         position, size = 0, len(block)
         while position < size:
             position = frames.decode(block, position, segment, limit)
@@ -190,7 +205,7 @@ def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] 
     writer.write(segment)
     if progress is not None and count > reported:
         progress(count - reported)
-    return count
+    return count, cut_off
 
 
 def _reason(error: BaseException) -> str:

@@ -22,7 +22,13 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, TextIO
 
 from blinkcan.formats.columns import FrameColumns
-from blinkcan.formats.log_source import LineTooLongError, bounded_line_blocks, bounded_lines
+from blinkcan.formats.log_source import (
+    CutOffError,
+    LineTooLongError,
+    UnterminatedLine,
+    bounded_line_blocks,
+    bounded_lines,
+)
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
@@ -201,7 +207,7 @@ def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
             if columns.times:  # the frames before the line, then what is wrong with it
                 yield columns
             # the first line of the block that reads so (a line reads the same every time)
-            raise _on_line(read + lines.index(line) + 1, error) from error
+            raise _failed_line(lines, read + lines.index(line) + 1, error) from error
         read += len(lines)
         if columns.times:
             yield columns
@@ -213,6 +219,15 @@ def _plainly(line: str, error: Exception) -> Exception:
     if 0 < len(line.split()) < 3:
         return ValueError(f"{_shown(line)} is not a whole candump line ((TIME) CHANNEL ID#DATA)")
     return error
+
+
+def _failed_line(lines: list[str], number: int, error: Exception) -> ValueError:
+    """The error of line ``number`` of ``lines``: :class:`CutOffError` when it is the file's
+    last line with no newline after it (a capture cut off by a killed logger)."""
+    failed = _on_line(number, error)
+    if isinstance(lines, UnterminatedLine):
+        return CutOffError(f"{failed}: the capture ends there, cut off")
+    return failed
 
 
 def _on_line(number: int, error: Exception) -> ValueError:

@@ -46,6 +46,16 @@ class LineTooLongError(BlinkcanError, ValueError):
     """A line of a text log over :data:`MAX_LINE` bytes; the message says which."""
 
 
+class CutOffError(BlinkcanError, ValueError):
+    """The last line of a text log is not whole and no newline follows it: the capture was
+    cut off there (a logger killed mid-write). Every frame before it was read."""
+
+
+class UnterminatedLine(list[str]):
+    """The block :func:`bounded_line_blocks` ends with when the file's last line has no
+    newline after it: a reader that cannot read that line raises :class:`CutOffError`."""
+
+
 @dataclass(frozen=True)
 class LogSource:
     """A log path checked: ``suffix`` is the format it is read in (by its name; ``.log``,
@@ -150,4 +160,4 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
         number += len(lines)
         yield lines
     if rest:
-        yield [rest]
+        yield UnterminatedLine([rest])
