@@ -32,6 +32,7 @@ from blinkcan.cli.emulate import build_twins
 from blinkcan.cli.main import cli
 from blinkcan.cli.typed_commands import MAX_LINE, TypedCommands
 from blinkcan.runtime import Emulator
+from tests.processes import stop
 
 pytestmark = pytest.mark.skipif(not supported(), reason="no Unix sockets here")
 
@@ -139,12 +140,7 @@ def test_two_emulators_are_told_apart_by_process_id(private_dir: Path,
             assert code == 1
             assert "no blinkcan emulate of this user has process id 1" in errors
     finally:
-        child.terminate()
-        try:
-            child.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait(timeout=5)
+        stop(child)
 
 
 def test_a_socket_of_a_process_still_alive_is_left_alone(private_dir: Path) -> None:

@@ -33,6 +33,7 @@ from blinkcan.twin.actions import ACTIONS, Action, actions_of
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.registry import build_twin
 from tests.conformance.cases import Case, cases
+from tests.processes import stop
 
 #: what the testing kit does for each action: the reference a typed command must match
 RIG_CALLS: dict[str, Callable[[Rig, CanopenTwin, dict[str, Any]], None]] = {
@@ -325,11 +326,7 @@ def test_emulate_reads_commands_on_its_input_and_emulates_on_after_its_end() -> 
             pytest.fail("no SDO reply after the end of the commands")
         assert child.poll() is None
     finally:
-        child.terminate()
-        try:
-            child.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            child.kill()
+        stop(child)
         host.shutdown()
 
 

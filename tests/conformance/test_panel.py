@@ -36,6 +36,7 @@ from blinkcan.devices.model import QUIRK_PROFILES, Face
 from blinkcan.protocol import Frame
 from blinkcan.runtime import to_frame, to_message
 from tests.conformance.cases import CASES, Case, cases
+from tests.processes import multicast_bus, stop
 
 pytestmark = pytest.mark.multiprocess
 
@@ -84,13 +85,6 @@ def _groups() -> list[list[Case]]:
     return [*shared.values(), *alone]
 
 
-def _host_bus(channel: str, port: int) -> can.BusABC:
-    try:
-        return can.Bus(interface="udp_multicast", channel=channel, port=port, hop_limit=0,
-                       receive_own_messages=False)
-    except (OSError, ImportError, can.CanError) as error:
-        pytest.skip(f"udp_multicast unavailable here ({error}); on a machine without a default "
-                    "route run: ip route add 224.0.0.0/4 dev lo")
 
 
 PR_SET_PDEATHSIG = 1  # Linux prctl(2)
@@ -106,11 +100,12 @@ def _end_with_this_process() -> None:
 def _start(group: list[Case]) -> Emulated:
     channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
     port = random.randint(40000, 60000)
-    host = _host_bus(channel, port)
+    host = multicast_bus(channel, port)
     several = len(group) > 1
     nodes = {str(case): (number if several else case.model.default_node_id)
              for number, case in enumerate(group, start=1)}
-    specs = [f"{case.spec}:{nodes[str(case)]}" for case in group]
+    # a J1939 keypad runs alone at its default address (DEVICE:ADDR would be its address)
+    specs = [f"{case.spec}:{nodes[str(case)]}" if case.canopen else case.spec for case in group]
     first = group[0]
     web = WEB and first.quirks == QUIRK_PROFILES[0]  # the quirk profile the panel is checked in
     environment = {name: value for name, value in os.environ.items()
@@ -150,12 +145,7 @@ def emulators() -> Iterator[dict[str, Emulated]]:
         yield {name: emulated for emulated in running for name in emulated.nodes}
     finally:
         for emulated in running:
-            emulated.child.terminate()
-            try:
-                emulated.child.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                emulated.child.kill()
-                emulated.child.wait(timeout=5)
+            stop(emulated.child)
             emulated.host.shutdown()
 
 

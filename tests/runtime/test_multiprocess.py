@@ -19,17 +19,11 @@ import pytest
 from blinkcan.cli.bus_options import DEFAULT_GROUP
 from blinkcan.protocol import Frame
 from blinkcan.runtime import to_frame, to_message
+from tests.processes import multicast_bus, stop
 
 pytestmark = pytest.mark.multiprocess
 
 
-def _multicast_bus(channel: str, port: int) -> can.BusABC:
-    try:
-        return can.Bus(interface="udp_multicast", channel=channel, port=port, hop_limit=0,
-                       receive_own_messages=False)
-    except (OSError, ImportError, can.CanError) as error:
-        pytest.skip(f"udp_multicast unavailable here ({error}); on a machine without a default "
-                    "route run: ip route add 224.0.0.0/4 dev lo")
 
 
 def _random_group() -> str:
@@ -52,7 +46,7 @@ def emulated(*devices: str, channel: str | None = None
     # two test runs on one machine would otherwise hear each other.
     channel = channel or _random_group()
     port = random.randint(40000, 60000)
-    host = _multicast_bus(channel, port)
+    host = multicast_bus(channel, port)
     child = subprocess.Popen(
         [sys.executable, "-m", "blinkcan", "emulate", *devices, "-q", "-i", "udp_multicast",
          "-c", channel, "--bus-kwargs", f"port={port}", "hop_limit=0"],
@@ -61,11 +55,7 @@ def emulated(*devices: str, channel: str | None = None
     try:
         yield host, child
     finally:
-        child.terminate()
-        try:
-            child.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            child.kill()
+        stop(child)
         host.shutdown()
 
 

@@ -21,7 +21,8 @@ import pytest
 from blinkcan.host import HostBus, Keypad, scan_j1939
 from blinkcan.protocol import Frame
 from blinkcan.runtime import to_frame
-from tests.runtime.test_multiprocess import _child_environment, _multicast_bus, _random_group
+from tests.processes import multicast_bus, stop
+from tests.runtime.test_multiprocess import _child_environment, _random_group
 
 pytestmark = pytest.mark.multiprocess
 
@@ -35,12 +36,7 @@ def _emulate(channel: str, port: int, *arguments: str) -> Iterator[subprocess.Po
     try:
         yield child
     finally:
-        child.terminate()
-        try:
-            child.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait(timeout=5)
+        stop(child)
 
 
 def _wait_for(bus: can.BusABC, can_id: int, data: bytes, child: subprocess.Popen[bytes],
@@ -86,7 +82,7 @@ def _revision(keypad: Keypad, child: subprocess.Popen[bytes]) -> str:
 def test_switched_power_cycled_driven_over_j1939_and_switched_back(tmp_path: Path) -> None:
     nvm = str(tmp_path / "keypad.json")
     channel, port = _random_group(), random.randint(40000, 60000)
-    bus = _multicast_bus(channel, port)
+    bus = multicast_bus(channel, port)
     keypad: Keypad | None = None
     try:
         with _emulate(channel, port, "--nvm", nvm) as child:
@@ -117,7 +113,7 @@ def test_emulate_and_keypad_commands_in_j1939_mode_across_processes() -> None:
     """``blinkcan emulate keypad --protocol j1939`` in one process, ``blinkcan keypad
     --protocol j1939 led 3 red`` in another, this process listening (LED acknowledge on)."""
     channel, port = _random_group(), random.randint(40000, 60000)
-    bus = _multicast_bus(channel, port)
+    bus = multicast_bus(channel, port)
     bus_options = ["-i", "udp_multicast", "-c", channel, "--bus-kwargs", f"port={port}",
                    "hop_limit=0"]
     keypad: Keypad | None = None
