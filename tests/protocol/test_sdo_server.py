@@ -101,3 +101,17 @@ def test_short_requests_are_padded_and_answered() -> None:
 def test_oversized_segmented_download_is_refused() -> None:
     server = SdoServer(FakeDictionary())
     assert server.on_request(h("2100300000100000")) == h("8000300005000405")
+
+
+def test_a_request_reads_the_same_however_many_were_seen_and_in_any_form() -> None:
+    # the server keeps the parse of requests it saw (bounded): the answer never depends on it,
+    # whether the request has its 8 bytes or fewer (errata P10: read as padded)
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    fake.values[multiplexer(0x2000, 0)] = b"\x07"
+    expected = h("4F00200007000000")
+    for round_ in range(3):
+        for sub in range(1, 600):  # more distinct requests than the server keeps
+            server.on_request(h("40002000") + sub.to_bytes(4, "little"))
+        assert server.on_request(h("4000200000000000")) == expected, round_
+        assert server.on_request(h("40002000")) == expected

@@ -41,6 +41,9 @@ _ACKNOWLEDGE_PREFIX = [bytes((command,)) for command in range(256)]
 _SEGMENT_REQUESTS = frozenset({CCS_DOWNLOAD_SEGMENT, CCS_UPLOAD_SEGMENT})
 
 
+#: distinct request frames whose parse a server keeps
+_PARSED_KEPT = 256
+
 class ObjectAccess(Protocol):
     """What the server needs from an object dictionary. ``mux`` is the 3-byte multiplexer."""
 
@@ -67,8 +70,8 @@ _Handler = Callable[[SdoFrame], "bytes | None"]
 class SdoServer:
     """One server channel (one per node)."""
 
-    __slots__ = ("_access", "_buffer", "_handlers", "_idle", "_mux", "_position", "_replies",
-                 "_size", "_state", "_tables", "_toggle")
+    __slots__ = ("_access", "_buffer", "_handlers", "_idle", "_mux", "_parsed", "_position",
+                 "_replies", "_size", "_state", "_tables", "_toggle")
 
     def __init__(self, access: ObjectAccess) -> None:
         self._access = access
@@ -80,6 +83,9 @@ class SdoServer:
         self._size: int | None = None
         #: mux -> (value bytes, reply): an unchanged value object gets the same reply bytes
         self._replies: dict[bytes, tuple[bytes, bytes]] = {}
+        #: request bytes -> their parse: a controller asks the same few requests again and
+        #: again, and an SdoFrame is immutable (bounded: cleared when full)
+        self._parsed: dict[bytes, SdoFrame] = {}
         # state -> handler per client command specifier (0..7; CiA 301 §7.2.4.3): the protocol
         # as a table. A list
         # per state, not a dict keyed by (state, ccs): hashing an enum costs a Python call.
@@ -111,10 +117,21 @@ class SdoServer:
 
     def on_request(self, data: bytes) -> bytes | None:
         """The eight reply bytes for one request, or None (a client abort needs no reply)."""
-        if len(data) < 8:  # errata P10: read as padded with zeros
-            data = data + ZEROS[len(data) :]
-        request = parse_sdo(data[:8])
+        request = self._parsed.get(data) if type(data) is bytes else None
+        if request is None:
+            request = self._parse(data)
         return self._handlers[request.command >> 5](request)
+
+    def _parse(self, data: bytes) -> SdoFrame:
+        raw = bytes(data)
+        if len(raw) < 8:  # errata P10: read as padded with zeros
+            raw += ZEROS[len(raw) :]
+        request = parse_sdo(raw[:8])
+        parsed = self._parsed
+        if len(parsed) >= _PARSED_KEPT:
+            parsed.clear()
+        parsed[bytes(data)] = request
+        return request
 
     # -- handlers -------------------------------------------------------------------------
 
