@@ -41,14 +41,18 @@ class Bench:
         ident, *data = text.split()
         self.host.send(to_message(Frame(int(ident, 16), bytes(int(b, 16) for b in data))))
 
-    def received(self, can_id: int, timeout: float = 2.0) -> list[Frame]:
+    def received(self, can_id: int, timeout: float = 2.0, quiet: float = 0.5) -> list[Frame]:
+        """The frames of ``can_id`` heard until ``quiet`` seconds pass without one after the
+        first (a loaded machine spaces a click's press and release), or ``timeout``."""
         frames, end = [], time.monotonic() + timeout
+        last = 0.0
         while time.monotonic() < end:
             message = self.host.recv(0.05)
-            if message is not None and (frame := to_frame(message)) is not None:
-                if frame.can_id == can_id:
-                    frames.append(frame)
-            elif frames:
+            if message is not None and (frame := to_frame(message)) is not None \
+                    and frame.can_id == can_id:
+                frames.append(frame)
+                last = time.monotonic()
+            elif frames and time.monotonic() - last > quiet:
                 break
         return frames
 
