@@ -1,5 +1,7 @@
 """A bus that echoes its own frames (python-can's udp_multicast): the echo of each frame sent
-is recognised once, within the window, and nothing else is taken for one."""
+is recognised once, within the window, and nothing else is taken for one. The buses here are
+stand-ins named as python-can's classes: no socket is opened, no datagram sent (a real one in
+a test would take hop_limit=0)."""
 
 from __future__ import annotations
 
