@@ -12,6 +12,7 @@ from typing import Any
 import click
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from blinkcan import fleet
 from blinkcan.cli.extras import install_command
@@ -36,7 +37,10 @@ def _check_reads_only(connection: Any, sql: str) -> None:
     VALUES are SELECTs to DuckDB): a query never writes, copies, attaches or deletes a file."""
     import duckdb  # noqa: PLC0415 (the [fleet] extra, checked by the caller)
 
-    for statement in connection.extract_statements(sql):
+    statements = connection.extract_statements(sql)
+    if not statements:
+        raise click.UsageError("no SQL statement: write a SELECT on the table events")
+    for statement in statements:
         if statement.type != duckdb.StatementType.SELECT:
             raise click.ClickException(
                 f"query only reads: {statement.type.name} is not a SELECT (DESCRIBE, SHOW, "
@@ -83,9 +87,11 @@ def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
         for row in rows:
             out.write(json.dumps(dict(zip(names, map(_json_value, row), strict=True))) + "\n")
     else:
-        table = Table(*names, show_lines=False)
+        table = Table(show_lines=False)
+        for name in names:  # names and values are shown as they are, never read as markup
+            table.add_column(Text(name))
         for row in rows[:TABLE_ROWS]:
-            table.add_row(*("" if v is None else str(_json_value(v)) for v in row))
+            table.add_row(*(Text("" if v is None else str(_json_value(v))) for v in row))
         Console().print(table)
         if len(rows) > TABLE_ROWS:
             click.echo(f"{len(rows):,} rows; the first {TABLE_ROWS:,} shown (--csv or --json "
