@@ -68,3 +68,52 @@ def test_a_j1939_keypad_claims_the_address_its_device_names() -> None:
     finally:
         for twin in twins:
             twin.close()
+
+
+# -- the attack pass of session 5 -------------------------------------------------------------
+
+J1939_MODELS = [m.name for m in models() if "j1939" in m.description().features]
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+def test_two_j1939_keypads_at_one_address_are_refused(model: str) -> None:
+    # a J1939 keypad with no ADDR claims 21h (§5): `keypad keypad:0x21 --protocol j1939` was
+    # two keypads on one address, both emulated (their node ids differed)
+    result = CliRunner().invoke(cli, ["emulate", model, f"{model}:0x21", "--protocol", "j1939",
+                                      *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert "both on J1939 address 21h" in result.output
+    assert "no-such-interface" not in result.output
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+@pytest.mark.parametrize("address", [0x80, 0xEE, 0xFD])
+def test_a_j1939_keypad_claims_any_node_address(model: str, address: int) -> None:
+    # J1939 node addresses are 01h..FDh (spec §16, as `keypad --address` takes them); DEVICE:ADDR
+    # refused 80h and over as "node id outside 0x01..0x7f"
+    [twin] = build_twins((f"{model}:{address:#x}",), None, None, "firmware", (), "j1939")
+    try:
+        twin.power_on(0.0)
+        twin.advance(1.0)
+        assert twin.snapshot()["j1939"]["source_address"] == address
+    finally:
+        twin.close()
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+@pytest.mark.parametrize("address", ["0xFE", "0xFF", "0", "0x100"])
+def test_a_j1939_address_outside_the_range_is_a_usage_error(model: str, address: str) -> None:
+    result = CliRunner().invoke(cli, ["emulate", f"{model}:{address}", "--protocol", "j1939",
+                                      *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert "a J1939 keypad address is 01h..FDh" in result.output
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1:99999", "abc", "127.0.0.1:-1"])
+def test_a_bad_web_address_is_a_usage_error_before_the_bus(address: str) -> None:
+    # it was checked after the bus opened and the devices had booted
+    result = CliRunner().invoke(cli, ["emulate", "keypad", "--web", address, *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert "--web" in result.output
+    assert "no-such-interface" not in result.output
+    assert "emulating" not in result.output

@@ -27,6 +27,7 @@ from blinkcan.cli.bus_options import (
     cli_bus,
     describe_bus,
     parse_int,
+    parse_j1939_address,
     parse_node_id,
 )
 from blinkcan.cli.clock import ABSOLUTE, Clock
@@ -40,8 +41,9 @@ from blinkcan.devices.keypad_j1939 import NVM_PREFIX
 from blinkcan.devices.model import Model
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.formats.nvm_file import nvm_file
-from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
+from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, SDO_RX, SDO_TX, split_cob_id
 from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.j1939 import ADDRESS_MAX
 from blinkcan.runtime import Emulator
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keypad import KeypadTwin
@@ -79,14 +81,21 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
     twins: list[CanopenTwin] = []
     for spec, found in zip(devices, chosen, strict=True):
         model, _, node_text = spec.partition(":")
-        node = parse_node_id(node_text) if node_text else node_id
+        j1939 = protocol != "canopen" and protocol in found.description().features
+        node = node_id
         options: dict[str, object] = {}
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
-        if protocol != "canopen" and protocol in found.description().features:
+        if j1939:
             options["protocol"] = protocol
-            if node is not None:  # J1939: DEVICE:ADDR is the source address it claims (§16)
-                options["settings"] = {NVM_PREFIX + "source_address": node}
+            # J1939: DEVICE:ADDR is the source address it claims (§16: 01h..FDh); its CANopen
+            # node id (after a switch back) is ADDR where ADDR is one, else the default
+            address = parse_j1939_address(node_text) if node_text else node_id
+            if address is not None:
+                options["settings"] = {NVM_PREFIX + "source_address": address}
+                node = address if address <= NODE_ID_MAX else None
+        elif node_text:
+            node = parse_node_id(node_text)
         try:
             # the file store is opened here, at the edge: the twin layer does no I/O
             store = None if nvm is None else nvm_file(nvm)
@@ -100,22 +109,34 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
 
 
 def _refuse_shared_node_ids(twins: list[CanopenTwin]) -> None:
-    """Two devices on one node id answer every SDO request twice: refused."""
-    seen: dict[int, CanopenTwin] = {}
+    """Two devices on one node id answer every SDO request twice, two J1939 keypads on one
+    address every command: refused."""
+    seen: dict[tuple[str, int], CanopenTwin] = {}
     for twin in twins:
-        other = seen.setdefault(twin.node_id, twin)
+        where = _where(twin)
+        other = seen.setdefault(where, twin)
         if other is not twin:
             for each in twins:
                 each.close()
+            taken = {number for protocol, number in seen if protocol == where[0]}
+            top = ADDRESS_MAX if where[0] == "j1939" else NODE_ID_MAX
+            place = "J1939 address" if where[0] == "j1939" else "node"
             raise click.UsageError(
-                f"{other.description.kind} and {twin.description.kind} both on node "
-                f"{twin.node_id:02X}h; give each its own, e.g. {twin.description.kind}:"
-                f"0x{_free_node_id(twin.node_id, set(seen)):02X}")
+                f"{other.description.kind} and {twin.description.kind} both on {place} "
+                f"{where[1]:02X}h; give each its own, e.g. {twin.description.kind}:"
+                f"0x{_free_node_id(where[1], taken, top):02X}")
 
 
-def _free_node_id(near: int, taken: set[int]) -> int:
+def _where(twin: CanopenTwin) -> tuple[str, int]:
+    """("canopen", node id) or ("j1939", source address): where a twin answers."""
+    if isinstance(twin, KeypadTwin) and twin.protocol == "j1939":
+        return "j1939", int(twin.j1939.settings["source_address"])
+    return "canopen", twin.node_id
+
+
+def _free_node_id(near: int, taken: set[int], top: int = NODE_ID_MAX) -> int:
     candidate: int
-    for candidate in [*range(near + 1, 128), *range(1, near)]:
+    for candidate in [*range(near + 1, top + 1), *range(1, near)]:
         if candidate not in taken:
             return candidate
     return near
@@ -160,6 +181,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     blinkcan emulate keypad --protocol j1939
     """
     console = output_console()
+    web_address = None if web is None else panel_address(web)
     try:
         pins = tuple(parse_int(p) for p in low_side.split(",") if p.strip())
         twins = build_twins(devices, node_id, nvm, quirks, pins, protocol)
@@ -184,7 +206,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
-        with emulator, panel(emulator, web, console), \
+        with emulator, panel(emulator, web_address, console), \
                 typed_commands(emulator, console) as commands, command_socket(commands, console):
             threading.Event().wait()
     except KeyboardInterrupt:
@@ -203,21 +225,31 @@ def _name(twin: CanopenTwin) -> str:
     return f"{description.title} {where}, {description.edition}"
 
 
-@contextlib.contextmanager
-def panel(emulator: Emulator, address: str | None, console: Console) -> Iterator[None]:
-    """Serve the front panel beside ``emulator`` when an address is given."""
-    if address is None:
-        yield
-        return
+def panel_address(text: str) -> tuple[str, int]:
+    """--web's HOST:PORT, checked before the bus opens (and the web extra with it)."""
     try:
-        from blinkcan.web.server import PanelServer, parse_address  # noqa: PLC0415 optional extra
+        from blinkcan.web.server import parse_address  # noqa: PLC0415 optional extra
     except ImportError:
         raise click.ClickException("the front panel needs the web extra: "
                                    f"{install_command('web')}") from None
     try:
-        host, port = parse_address(address)
-        server = PanelServer(emulator, host, port).start()
-    except (ValueError, OSError) as error:
+        return parse_address(text)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="'--web'") from None
+
+
+@contextlib.contextmanager
+def panel(emulator: Emulator, address: tuple[str, int] | None,
+          console: Console) -> Iterator[None]:
+    """Serve the front panel beside ``emulator`` when an address is given."""
+    if address is None:
+        yield
+        return
+    from blinkcan.web.server import PanelServer  # noqa: PLC0415 optional extra (checked)
+
+    try:
+        server = PanelServer(emulator, *address).start()
+    except OSError as error:
         raise click.ClickException(f"front panel: {error}") from None
     console.print(f"front panel: {server.url}")
     try:
