@@ -8,9 +8,11 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from blinkcan.cli.emulate import build_twins
+from blinkcan.cli.emulate import build_twins, frame_decoder
 from blinkcan.cli.main import cli
+from blinkcan.cli.typed_commands import TypedCommands
 from blinkcan.devices.registry import models
+from blinkcan.testing import Rig
 
 # an interface python-can does not know: reaching the bus would be another error
 NO_BUS = ["-i", "no-such-interface"]
@@ -117,3 +119,36 @@ def test_a_bad_web_address_is_a_usage_error_before_the_bus(address: str) -> None
     assert "--web" in result.output
     assert "no-such-interface" not in result.output
     assert "emulating" not in result.output
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+@pytest.mark.parametrize("address", [0x30, 0x90])
+def test_the_frames_of_a_j1939_keypad_are_printed_with_their_meaning(model: str,
+                                                                      address: int) -> None:
+    # emulate's printer knew only 21h: a keypad at 30h printed its key messages as "keypad FFh:
+    # malformed command (the keypad ignores it)"
+    twins = build_twins((f"{model}:{address:#x}",), None, None, "firmware", (), "j1939")
+    try:
+        decoder = frame_decoder(twins)
+        twin = twins[0]
+        twin.power_on(0.0)
+        [*frames] = twin.press(3, 0.5)
+        assert frames
+        assert str(decoder.decode(frames[-1], 0.5)).endswith(f"keypad {address:02X}h: key 3 "
+                                                              "pressed")
+    finally:
+        for twin in twins:
+            twin.close()
+
+
+def test_an_address_two_j1939_keypads_share_as_node_id_names_them_both() -> None:
+    # both keep the CANopen node id 15h (their J1939 addresses are 80h and 90h): '15h' is
+    # ambiguous, and the error listed every device instead of the two it names
+    twins = build_twins(("keypad:0x80", "keypad:0x90", "keybox"), None, None, "firmware", (),
+                        "j1939")
+    with Rig() as rig:
+        for twin in twins:
+            rig.add(twin)
+        [answer] = TypedCommands(rig.emulator).execute("15h press 3")
+    assert answer.startswith("Error: '15h' names 2 devices (PKP-2600-SI keypad 80h (J1939), "
+                             "PKP-2600-SI keypad 90h (J1939)); start with the address")

@@ -128,6 +128,15 @@ def _refuse_shared_node_ids(twins: list[CanopenTwin]) -> None:
                 f"0x{_free_node_id(where[1], taken, top):02X}")
 
 
+def frame_decoder(twins: list[CanopenTwin]) -> Decoder:
+    """The decoder of the frames the emulator prints: each twin at its node id, a J1939 keypad
+    at its address too (a keypad at 30h was "keypad FFh: malformed command")."""
+    decoder = Decoder({t.node_id: t.description for t in twins})
+    decoder.j1939.addresses.update(number for protocol, number in map(_where, twins)
+                                   if protocol == "j1939")
+    return decoder
+
+
 def _where(twin: CanopenTwin) -> tuple[str, int]:
     """("canopen", node id) or ("j1939", source address): where a twin answers."""
     if isinstance(twin, KeypadTwin) and twin.protocol == "j1939":
@@ -189,7 +198,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     except NvmError as error:
         raise click.ClickException(str(error)) from None
     bus = cli_bus()
-    decoder = Decoder({t.node_id: t.description for t in twins})
+    decoder = frame_decoder(twins)
     # the emulator's clock is time.monotonic: its start is 0, its offset to the epoch measured
     clock = Clock(absolute, start=time.monotonic(), to_epoch=time.time() - time.monotonic())
     printer = None if quiet else _FramePrinter(console, decoder, clock)
