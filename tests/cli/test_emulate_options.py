@@ -13,6 +13,7 @@ from blinkcan.cli.main import cli
 from blinkcan.cli.typed_commands import TypedCommands
 from blinkcan.devices.registry import models
 from blinkcan.testing import Rig
+from blinkcan.twin import KeypadTwin
 
 # an interface python-can does not know: reaching the bus would be another error
 NO_BUS = ["-i", "no-such-interface"]
@@ -130,7 +131,8 @@ def test_the_frames_of_a_j1939_keypad_are_printed_with_their_meaning(model: str,
     twins = build_twins((f"{model}:{address:#x}",), None, None, "firmware", (), "j1939")
     try:
         decoder = frame_decoder(twins)
-        twin = twins[0]
+        [twin] = twins
+        assert isinstance(twin, KeypadTwin)
         twin.power_on(0.0)
         [*frames] = twin.press(3, 0.5)
         assert frames
