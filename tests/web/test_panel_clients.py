@@ -17,8 +17,8 @@ from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
 pytest.importorskip("starlette", reason="the web extra is not installed")
-from blinkcan.web import app  # noqa: E402
-from blinkcan.web.server import PanelServer  # noqa: E402
+from blinkcan.web import app
+from blinkcan.web.server import PanelServer
 
 CLIENTS = 40
 
