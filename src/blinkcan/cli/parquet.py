@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import TYPE_CHECKING
 
 import click
 from rich.console import Console
@@ -12,6 +13,9 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from blinkcan import fleet
 from blinkcan.cli.extras import install_command
+
+if TYPE_CHECKING:  # the [fleet] extra: imported once checked
+    from blinkcan.fleet.task import FileResult
 
 
 def check_extra() -> None:
@@ -22,11 +26,21 @@ def check_extra() -> None:
                                    f"{install_command('fleet')}")
 
 
+def unreadable_text(result: FileResult) -> str:
+    """"x.log: 3 lines could not be read (named above; ...): kept as 'unreadable' rows;
+    its 2,998 frames are in the dataset"."""
+    plural = "s" if result.unreadable != 1 else ""
+    more = f", the first {len(result.unreadable_lines)}" \
+        if result.unreadable > len(result.unreadable_lines) else ""
+    return (f"{result.source}: {result.unreadable:,} line{plural} could not be read (named "
+            f"above{more}): kept as 'unreadable' row{plural} with {'their' if plural else 'its'}"
+            f" text; its {result.frames:,} frames are in the dataset")
+
+
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                       devices: dict[int, str]) -> None:
     check_extra()
     from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
-    from blinkcan.fleet.task import FileResult  # noqa: PLC0415
 
     total = len(log_files(files))
     console = Console(stderr=True)
@@ -57,10 +71,12 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                                    markup=False, highlight=False, soft_wrap=True)
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
             frames += result.frames
-        if result.cut_off is not None:
-            progress.console.print(f"{result.source}: {result.cut_off}; the {result.frames:,} "
-                                   "frames before it are in the dataset", markup=False,
-                                   highlight=False, soft_wrap=True)
+        if result.unreadable:
+            for line in result.unreadable_lines:
+                progress.console.print(f"{result.source}: {line}", markup=False,
+                                       highlight=False, soft_wrap=True)
+            progress.console.print(unreadable_text(result), markup=False, highlight=False,
+                                   soft_wrap=True)
         progress.advance(task)
         show()
 
