@@ -5,6 +5,7 @@ values or the SQL (found by the attack pass)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -85,3 +86,40 @@ def test_a_query_with_no_statement(tmp_path: Path, traffic: Traffic, sql: str) -
     assert status == 2
     assert output.startswith("Error: no SQL statement: write a SELECT on the table events")
     assert len(output.splitlines()) == 1
+
+
+def _strict(text: str) -> object:
+    def refuse(constant: str) -> object:
+        raise AssertionError(f"{constant} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_json_output_is_json_whatever_the_values(tmp_path: Path, traffic: Traffic) -> None:
+    # NaN and infinities were written bare (not JSON: jq refuses them), and a blob or a date
+    # inside a list or struct was "unexpected TypeError: Object of type bytes is not JSON
+    # serializable"
+    decode_files([write_log(tmp_path / "unit.log", traffic[:20])], str(tmp_path / "lake"))
+    sql = ("SELECT 'nan'::double AS nan, 'inf'::double AS inf, '-inf'::double AS ninf, "
+           "[data] AS blobs, {'at': time, 'raw': data} AS row, [date] AS dates, "
+           "map([data], [1]) AS keyed FROM events LIMIT 1")
+    status, output = query(tmp_path / "lake", sql, "--json")
+    assert status == 0, output
+    [line] = output.splitlines()
+    row = _strict(line)
+    assert isinstance(row, dict)
+    assert (row["nan"], row["inf"], row["ninf"]) == ("NaN", "Infinity", "-Infinity")
+    [blob] = row["blobs"]
+    assert blob == row["row"]["raw"]
+    assert list(row["keyed"]) == [blob]
+    assert bytes.fromhex(blob)
+    assert row["dates"][0] == row["row"]["at"][:10]
+
+
+def test_json_output_keeps_every_column_of_a_repeated_name(tmp_path: Path,
+                                                           traffic: Traffic) -> None:
+    # SELECT 1 AS a, 2 AS a printed {"a": 2}: the first column was dropped
+    decode_files([write_log(tmp_path / "unit.log", traffic[:20])], str(tmp_path / "lake"))
+    status, output = query(tmp_path / "lake", "SELECT 1 AS a, 2 AS a, 3 AS a_1", "--json")
+    assert status == 0, output
+    assert json.loads(output) == {"a": 1, "a_1": 2, "a_1_1": 3}

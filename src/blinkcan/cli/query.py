@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import datetime
 import json
+import math
 import sys
 from typing import Any
 
@@ -22,14 +23,42 @@ TABLE_ROWS = 1000
 
 
 def _json_value(value: Any) -> Any:
+    """A value DuckDB returned as JSON: bytes as hex, times in ISO 8601, intervals in seconds,
+    NaN and the infinities as the strings "NaN", "Infinity", "-Infinity" (JSON has no such
+    numbers; protobuf's JSON mapping writes them so), inside lists, structs and maps too."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
     if isinstance(value, (bytes, bytearray, memoryview)):
         return bytes(value).hex()
     if isinstance(value, (datetime.datetime, datetime.date, datetime.time)):
         return value.isoformat()
     if isinstance(value, datetime.timedelta):
         return value.total_seconds()
-    return value if isinstance(value, (int, float, str, bool, type(None), list, dict)) \
-        else str(value)
+    if isinstance(value, dict):
+        return {_json_key(key): _json_value(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_value(item) for item in value]
+    return value if isinstance(value, (int, float, str, bool, type(None))) else str(value)
+
+
+def _json_key(key: Any) -> str:
+    """A map's key as a JSON object's (a string)."""
+    converted = _json_value(key)
+    return converted if isinstance(converted, str) else json.dumps(converted)
+
+
+def _unique(names: list[str]) -> list[str]:
+    """The column names with repeats numbered as DuckDB numbers them in a table (a, a_1)."""
+    seen: set[str] = set()
+    unique = []
+    for name in names:
+        candidate, number = name, 0
+        while candidate in seen:
+            number += 1
+            candidate = f"{name}_{number}"
+        seen.add(candidate)
+        unique.append(candidate)
+    return unique
 
 
 def _check_reads_only(connection: Any, sql: str) -> None:
@@ -84,8 +113,10 @@ def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
         writer.writerow(names)
         writer.writerows([[_json_value(v) for v in row] for row in rows])
     elif as_json:
+        names = _unique(names)  # a JSON object holds a name once: a second 'a' is 'a_1'
         for row in rows:
-            out.write(json.dumps(dict(zip(names, map(_json_value, row), strict=True))) + "\n")
+            out.write(json.dumps(dict(zip(names, map(_json_value, row), strict=True)),
+                                 allow_nan=False) + "\n")
     else:
         table = Table(show_lines=False)
         for name in names:  # names and values are shown as they are, never read as markup
