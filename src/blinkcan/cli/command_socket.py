@@ -76,30 +76,41 @@ def command_socket(commands: TypedCommands, console: Console) -> Iterator[Path |
         yield None
         return
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    bound: Path | None = None  # the file exists from bind on: whatever happens next removes it
+    stopping = threading.Event()
+    thread: threading.Thread | None = None
     try:
         path = runtime_dir() / f"emulate-{os.getpid()}.sock"
         if _listening(path):
             raise SocketError(f"{path} is in use: another process listens on it")
         path.unlink(missing_ok=True)  # this process id's, nobody listening: an earlier one's
         server.bind(str(path))  # in the 0700 directory: no one else reaches it meanwhile
+        bound = path
         path.chmod(0o600)
         server.listen()
         server.settimeout(_ACCEPT_POLL_S)
     except OSError as error:
         server.close()
+        if bound is not None:
+            bound.unlink(missing_ok=True)
         console.print(f"warning: blinkcan act cannot reach this emulator: {error}",
                       markup=False, highlight=False)
         yield None
         return
-    stopping = threading.Event()
-    thread = threading.Thread(target=_serve, args=(server, commands, stopping),
-                              name="blinkcan-command-socket", daemon=True)
-    thread.start()
+    except BaseException:  # a stop signal (KeyboardInterrupt) once bound: act lists it already
+        server.close()
+        if bound is not None:
+            bound.unlink(missing_ok=True)
+        raise
     try:
+        thread = threading.Thread(target=_serve, args=(server, commands, stopping),
+                                  name="blinkcan-command-socket", daemon=True)
+        thread.start()
         yield path
     finally:
         stopping.set()
-        thread.join(timeout=2 * _ACCEPT_POLL_S + 1)
+        if thread is not None and thread.is_alive():
+            thread.join(timeout=2 * _ACCEPT_POLL_S + 1)
         server.close()
         path.unlink(missing_ok=True)
 
