@@ -12,6 +12,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from blinkcan import fleet
 from blinkcan.cli.extras import install_command
+from blinkcan.decode.nodes import NodeKey
 
 
 def check_extra() -> None:
@@ -23,7 +24,7 @@ def check_extra() -> None:
 
 
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
-                      devices: dict[int, str]) -> None:
+                      devices: dict[NodeKey, str]) -> None:
     check_extra()
     from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
     from blinkcan.fleet.task import FileResult  # noqa: PLC0415
