@@ -125,3 +125,17 @@ def test_emulate_takes_every_j1939_address(found: Model) -> None:
                     (), "j1939")
     with pytest.raises(click.BadParameter, match=r"outside 0x1\.\.0xfd"):
         build_twins((f"{found.name}:0xFE",), None, None, "firmware", (), "j1939")
+
+
+@pytest.mark.parametrize("found", [m for m in KEYPADS if m not in J1939_MODELS],
+                         ids=lambda m: m.name)
+@pytest.mark.parametrize("command", [["led", "3", "red"], ["info"], ["heartbeat", "100"]])
+def test_a_model_without_j1939_is_refused_over_j1939_before_the_bus(
+        empty_bus: tuple[str, object], found: Model, command: list[str]) -> None:
+    """``--model pkp-3500-mt --protocol j1939`` said "key 3 outside  (no registered model)",
+    or opened the bus and drove the keypad as a PKP-2600-SI."""
+    channel, sniffer = empty_bus
+    line = error_line(invoke(channel, "keypad", "--protocol", "j1939", "--model", found.name,
+                             *command))
+    assert f"the {found.description().title} has no J1939 mode (J1939: " in line
+    assert sniffer.recv(0.05) is None  # type: ignore[attr-defined]

@@ -152,8 +152,13 @@ J1939_COMMANDS = {
 
 
 def _refuse_unless_j1939_has(command: str) -> None:
-    """A command a keypad in J1939 mode has no J1939 message for is refused before the bus is
-    opened, naming what works over J1939."""
+    """A command a keypad in J1939 mode has no J1939 message for, or a ``--model`` without a
+    J1939 mode, is refused before the bus is opened, naming what works over J1939."""
+    chosen = _chosen_model()
+    if chosen is not None and not candidates("keypad", chosen, "j1939"):
+        having = ", ".join(dict.fromkeys(d.title for d in candidates("keypad", None, "j1939")))
+        raise click.UsageError(f"the {model(chosen).description().title} has no J1939 mode "
+                               f"(J1939: {having})")
     if command not in J1939_COMMANDS:
         raise click.UsageError(f"{command} has no J1939 command on this keypad; over J1939: "
                                f"{', '.join(J1939_COMMANDS.values())}")
