@@ -111,9 +111,12 @@ def _device(target: Target, start: bool = False, check: Check | None = None
             ) -> Iterator[Any]:
     """The driver of the device at the target's node id: the model its 100Bh names (or
     ``--model``), driven by that model's driver class from the registry. ``check`` runs
+    first against every model of the kind that may answer (before the bus opens), then
     against that model before anything but the identity reads is sent, then ``start`` starts
     the device (NMT): a bad argument never reaches it."""
     kind, node_id = target
+    if check is not None:
+        _arguments(kind, check)
     address = _j1939_address()
     if address is not None:
         _refuse_unless_j1939_has(click.get_current_context().info_name or "")
@@ -347,7 +350,6 @@ for group in (keypad, keybox):
             within("heartbeat period in ms", milliseconds,
                    entry_spans(descriptions, "producer_heartbeat_time"))
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             device.set_heartbeat(milliseconds / 1000)
         _done(target, f"heartbeat every {milliseconds} ms" if milliseconds else "heartbeat off")
@@ -370,7 +372,6 @@ for group in (keypad, keybox):
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             within("node id", new_id, entry_spans(descriptions, "node_id"))
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             if new_id != target[1]:
                 device.check_free(new_id)  # before asking: a taken id is refused anyway
@@ -396,7 +397,6 @@ for group in (keypad, keybox):
                 raise ValueError(f"bit rate {bit_rate} bit/s is not one of "
                                  f"{', '.join(map(str, rates))}")
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
                      "reset", yes)
@@ -420,6 +420,35 @@ for group in (keypad, keybox):
                      "heartbeat...) goes back to its factory value at the next reset", yes)
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")
+
+    @group.command("read")
+    @click.argument("name")
+    @bus_options
+    @node_id_option
+    @click.pass_obj
+    def read(target: Target, name: str) -> None:
+        """Read one object of the model's dictionary by NAME (as ``export eds`` lists them,
+        e.g. encoder_1_top)."""
+        with _device(target, check=_object_check(name)) as device:
+            entry = _entry(device, name)
+            value = device.read(name)
+        shown = f"{value} ({value:#x})" if isinstance(value, int) else value
+        click.echo(f"{name} ({entry.index:04X}h/{entry.subindex:02X}): {shown}")
+
+    @group.command("write")
+    @click.argument("name")
+    @click.argument("value")
+    @bus_options
+    @node_id_option
+    @click.pass_obj
+    def write(target: Target, name: str, value: str) -> None:
+        """Write one object of the model's dictionary by NAME; VALUE is checked against the
+        model's valid values first."""
+        with _device(target, check=_object_check(name, value)) as device:
+            entry = _entry(device, name)
+            number: int | str = value if entry.data_type.is_string else parse_int(value)
+            device.write(name, number)
+        _done(target, f"{name} ({entry.index:04X}h/{entry.subindex:02X}) = {value}")
 
 
 def _check_j1939_heartbeat(milliseconds: int) -> None:
@@ -480,7 +509,6 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
             if name is not None:
                 known(name)
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         if device.j1939 is None:  # CANopen: the LED PDO carries every key, so read them first
@@ -506,7 +534,6 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
         if level is not None:
             within("backlight level", level, entry_spans(descriptions, "backlight_brightness"))
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_backlight(colour, level)
@@ -526,7 +553,6 @@ def brightness(target: Target, level: int) -> None:
     def check(descriptions: Sequence[DeviceDescription]) -> None:
         within("brightness", level, entry_spans(descriptions, "indicator_brightness"))
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_brightness(level)
@@ -543,7 +569,6 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             within("pin", pin, merged(spans_of(d.face.pin_numbers) for d in descriptions))
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             getattr(device, action)(pin)
         _done(target, done.format(pin=pin))
@@ -589,7 +614,6 @@ def pwm(target: Target, pins: str, duty: str) -> None:
         else:
             within("PWM duty", level, ((0, top),))
 
-    _arguments(target[0], check)
     with _device(target, check=check) as device:
         assert isinstance(device, Keybox)
         device.set_pwm(chosen, tenths)
@@ -681,7 +705,6 @@ def ring(target: Target, encoder: int, leds: str) -> None:
         for led in chosen:
             within(f"ring {encoder} LED", led, ring_leds)
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         device.read_rings()  # the other ring keeps what it shows (read from the keypad first)
         device.set_ring(encoder, chosen)
@@ -711,7 +734,6 @@ def encoder_command(target: Target, encoder: int, top: int | None,
             if value is not None and not any(e.accepts(value) for e in entries):
                 raise ValueError(f"{what} {value} outside {entries[0].describe_valid()}")
 
-    _arguments(target[0], check)
     with _device(target, check=check) as device:
         if top is not None:
             device.set_top(encoder, top)
@@ -729,7 +751,6 @@ def encoder_command(target: Target, encoder: int, top: int | None,
 def inputs(target: Target) -> None:
     """The analog inputs in volts and the digital inputs' levels (read)."""
     check = _having("inputs", lambda face: face.analog_inputs + face.digital_inputs)
-    _arguments(target[0], check)
     with _device(target, check=check) as device:
         face = device.description.face
         volts = {number: device.read_analog(number) for number in range(face.analog_inputs)}
@@ -772,41 +793,6 @@ def _number(text: str) -> int:
         return parse_int(text)
     except click.BadParameter as error:
         raise ValueError(error.message) from None
-
-
-for group in (keypad, keybox):
-    @group.command("read")
-    @click.argument("name")
-    @bus_options
-    @node_id_option
-    @click.pass_obj
-    def read(target: Target, name: str) -> None:
-        """Read one object of the model's dictionary by NAME (as ``export eds`` lists them,
-        e.g. encoder_1_top)."""
-        check = _object_check(name)
-        _arguments(target[0], check)
-        with _device(target, check=check) as device:
-            entry = _entry(device, name)
-            value = device.read(name)
-        shown = f"{value} ({value:#x})" if isinstance(value, int) else value
-        click.echo(f"{name} ({entry.index:04X}h/{entry.subindex:02X}): {shown}")
-
-    @group.command("write")
-    @click.argument("name")
-    @click.argument("value")
-    @bus_options
-    @node_id_option
-    @click.pass_obj
-    def write(target: Target, name: str, value: str) -> None:
-        """Write one object of the model's dictionary by NAME; VALUE is checked against the
-        model's valid values first."""
-        check = _object_check(name, value)
-        _arguments(target[0], check)
-        with _device(target, check=check) as device:
-            entry = _entry(device, name)
-            number: int | str = value if entry.data_type.is_string else parse_int(value)
-            device.write(name, number)
-        _done(target, f"{name} ({entry.index:04X}h/{entry.subindex:02X}) = {value}")
 
 
 def _entry(device: Any, name: str) -> ObjectEntry:
