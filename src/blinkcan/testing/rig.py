@@ -154,14 +154,29 @@ class Rig:
     def act(self, action: Callable[[float], T]) -> T:
         """Run ``action(now)`` on a twin (``lambda now: kp.press(3, now)``); the frames it
         returns go on the bus as the device's, and everything they cause at this instant
-        (the drivers' handlers) has run when this returns."""
+        (the drivers' handlers) has run when this returns.
+
+        Frames already sent reach the twins first (:meth:`catch_up`): with no latency a frame
+        arrives at the time it was sent, so a press right after ``Keypad(rig.bus, ...)`` comes
+        after the driver's NMT start, to an operational keypad, as on a real bus."""
+        self.catch_up()
         result = self.emulator.run(action)
-        if not self.scheduler.in_loop:
-            self.scheduler.run_until(None, self.now)
+        self.catch_up()
         return result
 
+    def catch_up(self) -> None:
+        """Run what is due at this instant (frames sent and not yet delivered, the handlers
+        they call), not moving the clock; nothing when called from inside the simulation (a
+        handler: what is due runs after it)."""
+        if not self.scheduler.in_loop:
+            self.scheduler.run_until(None, self.now)
+
     def snapshot(self, device: CanopenTwin | int) -> dict[str, Any]:
-        return self.twin(device).snapshot()
+        """The twin's :meth:`snapshot` once the frames already sent have reached it
+        (:meth:`catch_up`)."""
+        twin = self.twin(device)
+        self.catch_up()
+        return twin.snapshot()
 
     # -- fault injection and inputs: a twin, or the node id it answers at ---------------------
 
