@@ -32,7 +32,8 @@ from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.emulator import Emulator
 from blinkcan.runtime.scheduler import SimulatedScheduler
-from blinkcan.runtime.simbus import SimulatedBus, SimulatedNetwork, TimedFrame
+from blinkcan.runtime.simbus import SimulatedBus, SimulatedNetwork
+from blinkcan.runtime.wire_log import TimedFrame, WireLog
 from blinkcan.twin.base import CanopenTwin
 
 T = TypeVar("T")
@@ -71,13 +72,14 @@ class Rig:
         return self.scheduler.clock()
 
     @property
-    def frames(self) -> list[TimedFrame]:
-        """Every frame that went on the wire, in order, with its virtual time."""
+    def frames(self) -> WireLog:
+        """Every frame that went on the wire, in order, with its virtual time: read it as a
+        list of :class:`TimedFrame` (index, slice, iterate, ``len``, compare with a list)."""
         return self.network.frames
 
     def frames_since(self, start: float) -> list[TimedFrame]:
         check_time("start", start)
-        return [timed for timed in self.network.frames if timed.time >= start]
+        return self.network.frames.since(start)
 
     def advance(self, seconds: float) -> None:
         """Run ``seconds`` of virtual time."""
