@@ -150,6 +150,9 @@ class Timer:
         self.cancelled = True
 
 
+_new_timer = object.__new__  # a Timer without the call of its __init__ (set every slot)
+
+
 def guarded(callback: Callable[..., object], *args: object) -> None:
     """Run a handler; an exception is logged with its traceback and the loop goes on (the
     real-time rule; :meth:`Scheduler.guarded` follows the scheduler's rule)."""
@@ -528,10 +531,16 @@ class SimulatedScheduler(Scheduler):
         return timer
 
     def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
-        # Scheduler.call_at with _push inlined: the emulator plans every twin deadline here
+        # Scheduler.call_at with _push and Timer.__init__ inlined: the emulator plans every
+        # twin deadline here
         if when.__class__ is not float or when - when:  # not a finite float: check it
             check_time("when", when)
-        timer = Timer(when, None, callback)
+        timer = _new_timer(Timer)
+        timer.due = timer.origin = when
+        timer.period = None
+        timer.callback = callback
+        timer.cancelled = False
+        timer.count = 0
         if when <= self.now:
             timer.due = self.now
             self._ready.append((timer, _TIMER))
@@ -695,23 +704,28 @@ class SimulatedScheduler(Scheduler):
                     self.now = max(self.now, until)
                 met = bool(predicate()) if predicate is not None else True
                 break
-            # step() and _run(), inlined: this loop runs every event of a simulation
-            callback, argument = popleft()
-            if argument is mark:  # a timer
-                if callback.cancelled:
-                    continue
-                if callback.period is not None:
-                    callback.rearm(self.now)
-                    self._push(callback)
-                callback = callback.callback
+            # step() and _run(), inlined: this loop runs every event of a simulation. With no
+            # predicate to ask between events, everything due now runs in one go, inside one
+            # depth (in_loop): no one looks between two of them
             self._depth += 1
             try:
-                if argument is mark:
-                    callback()
-                else:
-                    callback(argument)
-            except Exception as error:
-                self.failed(error)
+                while True:
+                    callback, argument = popleft()
+                    if argument is not mark:
+                        try:
+                            callback(argument)
+                        except Exception as error:
+                            self.failed(error)
+                    elif not callback.cancelled:  # a timer
+                        if callback.period is not None:
+                            callback.rearm(self.now)
+                            self._push(callback)
+                        try:
+                            callback.callback()
+                        except Exception as error:
+                            self.failed(error)
+                    if predicate is not None or not ready or self._failures or self.now > until:
+                        break
             finally:
                 self._depth -= 1
             if not self._depth and self._failures:
