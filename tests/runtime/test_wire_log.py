@@ -18,14 +18,22 @@ def test_the_wire_log_reads_as_a_list_of_timed_frames() -> None:
     for time, frame in expected:
         log.record(time, frame)
     assert len(log) == 3
-    assert log == expected and expected == log and log != expected[:2]
-    assert list(log) == expected and log.copy() == expected
-    assert log[0] == expected[0] and log[-1].frame == C and log[-1].time == 0.01
-    assert log[1:] == expected[1:] and log[::-1] == expected[::-1]
-    assert log.since(0.005) == expected[1:] and log.since(1.0) == []
+    assert log == expected
+    assert expected == log
+    assert log != expected[:2]
+    assert list(log) == expected
+    assert log.copy() == expected
+    assert log[0] == expected[0]
+    assert log[-1].frame == C
+    assert log[-1].time == 0.01
+    assert log[1:] == expected[1:]
+    assert log[::-1] == expected[::-1]
+    assert log.since(0.005) == expected[1:]
+    assert log.since(1.0) == []
     assert str(log[1]) == "  0.010000  Frame(701#05)"
     log.clear()
-    assert log == [] and not log
+    assert log == []
+    assert not log
 
 
 def test_a_long_simulation_keeps_no_object_per_frame() -> None:
