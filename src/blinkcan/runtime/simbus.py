@@ -84,8 +84,7 @@ class SimulatedNetwork:
         check_time("latency", latency, 0)
         self.scheduler = scheduler
         self.latency = latency
-        #: every frame that went on the wire, with its time (reads as a list of TimedFrame)
-        self.frames = WireLog()
+        self._frames = WireLog()
         self.up = True
         #: the endpoints' receivers, a tuple: delivery reads it for every frame, connect and
         #: detach (rare) replace it
@@ -95,6 +94,12 @@ class SimulatedNetwork:
         self._rules: list[Rule] = []
         #: frames held back by the latency or a delay rule, not yet arrived
         self._late = 0
+
+    @property
+    def frames(self) -> WireLog:
+        """Every frame that went on the wire, with its time (reads as a list of TimedFrame;
+        one log for the network's life: its senders write to it)."""
+        return self._frames
 
     @property
     def in_flight(self) -> int:
@@ -152,7 +157,7 @@ class SimulatedNetwork:
         mine: object = self._attached.get(endpoint, endpoint)  # type: ignore[arg-type]
         scheduler = self.scheduler
         defer = scheduler.deferrer()
-        record_time, record_frame = self.frames.writers()
+        record_time, record_frame = self._frames.writers()
 
         def send(frame: Frame) -> None:
             if not self.up:
@@ -193,7 +198,7 @@ class SimulatedNetwork:
         """Record ``frame`` and hand it to every other endpoint after what runs now (each
         endpoint's turn is an event of its own, in order, at this same time)."""
         scheduler = self.scheduler
-        self.frames.record(scheduler.now, frame)
+        self._frames.record(scheduler.now, frame)
         for receiver in self._receivers:
             if receiver is not sender:
                 scheduler.defer(receiver, frame)
