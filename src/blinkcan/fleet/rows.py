@@ -26,6 +26,7 @@ KINDS = ("key", "led", "output", "fault", "heartbeat", "nmt", "sdo", "j1939", "p
 _DARK = (0, 0, 0)
 _LED_STATES = {"led_on": "on", "led_blink": "blink"}
 _COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))
+_NAMES = {kind: kind.value for kind in Kind}  # an Enum's value is a slow property
 
 
 class Detail(NamedTuple):
@@ -122,7 +123,7 @@ class EventRows:
             return Rowed(node, model, [Detail("heartbeat", state="boot-up")])
         # SDO services: the kind of step as the state, the value where it is a number
         return _new(Rowed, (node, model, [_new(Detail, (
-            "sdo", None, None, kind.value, None, _int_value(event.fields.get("value"))))]))
+            "sdo", None, None, _NAMES[kind], None, _int_value(event.fields.get("value"))))]))
 
     # -- models -----------------------------------------------------------------------------
 
