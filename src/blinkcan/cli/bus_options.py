@@ -25,7 +25,6 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import click
 
 from blinkcan.protocol.cob import check_node_id
-from blinkcan.protocol.j1939 import ADDRESS_MAX
 
 if TYPE_CHECKING:  # python-can and the runtime load when a bus is opened (start-up: issue 22)
     import can
@@ -193,15 +192,6 @@ def parse_node_id(text: str) -> int:
         return check_node_id(parse_int(text))
     except ValueError as error:
         raise click.BadParameter(str(error)) from None
-
-
-def parse_j1939_address(text: str) -> int:
-    """A J1939 node address 01h..FDh as engineers write it (J1939-81: FEh is "cannot claim",
-    FFh the global address); BadParameter otherwise."""
-    address = parse_int(text)
-    if not 0x01 <= address <= ADDRESS_MAX:
-        raise click.BadParameter(f"a J1939 keypad address is 01h..{ADDRESS_MAX:02X}h, not {text}")
-    return address
 
 
 class NodeId(click.ParamType):  # type: ignore[type-arg]
