@@ -77,6 +77,7 @@ class EventRows:
 
     def __init__(self, decoder: Decoder) -> None:
         self._devices = decoder.devices  # the decoder's own: it learns models from the bus
+        self._j1939_models = decoder.j1939.models  # J1939 addresses the user named
         #: (node, pdo) -> the keys lit red, green, blue (masks: bit 0 is key 1)
         self._leds: dict[tuple[int, str], tuple[int, int, int]] = {}
         self._outputs: dict[int, int] = {}  # node -> the pins HIGH (a mask: bit 0 is pin 1)
@@ -96,8 +97,10 @@ class EventRows:
         if simple is not None:  # most of a fleet's log: other ECUs' frames
             return _new(Rowed, (node, self._model_of(node), simple))
         if kind is Kind.J1939:
-            return _new(Rowed, (node, self._model_named(event.device),
-                                [self._j1939(event.fields)]))
+            named = self._j1939_models.get(node) if node is not None else None
+            model = named.model if named is not None and event.device is not None else \
+                self._model_named(event.device)
+            return _new(Rowed, (node, model, [self._j1939(event.fields)]))
         if kind is Kind.NMT:
             target = event.fields.get("target") or None
             return Rowed(target, self._model_of(target), [
