@@ -205,7 +205,9 @@ def test_one_client_more_than_it_serves_is_told_the_emulator_is_busy(
             slow.sendall(b"list\n")
             slow.shutdown(socket.SHUT_WR)
             assert slow.recv(4096).startswith(b"PKP-2600-SI keypad 15h")
-        code, out, errors = _act("list")  # the place is free again
+        # the place is free again once the answer came
+        assert send(path, "list", timeout=60)[0].startswith("PKP-2600-SI keypad 15h")
+        code, out, errors = _act("list")  # act's own probe takes a place for an instant too
         assert code == 0, (out, errors)
 
 
