@@ -297,11 +297,9 @@ def _read_lines(lines: list[str], columns: FrameColumns,
 
 
 def _escaped(line: str) -> bool:
-    """The line holds a byte that is not UTF-8 (a surrogate escape)."""
-    return _SURROGATE.search(line) is not None
-
-
-_SURROGATE = re.compile("[\udc80-\udcff]")
+    """The line holds a byte that is not UTF-8 (a surrogate escape; ``re`` compiles the
+    pattern at its first use and keeps it)."""
+    return re.search("[\udc80-\udcff]", line) is not None
 
 
 def _unreadable(line: str, number: int, error: Exception, cut_off: bool) -> UnreadableLine:
