@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Literal, TextIO, overload
 from blinkcan.formats.candump import candump_messages, read_candump
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
 from blinkcan.formats.log_source import (
+    DecompressedText,
     LineTooLongError,
     LogError,
     LogSource,
@@ -166,7 +167,9 @@ def _open_text(source: LogSource, encoding: str | None, errors: str | None = Non
         with open_text(source, encoding, errors) as stream:
             yield stream
         return
-    with gzip.open(source.path, "rt", encoding=encoding, errors=errors) as compressed:
+    # a file cut short keeps every line before the cut (formats/log_source.py)
+    with DecompressedText(gzip.open(source.path, "rb"), encoding or "utf-8",
+                          errors or "strict") as compressed:
         yield compressed
 
 

@@ -48,7 +48,8 @@ class UnreadableLine(NamedTuple):
 
     def __str__(self) -> str:
         """"line 7: 'garbage' is not a candump line ((TIME) CHANNEL ID#DATA)"."""
-        ending = ": the capture ends there, cut off" if self.cut_off else ""
+        ending = ": the capture ends there, cut off" if self.cut_off and \
+            "cut short" not in self.reason else ""
         return f"line {self.number}: {self.reason}{ending}"
 
     def to_json(self) -> dict[str, object]:
