@@ -92,3 +92,18 @@ def test_a_recording_onto_a_full_disk_keeps_whole_frames(tmp_path: Path) -> None
         numbers = [int.from_bytes(m.data, "big") for m in read_messages(target)]
         assert numbers == list(range(len(numbers))), target.name
         assert len(numbers) >= 100, target.name
+
+
+def test_a_conversion_whose_last_write_fails_leaves_no_temporary_file(tmp_path: Path) -> None:
+    """The .db writer commits its last rows when it is closed: on a full disk that failed
+    after the frames were written, and the temporary .out.db.XXXX.db stayed beside the
+    target (found by the attack pass)."""
+    source = tmp_path / "big.log"
+    source.write_text("".join(f"({n / 1000:.6f}) can0 195#0800000001\n" for n in range(20000)))
+    limited = ("import resource, sys; resource.setrlimit(resource.RLIMIT_FSIZE, (65536, 65536)); "
+               "from blinkcan.cli.main import main; sys.argv[0] = 'blinkcan'; main()")
+    result = subprocess.run([sys.executable, "-c", limited, "convert", str(source),
+                             str(tmp_path / "out.db")], capture_output=True, text=True,
+                            timeout=120, check=False)
+    assert result.returncode == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big.log"]

@@ -18,16 +18,21 @@ if TYPE_CHECKING:
     from concurrent.futures import Future
 
 
-def log_files(paths: Iterable[str | os.PathLike[str]]) -> list[str]:
+def log_files(paths: Iterable[str | os.PathLike[str]], out: str | None = None) -> list[str]:
     """The files to decode, each once, in order: a folder stands for the files under it
-    (hidden ones and ``_`` names, such as a dataset's own, left out)."""
+    (hidden ones and ``_`` names, such as a dataset's own, left out, and the dataset ``out``
+    itself when it is a folder among them: ``decode logs --parquet logs/lake`` run again
+    must not read the dataset as logs)."""
+    dataset = None if out is None or "://" in out else Path(os.path.abspath(out))
     found: dict[str, None] = {}
     for path in paths:
         source = Path(path)
         if source.is_dir():
             for inner in sorted(source.rglob("*")):
                 parts = inner.relative_to(source).parts
-                if inner.is_file() and not any(p.startswith((".", "_")) for p in parts):
+                if inner.is_file() and not any(p.startswith((".", "_")) for p in parts) \
+                        and not (dataset is not None
+                                 and Path(os.path.abspath(inner)).is_relative_to(dataset)):
                     found.setdefault(os.path.abspath(inner))
         else:
             found.setdefault(os.path.abspath(source))
@@ -51,7 +56,7 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be 1 or more, not {jobs}")
     split_devices(devices)  # checked here, not once per file on the workers
-    sources = log_files(paths)
+    sources = log_files(paths, out)
     task = partial(decode_file, out=out, force=force, devices=dict(devices or {}),
                    rows_per_group=rows_per_group)
     if client is not None:
@@ -69,21 +74,50 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
 
 def _on_processes(jobs: int, sources: list[str], task: Callable[..., FileResult],
                   on_result: Callable[[FileResult], None] | None) -> dict[str, FileResult]:
+    """The files on ``jobs`` local processes. A worker that dies (the OOM killer, a kill -9)
+    breaks python's pool and fails every file not yet done, those never started too: they
+    are run again on a new pool, as Dask runs a dead worker's task again; after a second
+    break each is run alone, so only a file that kills its worker every time fails (its
+    output is written aside and renamed, so a re-run never leaves half of it)."""
+    results: dict[str, FileResult] = {}
+
+    def finished(source: str, result: FileResult) -> None:
+        results[source] = result
+        if on_result is not None:
+            on_result(result)
+
+    pending = list(sources)
+    for _attempt in range(2):
+        pending = _pool_run(min(jobs, len(pending)), pending, task, finished,
+                            keep_broken=True)
+        if not pending:
+            return results
+    for source in pending:  # alone: a break now is this file's own
+        _pool_run(1, [source], task, finished, keep_broken=False)
+    return results
+
+
+def _pool_run(jobs: int, sources: list[str], task: Callable[..., FileResult],
+              finished: Callable[[str, FileResult], None], keep_broken: bool) -> list[str]:
+    """Run ``sources`` on a pool of ``jobs`` processes, handing each result to ``finished``
+    as it comes; with ``keep_broken``, the files whose pool broke are returned instead."""
     import multiprocessing  # noqa: PLC0415 (-j only: start-up)
     from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: PLC0415
+    from concurrent.futures.process import BrokenProcessPool  # noqa: PLC0415
 
     methods = multiprocessing.get_all_start_methods()
     # fork: the workers need nothing of __main__ (python -m blinkcan runs the CLI on import)
     context = multiprocessing.get_context("fork" if "fork" in methods else None)
-    results: dict[str, FileResult] = {}
+    broken: list[str] = []
     with ProcessPoolExecutor(jobs, mp_context=context) as pool:
         futures: dict[Future[FileResult], str] = {pool.submit(task, s): s for s in sources}
         for future in as_completed(futures):
             source = futures[future]
-            results[source] = result = _result(source, future)
-            if on_result is not None:
-                on_result(result)
-    return results
+            if keep_broken and isinstance(future.exception(), BrokenProcessPool):
+                broken.append(source)
+            else:
+                finished(source, _result(source, future))
+    return [source for source in sources if source in broken]  # in their order
 
 
 def _on_dask(client: Any, sources: list[str], task: Callable[..., FileResult],

@@ -459,9 +459,23 @@ class FrameWriter:
             self._file.close()
 
     def close(self) -> None:
-        self._finish()
-        if not self.live:
-            os.replace(self._written, self.path)
+        """Finish the file; a conversion's then takes the target's place. A conversion whose
+        last write fails (a full disk while .db commits its last rows) leaves the target as it
+        was and no temporary file behind, as any other failure does."""
+        if self.live:
+            self._finish()
+            return
+        try:
+            self._finish()
+        except BaseException:
+            self._discard()
+            raise
+        os.replace(self._written, self.path)
+
+    def _discard(self) -> None:
+        """Remove a failed conversion's temporary file (and SQLite's journal beside it)."""
+        for leftover in (self._written, Path(f"{self._written}-journal")):
+            leftover.unlink(missing_ok=True)
 
     def __enter__(self) -> FrameWriter:
         return self
@@ -475,4 +489,4 @@ class FrameWriter:
         try:
             self._finish()
         finally:
-            self._written.unlink(missing_ok=True)
+            self._discard()
