@@ -4,7 +4,8 @@
     python3 dev.py demo    # the demo: twins on a virtual CAN bus, driven by a host
     python3 dev.py test    # the whole test suite
     python3 dev.py lint    # ruff and mypy
-    python3 dev.py bench   # the benchmarks (anchor beside ours)
+    python3 dev.py bench   # the benchmarks (anchor beside ours); bench NAME... runs only those
+                           # (NAME: a module of benchmarks/, e.g. sdo_twin; --smoke: a short run)
 
 Needs only python3. The environment lives in .venv and is refreshed whenever pyproject.toml changes.
 """

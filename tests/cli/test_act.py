@@ -7,6 +7,7 @@ from __future__ import annotations
 import io
 import os
 import random
+import signal
 import socket
 import stat
 import subprocess
@@ -109,28 +110,40 @@ def test_a_directory_others_may_enter_is_refused(private_dir: Path,
     assert "not a directory private to this user" in errors
 
 
-@pytest.mark.multiprocess
-def test_two_emulators_are_told_apart_by_process_id(private_dir: Path,
-                                                    live_emulator: Emulator) -> None:
+def _child_emulator(private_dir: Path, device: str) -> subprocess.Popen[str]:
+    """``blinkcan emulate DEVICE`` in a child process on a udp_multicast bus of its own, its
+    socket in ``private_dir``; returned once it listens there (its stdout a pipe)."""
     channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
     environment = {**{k: v for k, v in os.environ.items() if not k.startswith("CAN_")},
                    "XDG_RUNTIME_DIR": str(private_dir.parent), "PYTHONUNBUFFERED": "1"}
     child = subprocess.Popen(
-        [sys.executable, "-m", "blinkcan", "emulate", "pkp-3500-mt", "-q", "-i",
+        [sys.executable, "-m", "blinkcan", "emulate", device, "-q", "-i",
          "udp_multicast", "-c", channel, "--bus-kwargs", f"port={random.randint(40000, 60000)}",
-         "hop_limit=0"], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL, env=environment)
+         "hop_limit=0"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT, text=True, env=environment)
+    deadline = time.monotonic() + 120  # generous: 8 test suites may share 2 cores
+    try:
+        while child.pid not in emulators():
+            assert child.poll() is None, child.communicate()[0]
+            assert time.monotonic() < deadline, "the child's socket did not appear"
+            time.sleep(0.05)
+    except BaseException:
+        stop(child)
+        raise
+    return child
+
+
+@pytest.mark.multiprocess
+def test_two_emulators_are_told_apart_by_process_id(private_dir: Path,
+                                                    live_emulator: Emulator) -> None:
+    child = _child_emulator(private_dir, "pkp-3500-mt")
     try:
         with command_socket(TypedCommands(live_emulator), Console(file=io.StringIO())):
-            deadline = time.monotonic() + 30
-            while child.pid not in emulators():
-                assert child.poll() is None
-                assert time.monotonic() < deadline, "the child's socket did not appear"
-                time.sleep(0.05)
             code, _, errors = _act("press", "3")
             assert code == 2
-            assert f"2 emulators run ({os.getpid()}: PKP-2600-SI keypad 15h" in errors
-            assert f"; {child.pid}: PKP-3500-MT keypad 15h, manual rev 1.3" in errors
+            assert f"{os.getpid()}: PKP-2600-SI keypad 15h" in errors
+            assert f"{child.pid}: PKP-3500-MT keypad 15h, manual rev 1.3" in errors
+            assert errors.startswith("Error: 2 emulators run (")
             assert "pick one with --to PID" in errors
             assert _act("--to", str(child.pid), "turn", "1", "-5") == (
                 0, "PKP-3500-MT keypad 15h: turn encoder 1, ticks -5\n", "")
@@ -141,6 +154,91 @@ def test_two_emulators_are_told_apart_by_process_id(private_dir: Path,
             assert "no blinkcan emulate of this user has process id 1" in errors
     finally:
         stop(child)
+
+
+@pytest.mark.multiprocess
+@pytest.mark.parametrize("stop_signal", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP],
+                         ids=lambda number: signal.Signals(number).name)
+def test_an_emulator_stopped_by_a_signal_removes_its_socket(private_dir: Path,
+                                                            stop_signal: int) -> None:
+    """SIGTERM (kill, a service manager) and SIGHUP (the terminal closed) stop it as Ctrl-C
+    does: the socket goes, the bus is shut down, it says it stopped (SIGTERM left the socket)."""
+    child = _child_emulator(private_dir, "keypad")
+    path = emulators()[child.pid]
+    try:
+        child.send_signal(stop_signal)
+        output, _ = child.communicate(timeout=60)
+    finally:
+        stop(child)
+    assert child.returncode == 0, output
+    assert output.rstrip().endswith("stopped")
+    assert not path.exists()
+    assert list(private_dir.iterdir()) == []
+
+
+def test_several_clients_are_served_at_once(private_dir: Path, live_emulator: Emulator,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    """A client that has not sent its line yet (or waits on ``wait 10``) holds no other up."""
+    monkeypatch.setattr("blinkcan.cli.command_socket.LINE_TIMEOUT_S", 300.0)
+    with command_socket(TypedCommands(live_emulator), Console(file=io.StringIO())) as path:
+        assert path is not None
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as slow:
+            slow.connect(str(path))  # says nothing yet
+            assert send(path, "15h press 3", timeout=60) == ["PKP-2600-SI keypad 15h: press key 3"]
+            assert send(path, "list", timeout=60)[0].startswith("PKP-2600-SI keypad 15h")
+            slow.sendall(b"15h release 3\n")
+            slow.shutdown(socket.SHUT_WR)
+            assert slow.recv(4096) == b"PKP-2600-SI keypad 15h: release key 3\n"
+
+
+def test_one_client_more_than_it_serves_is_told_the_emulator_is_busy(
+        private_dir: Path, live_emulator: Emulator, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("blinkcan.cli.command_socket.LINE_TIMEOUT_S", 300.0)
+    monkeypatch.setattr("blinkcan.cli.command_socket.MAX_CLIENTS", 1)
+    with command_socket(TypedCommands(live_emulator), Console(file=io.StringIO())) as path:
+        assert path is not None
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as slow:
+            slow.connect(str(path))  # accepted first: it holds the one place
+            assert send(path, "list", timeout=60) == [
+                "Error: the emulator is busy with 1 other commands; try again when one has ended"]
+            slow.sendall(b"list\n")
+            slow.shutdown(socket.SHUT_WR)
+            assert slow.recv(4096).startswith(b"PKP-2600-SI keypad 15h")
+        code, _, _errors = _act("list")  # the place is free again
+        assert code == 0
+
+
+def test_a_socket_someone_listens_on_is_not_taken_over(private_dir: Path,
+                                                       live_emulator: Emulator) -> None:
+    """Under this process id's name but listened on: left alone, the emulator runs without."""
+    private_dir.mkdir(mode=0o700)
+    taken = private_dir / f"emulate-{os.getpid()}.sock"
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as listener:
+        listener.bind(str(taken))
+        listener.listen()
+        output = io.StringIO()
+        with command_socket(TypedCommands(live_emulator), Console(file=output)) as path:
+            assert path is None
+        assert output.getvalue().startswith("warning: blinkcan act cannot reach this emulator:")
+        assert "another process listens on it" in output.getvalue()
+        assert taken.exists()
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as client:
+            client.connect(str(taken))  # still the listener's
+            accepted, _ = listener.accept()
+            accepted.close()
+
+
+def test_a_stale_socket_under_this_process_id_is_replaced(private_dir: Path,
+                                                          live_emulator: Emulator) -> None:
+    """Left by a killed process that had this id (nobody listens): this emulator takes it."""
+    private_dir.mkdir(mode=0o700)
+    stale = private_dir / f"emulate-{os.getpid()}.sock"
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as dead:
+        dead.bind(str(stale))
+    with command_socket(TypedCommands(live_emulator), Console(file=io.StringIO())) as path:
+        assert path == stale
+        assert send(path, "15h press 3", timeout=60) == ["PKP-2600-SI keypad 15h: press key 3"]
+    assert not stale.exists()
 
 
 def test_a_socket_of_a_process_still_alive_is_left_alone(private_dir: Path) -> None:

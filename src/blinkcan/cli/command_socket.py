@@ -5,9 +5,12 @@ Each emulator listens on ``emulate-PID.sock`` in a directory only its user can e
 (``$XDG_RUNTIME_DIR/blinkcan``, else ``blinkcan-UID`` in the temporary directory; created 0700,
 refused if it belongs to someone else or others may write to it); the socket itself is 0600.
 A client sends one command line and reads the lines the emulator answers until it closes.
+Several clients are served at once (one's ``wait 10`` holds no other up), up to
+:data:`MAX_CLIENTS`; one more is answered at once that the emulator is busy.
 A socket left by an emulator that died (nobody accepts on it, and no process has its id) is
 stale and is removed by the next client that meets it; an emulator removes its own when it
-stops, and a new one takes over a socket left under its own process id.
+stops (Ctrl-C, SIGTERM: ``blinkcan emulate`` turns it into the same stop), and a new one takes
+over a socket left under its own process id only if nobody listens on it (a ``kill -9``).
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import socket
 import stat
 import tempfile
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from rich.console import Console
@@ -30,6 +33,8 @@ from blinkcan.errors import BlinkcanError
 #: seconds a client may take to send its line, and an answer to come (``wait`` counts)
 LINE_TIMEOUT_S = 5.0
 ANSWER_TIMEOUT_S = 600.0
+#: clients served at once; one more is told the emulator is busy
+MAX_CLIENTS = 16
 _ACCEPT_POLL_S = 0.25
 _SOCKET_NAME = re.compile(r"emulate-(\d+)\.sock")
 
@@ -73,7 +78,9 @@ def command_socket(commands: TypedCommands, console: Console) -> Iterator[Path |
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         path = runtime_dir() / f"emulate-{os.getpid()}.sock"
-        path.unlink(missing_ok=True)  # this process id's: an earlier process's, long gone
+        if _listening(path):
+            raise SocketError(f"{path} is in use: another process listens on it")
+        path.unlink(missing_ok=True)  # this process id's, nobody listening: an earlier one's
         server.bind(str(path))  # in the 0700 directory: no one else reaches it meanwhile
         path.chmod(0o600)
         server.listen()
@@ -98,7 +105,11 @@ def command_socket(commands: TypedCommands, console: Console) -> Iterator[Path |
 
 
 def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.Event) -> None:
-    """One client at a time: its line carried out, the answer sent, the connection closed."""
+    """Accepts clients until stopped, each answered in a thread of its own: up to
+    :data:`MAX_CLIENTS` at once are served, one more is answered that the emulator is busy."""
+    slots = threading.BoundedSemaphore(MAX_CLIENTS)
+    busy = [f"Error: the emulator is busy with {MAX_CLIENTS} other commands; try again when "
+            "one has ended"]
     while not stopping.is_set():
         try:
             connection, _ = server.accept()
@@ -106,15 +117,27 @@ def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.E
             continue
         except OSError:
             return
-        with connection:
-            try:
-                connection.settimeout(LINE_TIMEOUT_S)
-                line = _read_line(connection)
-                answer = (commands.execute(line.decode(errors="replace")) if line is not None
-                          else [f"Error: send one command line of at most {MAX_LINE} bytes"])
-                connection.sendall("".join(f"{text}\n" for text in answer).encode())
-            except OSError:  # a client gone, or too slow: the next one
-                continue
+        served = slots.acquire(blocking=False)
+        threading.Thread(target=_answer, name="blinkcan-command-client", daemon=True,
+                         args=(connection, commands.execute if served else lambda _: busy,
+                               slots.release if served else lambda: None)).start()
+
+
+def _answer(connection: socket.socket, reply: Callable[[str], list[str]],
+            done: Callable[[], None]) -> None:
+    """One client: its line read (all of it, so that closing resets nothing), the reply sent,
+    the connection closed."""
+    with connection:
+        try:
+            connection.settimeout(LINE_TIMEOUT_S)
+            line = _read_line(connection)
+            answer = (reply(line.decode(errors="replace")) if line is not None
+                      else [f"Error: send one command line of at most {MAX_LINE} bytes"])
+            connection.sendall("".join(f"{text}\n" for text in answer).encode())
+        except OSError:  # a client gone, or too slow
+            pass
+        finally:
+            done()
 
 
 def _read_line(connection: socket.socket) -> bytes | None:
@@ -155,6 +178,19 @@ def emulators() -> dict[int, Path]:
             continue
         found[int(match.group(1))] = path
     return found
+
+
+def _listening(path: Path) -> bool:
+    """Whether a process accepts connections on the socket at ``path``."""
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+        probe.settimeout(LINE_TIMEOUT_S)
+        try:
+            probe.connect(str(path))
+        except (ConnectionRefusedError, FileNotFoundError):
+            return False
+        except OSError:  # a listener too busy to accept in time, or one not ours to reach
+            return True
+    return True
 
 
 def _alive(pid: int) -> bool:

@@ -10,6 +10,7 @@ direction, the frame and its meaning; off a terminal the lines are never wrapped
 from __future__ import annotations
 
 import contextlib
+import signal
 import threading
 import time
 from collections.abc import Iterator
@@ -184,13 +185,44 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
-        with emulator, panel(emulator, web, console), \
+        with _stopped_as_by_ctrl_c(), emulator, panel(emulator, web, console), \
                 typed_commands(emulator, console) as commands, command_socket(commands, console):
-            threading.Event().wait()
+            never = threading.Event()
+            while not never.wait(_SIGNALS_SEEN_WITHIN_S):
+                pass  # (one endless wait may miss a signal that reached another thread)
     except KeyboardInterrupt:
         console.print("stopped")
     finally:
         bus.shutdown()
+
+
+#: the main thread wakes this often, so that a stop signal always stops it
+_SIGNALS_SEEN_WITHIN_S = 0.5
+
+
+@contextlib.contextmanager
+def _stopped_as_by_ctrl_c() -> Iterator[None]:
+    """While the body runs, SIGTERM (``kill``, a service manager) and SIGHUP (its terminal
+    closed) stop the emulator as Ctrl-C does: its command socket is removed and its bus shut
+    down (their default ends the process on the spot, leaving the socket). A signal ignored
+    when it started (``nohup``) stays ignored."""
+    if threading.current_thread() is not threading.main_thread():  # signals reach only it
+        yield
+        return
+    previous = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        number = getattr(signal, name, None)
+        if number is not None and signal.getsignal(number) is not signal.SIG_IGN:
+            previous[number] = signal.signal(number, _interrupt)
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
 
 
 def _name(twin: CanopenTwin) -> str:

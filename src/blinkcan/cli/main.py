@@ -149,7 +149,7 @@ def _fail(message: str, code: int) -> None:
 @click.option("-v", "--verbose", count=True, help="More log output (-vv for debug).")
 @bus_options
 def cli(verbose: int) -> None:
-    """Digital twins, drivers and decoders for Blink Marine CANopen keypads and Keyboxes.
+    """Digital twins, drivers and decoders for Blink Marine keypads (CANopen, J1939) and Keyboxes.
 
     Bus options (-i, -c, -b, --bus-kwargs) go before or after the command. With none given and
     none configured for python-can: udp_multicast 239.74.163.2:43113, hop limit 0 (processes of
