@@ -1,17 +1,22 @@
 """``blinkcan decode LOG... --parquet OUT [-j N] [--force]``: logs into the fleet dataset,
-with a progress bar (files, frames, rate). Needs the [fleet] extra; imported only then."""
+with a progress bar (files, frames, rate) on a terminal. Needs the [fleet] extra; imported
+only then."""
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import click
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from blinkcan import fleet
 from blinkcan.cli.extras import install_command
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
 
 
 def check_extra() -> None:
@@ -22,6 +27,21 @@ def check_extra() -> None:
                                    f"{install_command('fleet')}")
 
 
+def _progress_bar(total: int) -> Progress:
+    """rich's bar of files, frames and rate (loaded for a terminal only: a tenth of a second
+    of start-up that a script or a pipe would pay for nothing)."""
+    from rich.console import Console  # noqa: PLC0415
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn  # noqa: PLC0415
+
+    progress = Progress(TextColumn("{task.completed:,.0f}/{task.total:,.0f} files"),
+                        BarColumn(), TextColumn("{task.fields[frames]:,} frames"),
+                        TextColumn("{task.fields[rate]:,.0f} frames/s"), TimeElapsedColumn(),
+                        console=Console(stderr=True), transient=True,
+                        auto_refresh=False)  # no thread: -j forks the workers
+    progress.add_task("decode", total=total, frames=0, rate=0.0)
+    return progress
+
+
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                       devices: dict[int, str]) -> None:
     check_extra()
@@ -29,20 +49,24 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
     from blinkcan.fleet.task import FileResult  # noqa: PLC0415
 
     total = len(log_files(files))
-    console = Console(stderr=True)
-    progress = Progress(TextColumn("{task.completed:,.0f}/{task.total:,.0f} files"),
-                        BarColumn(), TextColumn("{task.fields[frames]:,} frames"),
-                        TextColumn("{task.fields[rate]:,.0f} frames/s"), TimeElapsedColumn(),
-                        console=console, transient=True, disable=not sys.stderr.isatty(),
-                        auto_refresh=False)  # no thread: -j forks the workers
-    task = progress.add_task("decode", total=total, frames=0, rate=0.0)
     start = time.monotonic()
     frames = 0
     counts = {"decoded": 0, "skipped": 0, "failed": 0}
+    progress = _progress_bar(total) if sys.stderr.isatty() else None
+    running: contextlib.AbstractContextManager[object] = progress if progress is not None else \
+        contextlib.nullcontext()
 
-    def show() -> None:
-        rate = frames / max(time.monotonic() - start, 1e-9)
-        progress.update(task, frames=frames, rate=rate, refresh=True)
+    def say(line: str) -> None:
+        if progress is None:
+            click.echo(line, err=True)
+        else:
+            progress.console.print(line, markup=False, highlight=False, soft_wrap=True)
+
+    def show(advance: int = 0) -> None:
+        if progress is not None:
+            rate = frames / max(time.monotonic() - start, 1e-9)
+            progress.update(progress.task_ids[0], advance=advance, frames=frames, rate=rate,
+                            refresh=True)
 
     def on_frames(count: int) -> None:  # one process: live counts
         nonlocal frames
@@ -53,20 +77,18 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
         nonlocal frames
         counts[result.status] += 1
         if result.status == "failed":
-            progress.console.print(f"cannot decode {result.source}: {result.error}",
-                                   markup=False, highlight=False, soft_wrap=True)
+            say(f"cannot decode {result.source}: {result.error}")
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
             frames += result.frames
         if result.cut_off is not None:
-            progress.console.print(f"{result.source}: {result.cut_off}; the {result.frames:,} "
-                                   "frames before it are in the dataset", markup=False,
-                                   highlight=False, soft_wrap=True)
-        progress.advance(task)
-        show()
+            say(f"{result.source}: {result.cut_off}; the {result.frames:,} frames before it "
+                "are in the dataset")
+        show(advance=1)
 
-    with progress:
+    frames_heard: Callable[[int], None] | None = on_frames if jobs == 1 else None
+    with running:
         decode_files(files, out, jobs=jobs, force=force, devices=devices,
-                     on_result=on_result, on_frames=on_frames if jobs == 1 else None)
+                     on_result=on_result, on_frames=frames_heard)
     elapsed = time.monotonic() - start
     skipped = f", {counts['skipped']} already decoded (--force decodes again)" \
         if counts["skipped"] else ""

@@ -3,9 +3,12 @@
 The decoder runs once per frame (its events carry state: keys held, SDO transfers, learned
 models), and so does :class:`~blinkcan.fleet.rows.EventRows` for the events that say more than
 their kind; everything else is gathered per column (a list each, extended by the block's) and
-becomes Arrow arrays once per row group (``writer.py``). Most frames of a fleet's log are other
-ECUs' (undecoded, one row, the decoder's lookup): for them the loop appends the node, the
-model, one shared row detail and the text, nothing more.
+becomes Arrow arrays once per row group (``writer.py``). A row's detail is kept as a number:
+each distinct detail of the row group is in a table once, so the lists hold plain numbers,
+strings and bytes and no object per row (nothing for the garbage collector to go through,
+and one Arrow conversion per distinct detail). Most frames of a fleet's log are other ECUs'
+(undecoded, one row, the decoder's lookup): for them the loop appends the node, the model,
+one shared detail's number and the text, nothing more.
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from blinkcan.decode.decoder import Decoder, Event
+from blinkcan.decode.decoder import Decoder, Event, Kind
 from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows
 from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.logs import describe_frame, frame_kind
@@ -30,7 +33,9 @@ _TEXTS_KEPT = 4096
 @dataclass
 class Segment:
     """The rows of one row group in the making: per frame its log columns (time, channel,
-    identifier, flag, data) and what its event says (node, model, text, one detail per row)."""
+    identifier, flag, data) and what its event says (node, model, text); per row the number
+    of its detail in ``details`` (each distinct detail once). A frame is one row unless
+    ``multiple`` says otherwise."""
 
     times: list[float] = field(default_factory=list)
     channels: list[str | None] = field(default_factory=list)
@@ -40,18 +45,63 @@ class Segment:
     nodes: list[int | None] = field(default_factory=list)
     models: list[str | None] = field(default_factory=list)
     texts: list[str] = field(default_factory=list)
-    details: list[list[Detail]] = field(default_factory=list)
-    #: rows so far (a frame is one row or more)
-    rows: int = 0
+    #: per row: its detail's number (its place in ``details``)
+    codes: list[int] = field(default_factory=list)
+    #: the distinct details of the rows, in the order they came
+    details: list[Detail] = field(default_factory=list)
+    #: the frames of more than one row: their positions, and their rows' counts
+    multiple: list[int] = field(default_factory=list)
+    counts: list[int] = field(default_factory=list)
+    #: the number of each detail in ``details``
+    numbers: dict[Detail, int] = field(default_factory=dict)
+    #: the number of the one detail of each kind of event that has nothing else
+    simple: dict[Kind, int] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.simple.update((kind, self.number(rows[0])) for kind, rows in SIMPLE_ROWS.items())
+
+    @property
+    def rows(self) -> int:
+        """Rows so far (a frame is one row or more)."""
+        return len(self.codes)
 
     def __len__(self) -> int:
         return len(self.texts)
 
+    def number(self, detail: Detail) -> int:
+        """The number of a detail in ``details`` (added if new)."""
+        number = self.numbers.get(detail)
+        if number is None:
+            number = self.numbers[detail] = len(self.details)
+            self.details.append(detail)
+        return number
+
+    def add_rows(self, details: list[Detail]) -> None:
+        """The rows of the frame added last."""
+        number, add = self.number, self.codes.append
+        if len(details) == 1:
+            add(number(details[0]))
+            return
+        self.multiple.append(len(self.texts) - 1)
+        self.counts.append(len(details))
+        for detail in details:
+            add(number(detail))
+
+    def frame_rows(self) -> list[int]:
+        """The count of rows of each frame."""
+        counts = [1] * len(self.texts)
+        for position, count in zip(self.multiple, self.counts, strict=True):
+            counts[position] = count
+        return counts
+
     def clear(self) -> None:
         for column in (self.times, self.channels, self.ids, self.extended, self.data,
-                       self.nodes, self.models, self.texts, self.details):
+                       self.nodes, self.models, self.texts, self.codes, self.details,
+                       self.multiple, self.counts):
             column.clear()
-        self.rows = 0
+        self.numbers.clear()
+        self.simple.clear()
+        self.__post_init__()
 
 
 def other_event(decoder: Decoder, message: can.Message) -> Event:
@@ -98,9 +148,8 @@ class FrameDecoder:
             segment.data.append(frame.data)
             segment.nodes.append(node)
             segment.models.append(model)
-            segment.details.append(details)
             segment.texts.append(str(event))
-            segment.rows += len(details)
+            segment.add_rows(details)
             position = other + 1
             if segment.rows >= limit:
                 return position
@@ -133,8 +182,9 @@ class FrameDecoder:
         decode, rows = self._decoder.decode, self._rows.rows
         devices = self._decoder.devices
         add_node, add_model = segment.nodes.append, segment.models.append
-        add_text, add_details = segment.texts.append, segment.details.append
-        simple_rows = SIMPLE_ROWS
+        add_text, add_code = segment.texts.append, segment.codes.append
+        add_rows = segment.add_rows
+        simple = segment.simple
         new, frame_type = _new_tuple, Frame
         texts = self._texts
         if len(texts) > _TEXTS_KEPT:
@@ -144,13 +194,13 @@ class FrameDecoder:
         for timestamp, can_id, payload, flag in zip(times, ids, data, extended, strict=True):
             event = decode(new(frame_type, (can_id, payload, flag)), timestamp)
             count += 1
-            simple = simple_rows.get(event.kind)
-            if simple is not None:  # most of a fleet's log: other ECUs' frames
+            code = simple.get(event.kind)
+            if code is not None:  # most of a fleet's log: other ECUs' frames
                 node = event.node_id
                 device = devices.get(node)  # type: ignore[arg-type]  # None: no device
                 add_node(node)
                 add_model(None if device is None else device.model)
-                add_details(simple)
+                add_code(code)
                 total += 1
                 known = texts.get(event.text)  # str(event) is its device's, node's and text's
                 if known is not None and known[0] == node and known[1] == event.device:
@@ -163,10 +213,9 @@ class FrameDecoder:
                 node, model, details = rows(event)
                 add_node(node)
                 add_model(model)
-                add_details(details)
-                total += len(details)
                 add_text(str(event))
+                add_rows(details)
+                total += len(details)
             if total >= limit:
                 break
-        segment.rows = total
         return count

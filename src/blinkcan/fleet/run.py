@@ -4,16 +4,17 @@ dataset is the same whichever ran it."""
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Mapping
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from blinkcan.fleet.schema import ROWS_PER_GROUP
 from blinkcan.fleet.task import FileResult, decode_file
+
+if TYPE_CHECKING:
+    from concurrent.futures import Future
 
 
 def log_files(paths: Iterable[str | os.PathLike[str]]) -> list[str]:
@@ -65,6 +66,9 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
 
 def _on_processes(jobs: int, sources: list[str], task: Callable[..., FileResult],
                   on_result: Callable[[FileResult], None] | None) -> dict[str, FileResult]:
+    import multiprocessing  # noqa: PLC0415 (-j only: start-up)
+    from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: PLC0415
+
     methods = multiprocessing.get_all_start_methods()
     # fork: the workers need nothing of __main__ (python -m blinkcan runs the CLI on import)
     context = multiprocessing.get_context("fork" if "fork" in methods else None)

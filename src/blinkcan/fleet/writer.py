@@ -1,8 +1,10 @@
 """Rows into Parquet files, one per (model, date) partition, in row groups of bounded size.
 
 The caller gathers a row group's rows column by column (:class:`~blinkcan.fleet.frames.Segment`:
-a list per column, per frame, and a detail per row); :meth:`PartitionWriter.write` makes each
-column one Arrow array (the frame's columns repeated for its rows by one ``take``), the times
+a list per column, per frame, and per row the number of its detail among the segment's distinct
+ones); :meth:`PartitionWriter.write` makes each column one Arrow array (the distinct details
+converted once and taken for the rows, the frame's columns repeated for its rows by one
+``take``), the times
 with Arrow's arithmetic, and writes each partition's rows as a row group (one stable sort by
 partition, then slices), so memory stays the same whatever the log's size. Files go to a
 folder of the caller's choice (the caller renames them into the dataset once the whole log is
@@ -13,7 +15,7 @@ from __future__ import annotations
 
 import datetime
 import math
-from itertools import accumulate, chain
+from itertools import accumulate
 from typing import Any
 
 import pyarrow as pa
@@ -35,6 +37,14 @@ _SOURCE = SCHEMA.get_field_index("source")
 _TIME = SCHEMA.field("time").type
 #: a row's detail (rows.Detail) as the schema's columns
 _DETAILS = pa.struct([SCHEMA.field(name) for name in Detail._fields])
+#: columns of a value per frame (a dictionary of them costs time and space for nothing)
+_UNIQUE = ("time", "data")
+#: Parquet's dictionary encoding where values repeat; min/max statistics (which readers use
+#: to skip row groups) on all but the texts and data, whose min and max select nothing
+_PARQUET_OPTIONS = {
+    "use_dictionary": [name for name in SCHEMA.names if name not in _UNIQUE],
+    "write_statistics": [name for name in SCHEMA.names if name not in ("text", "data")],
+}
 
 
 def partition_path(model: str, date: str) -> str:
@@ -98,15 +108,11 @@ class PartitionWriter:
         frames = len(segment)
         if not frames:
             return
-        per_frame = segment.details
         index: pa.Array | None = None  # the frame of each row, where a frame has several
-        if segment.rows == frames:
-            details = [rows[0] for rows in per_frame]
-        else:
-            details = list(chain.from_iterable(per_frame))
-            offsets = pa.array(list(accumulate(map(len, per_frame), initial=0)), pa.int32())
-            index = pc.list_parent_indices(pa.ListArray.from_arrays(offsets,
-                                                                    pa.nulls(len(details))))
+        rows = segment.rows
+        if rows != frames:
+            offsets = pa.array(list(accumulate(segment.frame_rows(), initial=0)), pa.int32())
+            index = pc.list_parent_indices(pa.ListArray.from_arrays(offsets, pa.nulls(rows)))
         micros, dates = self.times_and_dates(segment.times)
         frame_columns = {
             "time": micros, "channel": pa.array(segment.channels, pa.string()),
@@ -116,9 +122,9 @@ class PartitionWriter:
             "text": pa.array(segment.texts, pa.string()),
             "data": pa.array(segment.data, pa.binary()),
         }
-        row_details = _detail_struct(details)
+        details = pa.array(segment.codes, pa.int32())  # each row's number in segment.details
         partitions, codes = _partitions(segment.models, dates)
-        sizes = [len(details)]
+        sizes = [rows]
         if len(partitions) > 1:  # the rows by partition (a stable sort: each keeps its order)
             row_codes = pa.array(codes, pa.int32())
             if index is not None:
@@ -129,18 +135,19 @@ class PartitionWriter:
                              counts.field("counts").to_pylist(), strict=True))
             sizes = [found[code] for code in range(len(partitions))]
             index = order if index is None else index.take(order)
-            row_details = row_details.take(order)
+            details = details.take(order)
+        row_details = _detail_struct(segment.details).take(details)
         if index is not None:  # each row's frame columns: one take per column
             frame_columns = {name: array.take(index) for name, array in frame_columns.items()}
         arrays = [frame_columns[name] if name in frame_columns else row_details.field(name)
                   for name in _COLUMNS]
-        arrays.insert(_SOURCE, pa.repeat(pa.scalar(self._source, pa.string()), len(details)))
+        arrays.insert(_SOURCE, pa.repeat(pa.scalar(self._source, pa.string()), rows))
         table = pa.Table.from_arrays(arrays, schema=SCHEMA)
         offset = 0
         for partition, size in zip(partitions, sizes, strict=True):
             self._writer(partition).write_table(table.slice(offset, size))
             offset += size
-        self.rows += len(details)
+        self.rows += rows
 
     def _writer(self, partition: tuple[str, str]) -> pq.ParquetWriter:
         entry = self._writers.get(partition)
@@ -148,7 +155,8 @@ class PartitionWriter:
             folder = f"{self._folder}/{partition_path(*partition)}"
             self._fs.makedirs(folder, exist_ok=True)
             stream = self._fs.open(f"{folder}/{self._name}", "wb")
-            entry = self._writers[partition] = (stream, pq.ParquetWriter(stream, SCHEMA))
+            entry = self._writers[partition] = (stream, pq.ParquetWriter(stream, SCHEMA,
+                                                                          **_PARQUET_OPTIONS))
         return entry[1]
 
     def close(self) -> list[str]:
@@ -176,8 +184,8 @@ def int64_or_none(value: int | None) -> int | None:
 
 
 def _detail_struct(details: list[Detail]) -> pa.StructArray:
-    """The rows' details as one struct array (one conversion, a field per column); a value
-    int64 cannot hold is null (rare: an SDO value of a generic node's domain)."""
+    """Details as one struct array (one conversion, a field per column); a value int64
+    cannot hold is null (rare: an SDO value of a generic node's domain)."""
     try:
         return pa.array(details, _DETAILS)
     except (OverflowError, pa.ArrowInvalid):
