@@ -100,7 +100,7 @@ def test_other_ecus_frames_are_written_as_their_events_say() -> None:
     what their events say, also once a node's model is learned (then its frames are named)."""
     from blinkcan.decode.decoder import _encode
 
-    fast, plain = Decoder(), Decoder()
+    fast, plain, text = Decoder(), Decoder(), Decoder()
     others = [Frame(0x0A2, b"\x01\x02"), Frame(0x0CF00400, bytes(8), True),
               Frame(0x18FEF117, b"\x01" * 8, True), Frame(0x0A2, b"\x03")]
     learn = [frame("622 40 00 10 00 00 00 00 00"), frame("5A2 43 00 10 00 91 01 0B 00")]
@@ -109,6 +109,7 @@ def test_other_ecus_frames_are_written_as_their_events_say() -> None:
         line = fast.json_line(item, n / 4)
         event = plain.decode(item, n / 4)
         assert line == _encode(event.to_json())
+        assert text.text(item, n / 4) == str(event)
         seen.append(str(event))
     assert seen[0] == "node 22h: frame 0A2h"
     assert seen[1] == "extended frame 0CF00400h"

@@ -118,9 +118,9 @@ class Kind(str, Enum):
 
 
 _NO_FIELDS: dict[str, Any] = {}  # shared, never written
-#: what a frame that means nothing costs: its event's (text, node, device) and its JSON line
-#: before and after the data (Decoder._keep_raw)
-_Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str]
+#: what a frame that means nothing costs: its event's (text, node, device), its JSON line
+#: before and after the data, and its event as text (Decoder._keep_raw)
+_Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str, str]
 _new_tuple = tuple.__new__
 
 
@@ -251,6 +251,18 @@ class Decoder:
             elif len(self._routes) < _ROUTES_KEPT and self.j1939.concerns(frame.can_id):
                 self._routes[frame.can_id, True] = route  # the keypad PGNs' ids, up to a bound
         return route(frame, time)
+
+    def text(self, frame: Frame, time: float = 0.0) -> str:
+        """``str(decode(frame, time))``: another ECU's frame is a lookup."""
+        if frame[2]:
+            text = self._foreign.get(frame[0])
+            if text is not None:
+                return text
+        else:
+            raw = self._raw_standard.get(frame[0])
+            if raw is not None:
+                return raw[3]
+        return str(self.decode(frame, time))
 
     def json_line(self, frame: Frame, time: float = 0.0) -> str:
         """``json.dumps(decode(frame, time).to_json())``, fast for frames seen before.
@@ -410,7 +422,7 @@ class Decoder:
         head, _, tail = line.partition(',"data":""')
         self._raw_standard[event.frame.can_id] = (
             (event.text, event.node_id, event.device, _NO_FIELDS),
-            head[len('{"time":0'):] + ',"data":"', '"' + tail)
+            head[len('{"time":0'):] + ',"data":"', '"' + tail, str(event))
 
     def _forget_routes(self, node: int) -> None:
         """A node's model became known: its routes and their cached JSON change."""
