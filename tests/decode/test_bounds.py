@@ -105,15 +105,23 @@ def test_other_ecus_frames_are_written_as_their_events_say() -> None:
               Frame(0x18FEF117, b"\x01" * 8, True), Frame(0x0A2, b"\x03")]
     learn = [frame("622 40 00 10 00 00 00 00 00"), frame("5A2 43 00 10 00 91 01 0B 00")]
     seen: list[str] = []
+    looked_up = 0
     for n, item in enumerate(others * 2 + learn + others * 2):
         line = fast.json_line(item, n / 4)
         event = plain.decode(item, n / 4)
         assert line == _encode(event.to_json())
         assert text.text(item, n / 4) == str(event)
+        undecoded = text.undecoded(item.can_id, item.extended)
+        if undecoded is not None:  # what decode says, without the Event
+            assert event.kind is Kind.FRAME
+            assert not event.fields
+            assert undecoded == (str(event), event.node_id, event.device)
+            looked_up += 1
         seen.append(str(event))
     assert seen[0] == "node 22h: frame 0A2h"
     assert seen[1] == "extended frame 0CF00400h"
     assert seen[-1] == "keypad 22h: frame 0A2h"  # 1000h named the node's model
+    assert looked_up >= len(others)
 
 
 def test_a_keypad_pgn_from_a_learned_address_is_still_decoded() -> None:

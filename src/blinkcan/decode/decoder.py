@@ -252,6 +252,18 @@ class Decoder:
                 self._routes[frame.can_id, True] = route  # the keypad PGNs' ids, up to a bound
         return route(frame, time)
 
+    def undecoded(self, can_id: int, extended: bool) -> tuple[str, int | None, str | None] | None:
+        """(text, node, device) of the event every frame of this identifier makes, where it
+        means nothing here (another ECU's: kind FRAME, no fields) and was seen before; None
+        otherwise (then :meth:`decode` it). For a batch reader (the fleet's columns): such a
+        frame, most of a fleet's log, costs a lookup, no Frame and no Event; the decoder's
+        state does not depend on these frames."""
+        if extended:
+            text = self._foreign.get(can_id)
+            return None if text is None else (text, None, None)
+        raw = self._raw_standard.get(can_id)
+        return None if raw is None else (raw[3], raw[0][1], raw[0][2])
+
     def text(self, frame: Frame, time: float = 0.0) -> str:
         """``str(decode(frame, time))``: another ECU's frame is a lookup."""
         if frame[2]:
