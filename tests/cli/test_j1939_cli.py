@@ -15,6 +15,8 @@ from blinkcan.cli.emulate import _name, build_twins
 from blinkcan.cli.main import cli
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
+from blinkcan.runtime.simbus import SimulatedBus
+from blinkcan.testing import Rig
 from blinkcan.twin import KeypadTwin
 
 
@@ -70,21 +72,21 @@ def test_emulate_builds_keypads_in_j1939_mode() -> None:
         build_twins(("keybox",), None, None, "firmware", (), "j1939")
 
 
-def test_scan_lists_j1939_keypads_beside_canopen_devices() -> None:
-    channel = f"scan-j1939-{uuid.uuid4().hex}"
-    device_bus = can.Bus(interface="virtual", channel=channel)
-    claiming = KeypadTwin(protocol="j1939", node_id=0x16)
-    try:
-        with Emulator(device_bus, [KeypadTwin(), claiming]) as emulator:
-            emulator.run(lambda now: claiming.receive(Frame(
-                0x18EF2100, bytes.fromhex("041B7030FFFFFFFF"), extended=True), now))
-            emulator.run(lambda now: claiming.receive(Frame(
-                0x18EF3000, bytes.fromhex("041B7401FFFFFFFF"), extended=True), now))
-            emulator.power_cycle(claiming)
-            result = CliRunner().invoke(cli, ["scan", "--listen", "0.05", "-i", "virtual",
-                                              "-c", channel], env={"COLUMNS": "150"})
-    finally:
-        device_bus.shutdown()
+def test_scan_lists_j1939_keypads_beside_canopen_devices(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """In simulated time (a Rig): scan's waits (0.05 s of listening, 0.2 s per SDO reply) are
+    virtual, so every reply is in time however loaded the host is."""
+    with Rig() as rig:
+        rig.add(KeypadTwin())
+        claiming = rig.add(KeypadTwin(protocol="j1939", node_id=0x16))
+        rig.act(lambda now: claiming.receive(Frame(
+            0x18EF2100, bytes.fromhex("041B7030FFFFFFFF"), extended=True), now))
+        rig.act(lambda now: claiming.receive(Frame(
+            0x18EF3000, bytes.fromhex("041B7401FFFFFFFF"), extended=True), now))
+        rig.power_cycle(claiming)
+        monkeypatch.setattr("blinkcan.cli.scan.cli_bus",
+                            lambda: SimulatedBus(rig.network, "blinkcan scan"))
+        result = CliRunner().invoke(cli, ["scan", "--listen", "0.05"], env={"COLUMNS": "150"})
     assert result.exit_code == 0, result.output
     assert "PKP2600SI" in result.output  # the CANopen keypad
     row = next(line for line in result.output.splitlines() if "J1939" in line)

@@ -12,6 +12,7 @@ from click.testing import CliRunner
 import blinkcan.cli.nmt as nmt_cli
 from blinkcan.cli.bus_options import cli_bus
 from blinkcan.cli.main import cli
+from blinkcan.protocol.nmt import NmtCommand, nmt_frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeypadTwin
 
@@ -21,7 +22,12 @@ def channel() -> Iterator[str]:
     name = f"nmt-{uuid.uuid4().hex}"
     device_bus = can.Bus(interface="virtual", channel=name)
     keypad = KeypadTwin(node_id=0x15, settings={"producer_heartbeat_time": 100})
-    with Emulator(device_bus, [keypad]):
+    with Emulator(device_bus, [keypad]) as emulator:
+        # started before the command: every heartbeat it sends says operational, so that the
+        # only other state on the bus is the one the test puts in flight (a heartbeat of its
+        # own sent while the command was on its way would race the command on a loaded host)
+        emulator.run(lambda now: keypad.receive(nmt_frame(NmtCommand.START, 0x15), now))
+        assert emulator.snapshot(keypad)["nmt_state"] == "operational"
         yield name
     device_bus.shutdown()
 
@@ -39,7 +45,8 @@ def test_a_heartbeat_sent_before_the_command_is_not_its_answer(
         return bus
 
     monkeypatch.setattr(nmt_cli, "cli_bus", bus_with_a_heartbeat_in_flight)
-    result = CliRunner().invoke(cli, ["nmt", "start", "all", "--listen", "0.5", "-i", "virtual",
+    # 2 s: the keypad says its state every 0.1 s; a loaded host may hold its thread a while
+    result = CliRunner().invoke(cli, ["nmt", "start", "all", "--listen", "2", "-i", "virtual",
                                       "-c", channel])
     assert result.exit_code == 0, result.output
     assert result.output.splitlines() == ["sent NMT start to every node",

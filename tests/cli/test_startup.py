@@ -12,6 +12,7 @@ import click
 import pytest
 
 from blinkcan.cli.main import SUBCOMMANDS, cli, load_subcommand
+from blinkcan.formats.log_source import MAX_LINE
 
 HEAVY = ("can", "cantools", "canopen", "rich.console", "blinkcan.runtime", "blinkcan.host",
          "blinkcan.twin")
@@ -57,12 +58,13 @@ def test_the_listing_says_what_each_subcommand_says_of_itself(name: str) -> None
 @pytest.mark.parametrize("as_json", [False, True])
 def test_lines_decoded_before_a_broken_line_are_written(tmp_path: Path, as_json: bool) -> None:
     """Lines are written in batches (issue 22): those decoded before an error still come out,
-    before the error's one line."""
+    before the error's one line (a line over MAX_LINE ends the reading: not a candump log;
+    a line that is no frame does not, issue 23)."""
     from click.testing import CliRunner
 
     log = tmp_path / "broken.log"
     log.write_text("(1700000000.000000) can0 715#05\n(1700000000.000100) can0 70C#7F\n"
-                   "(1700000000.000200) can0 123#XYZW!\n")
+                   "(1700000000.000200) can0 123#" + "0" * MAX_LINE + "\n")
     result = CliRunner().invoke(cli, ["decode", *(["--json"] if as_json else []), str(log)])
     assert result.exit_code == 1
     assert result.stderr.splitlines()[-1].startswith("Error: ")

@@ -42,9 +42,11 @@ pytestmark = pytest.mark.multiprocess
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 WEB = find_spec("starlette") is not None and find_spec("uvicorn") is not None
-START_TIMEOUT_S = 60.0  # a loaded machine starts eight Python processes at once
-WAIT_MS = 10_000
-HEARD_S = 30.0  # frames on the bus: only reached on a failure or an overloaded machine
+# bounds only a failure reaches: each wait ends as soon as what it waits for happens, and a
+# machine running 8 test suites on 2 cores (load 30) took more than 10 s to draw a click
+START_TIMEOUT_S = 180.0  # a loaded machine starts eight Python processes at once
+WAIT_MS = 60_000  # every Playwright wait (the page's default timeout too)
+HEARD_S = 60.0  # frames on the bus
 
 
 @dataclass
@@ -185,6 +187,7 @@ def _page(browser: Any, emulated: Emulated) -> Any:
     """The emulator's panel, open with every device drawn and every CANopen device started."""
     if emulated.page is None:
         page = browser.new_page(viewport={"width": 1600, "height": 1000})
+        page.set_default_timeout(WAIT_MS)  # clicks, fills, navigation: not Playwright's 30 s
         page.goto(emulated.url)
         for node in emulated.nodes.values():
             page.wait_for_selector(f'[data-test="device-{node}"]', timeout=WAIT_MS)

@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 from blinkcan.formats.candump import read_candump, with_error_details
 from blinkcan.formats.logs import read_frames, read_log
+from blinkcan.formats.unreadable import UnreadableLine
 from blinkcan.protocol import Frame
 
 
@@ -28,6 +29,7 @@ def _as_tuple(message: can.Message) -> tuple[object, ...]:
 def _ours(text: str) -> list[tuple[object, ...]]:
     found: list[tuple[object, ...]] = []
     for timestamp, item in read_candump(io.StringIO(text)):
+        assert not isinstance(item, UnreadableLine), item
         if isinstance(item, Frame):
             found.append((round(timestamp, 6), item.can_id, item.extended, False, False, False,
                           len(item.data), item.data))
@@ -85,22 +87,25 @@ def test_blank_lines_are_skipped_as_python_can_does(tmp_path: Path) -> None:
     "(inf) can0 715#R",               # python-can's path: a remote frame
     "(-inf) can0 12345678##1AABB",    # python-can's path: a CAN FD frame
 ])
-def test_a_time_that_is_not_a_finite_number_is_refused(line: str) -> None:
+def test_a_time_that_is_not_a_finite_number_is_an_unreadable_line(line: str) -> None:
     log = io.StringIO(f"(1.000000) can0 715#00\n{line}\n(2.000000) can0 715#05\n")
-    frames = read_candump(log)
-    assert next(frames)[0] == 1.0
-    with pytest.raises(ValueError, match="is not a finite number of seconds"):
-        next(frames)
+    items = list(read_candump(log))
+    assert [item for _, item in items[::2]] == [Frame(0x715, b"\x00"), Frame(0x715, b"\x05")]
+    unreadable = items[1][1]
+    assert isinstance(unreadable, UnreadableLine)
+    assert (unreadable.number, unreadable.text, unreadable.time) == (2, line, None)
+    assert "is not a finite number of seconds" in unreadable.reason
 
 
-def test_decode_names_the_file_of_a_non_finite_time(tmp_path: Path) -> None:
+def test_decode_names_the_file_and_line_of_a_non_finite_time(tmp_path: Path) -> None:
     log = tmp_path / "n.log"
-    log.write_text("(1.000000) can0 715#00\n(nan) can0 715#00\n")
+    log.write_text("(1.000000) can0 715#00\n(nan) can0 715#00\n(2.000000) can0 715#05\n")
     result = subprocess.run([sys.executable, "-m", "blinkcan", "decode", str(log)],
                             capture_output=True, text=True, check=False)
-    assert result.returncode == 1
-    assert result.stderr.strip().splitlines()[-1] == (
-        f"Error: {log}: not a readable log (line 2: time (nan) is not a finite number of seconds)")
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 3
+    assert f"{log}: line 2: '(nan) can0 715#00' is not a candump line (time (nan) is not a " \
+        "finite number of seconds)" in result.stderr
 
 
 def test_an_identifier_over_8_hex_digits_is_refused_not_read_as_an_error_frame() -> None:

@@ -5,6 +5,7 @@ and the emulator say what it is: "two devices answer at node 15h"."""
 
 from __future__ import annotations
 
+import time
 import uuid
 from collections.abc import Iterator
 from io import StringIO
@@ -144,26 +145,33 @@ def test_emulate_warns_about_a_j1939_address_in_use() -> None:
 @pytest.mark.multiprocess
 def test_blinkcan_emulate_warns_when_another_device_uses_its_node_id() -> None:
     """``blinkcan emulate keypad`` in a child process; this process sends a heartbeat from 15h,
-    as a second ``blinkcan emulate keypad`` in another terminal would."""
-    import time
-
+    as a second ``blinkcan emulate keypad`` in another terminal would. Each wait is for what
+    the child sends, with a bound only a failure reaches (8 test suites may share 2 cores)."""
     from blinkcan.runtime import to_message
     from tests.runtime.test_multiprocess import emulated
 
     with emulated("keypad") as (host, child):
-        end = time.monotonic() + 20
-        while time.monotonic() < end:  # the child's own boot-up first: it is running
-            message = host.recv(0.5)
-            if message is not None and message.arbitration_id == 0x715:
-                break
-        else:
-            pytest.fail("the emulator did not boot")
+        _wait_for(host, 0x715, "the emulator did not boot")  # its own boot-up: it is running
         for _ in range(3):
             host.send(to_message(Frame(0x715, b"\x05")))  # a heartbeat, operational
-            time.sleep(0.2)
+        # an SDO read after them: the child takes frames in order, so once it has answered,
+        # it has heard the three heartbeats
+        host.send(to_message(Frame(0x615, bytes.fromhex("4000100000000000"))))
+        _wait_for(host, 0x595, "the emulator did not answer the SDO read")
         child.terminate()
-        output = child.communicate(timeout=10)[0].decode()
+        output = child.communicate(timeout=60)[0].decode()
     warnings = [line for line in output.splitlines() if line.startswith("warning:")]
     assert len(warnings) == 1, output
     assert warnings[0].startswith("warning: another device uses node 15h (heard a heartbeat on "
                                   "715h")
+
+
+def _wait_for(bus: can.BusABC, can_id: int, failure: str, within: float = 60.0) -> None:
+    """Read ``bus`` until a frame with ``can_id`` comes; the test fails saying ``failure``
+    if none comes ``within`` seconds."""
+    end = time.monotonic() + within
+    while time.monotonic() < end:
+        message = bus.recv(0.5)
+        if message is not None and message.arbitration_id == can_id:
+            return
+    pytest.fail(failure)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from blinkcan.twin import KeypadTwin
-from tests.twin.trace import Bench
+from tests.twin.trace import Bench, replayed
 
 
 @pytest.fixture
@@ -75,8 +75,10 @@ def test_s8_boot_up_at_power_on() -> None:
 # -- PDOs (§10-§14) --------------------------------------------------------------------------
 
 
-def test_s10_key_state_examples(started: Bench) -> None:
-    started.replay("""
+#: the manual's examples replayed as they stand, on the started device (``started``): a
+#: case each, named by its section and subject
+STARTED_EXAMPLES = {
+    "s10_key_state_examples": """
         press 4
         < 195 08 00 00 00 ??     # only key #4 pressed
         release 4
@@ -95,7 +97,100 @@ def test_s10_key_state_examples(started: Bench) -> None:
         < 195 00 00 00 00 ??
         press 12
         < 195 00 08 00 00 ??     # only key #12 pressed
-    """)
+    """,
+    "s41b_periodic_state_transmission": """
+        > 615 2B 00 18 05 00 00 00 00    # switch off
+        < 595 60 00 18 05 00 00 00 00
+        > 615 2B 00 18 05 32 00 00 00    # 50 ms
+        < 595 60 00 18 05 00 00 00 00
+        wait 0.05
+        < 195 00 00 00 00 ??
+        wait 0.05
+        < 195 00 00 00 00 ??
+        > 615 2B 00 18 05 F4 01 00 00    # 500 ms
+        < 595 60 00 18 05 00 00 00 00    # errata P4: printed "60 0 18 05"
+        wait 0.25
+        < -
+        wait 0.25
+        < 195 00 00 00 00 ??
+    """,
+}
+test_example_started = replayed(STARTED_EXAMPLES, on="started")
+
+
+#: the manual's examples replayed as they stand, on the booted device (``bench``): a
+#: case each, named by its section and subject
+EXAMPLES = {
+    "s25_producer_heartbeat": """
+        > 615 2B 17 10 00 64 00 00 00
+        < 595 60 17 10 00 00 00 00 00
+        > 615 40 17 10 00 00 00 00 00    # heartbeat time = 100 ms
+        < 595 4B 17 10 00 64 00 00 00
+        > 615 2B 17 10 00 00 00 00 00    # switch off
+        < 595 60 17 10 00 00 00 00 00
+        > 615 2B 17 10 00 32 00 00 00    # 50 ms
+        < 595 60 17 10 00 00 00 00 00
+        > 615 2B 17 10 00 F4 01 00 00    # 500 ms
+        < 595 60 17 10 00 00 00 00 00
+    """,
+    "s26_device_type": "> 615 40 00 10 00 00 00 00 00\n< 595 43 00 10 00 91 01 0B 00",
+    "s27_error_register_not_implemented": ("> 615 40 01 10 00 00 00 00 00\n"
+                                           "< 595 80 01 10 00 00 00 02 06"),
+    "s28_device_name_segmented": """
+        > 615 40 08 10 00 00 00 00 00
+        < 595 41 08 10 00 0B 00 00 00
+        > 615 60 00 00 00 00 00 00 00
+        < 595 00 42 6C 69 6E 6B 4D 61    # BlinkMa
+        > 615 70 00 00 00 00 00 00 00
+        < 595 17 72 69 6E 65 00 00 00    # rine
+    """,
+    # errata P5/P6 (Q): the firmware profile sends the strings reversed, as printed
+    "s29_s30_versions_as_printed_by_the_firmware": """
+        > 615 40 09 10 00 00 00 00 00
+        < 595 43 09 10 00 31 30 5F 56
+        > 615 40 0A 10 00 00 00 00 00
+        < 595 43 0A 10 00 32 2E 32 56
+    """,
+    "s31_model_id_segmented": """
+        > 615 40 0B 10 00 00 00 00 00
+        < 595 41 0B 10 00 09 00 00 00
+        > 615 60 00 00 00 00 00 00 00
+        < 595 00 50 4B 50 32 36 30 30    # PKP2600
+        > 615 70 00 00 00 00 00 00 00
+        < 595 1B 53 49 00 00 00 00 00    # SI
+    """,
+    "s32_identity": """
+        > 615 40 18 10 00 00 00 00 00
+        < 595 4F 18 10 00 04 00 00 00
+        > 615 40 18 10 01 00 00 00 00
+        < 595 43 18 10 01 E2 03 00 00
+    """,
+    "s41a_tpdo_parameter": """
+        > 615 40 00 18 00 00 00 00 00
+        < 595 4F 00 18 00 05 00 00 00
+        > 615 40 00 18 01 00 00 00 00
+        < 595 43 00 18 01 95 01 00 00
+        > 615 40 00 18 02 00 00 00 00
+        < 595 4F 00 18 02 FE 00 00 00
+        > 615 40 00 18 05 00 00 00 00
+        < 595 4B 00 18 05 00 00 00 00    # errata P3: 2 bytes, 4Bh (printed 4Fh)
+    """,
+    "s42_tpdo_mapping": """
+        > 615 40 00 1A 00 00 00 00 00
+        < 595 4F 00 1A 00 01 00 00 00
+        > 615 40 00 1A 01 00 00 00 00
+        < 595 43 00 1A 01 10 01 00 20
+    """,
+    "s43_serial_number_segmented": """
+        > 615 40 00 22 00 00 00 00 00
+        < 595 41 00 22 00 08 00 00 00
+        > 615 60 00 00 00 00 00 00 00
+        < 595 00 46 46 46 46 46 46 46
+        > 615 70 00 00 00 00 00 00 00
+        < 595 1D 46 00 00 00 00 00 00
+    """,
+}
+test_example = replayed(EXAMPLES)
 
 
 @pytest.mark.parametrize(("data", "expected"), [
@@ -238,21 +333,6 @@ def test_s19_to_s24_settings(bench: Bench, index: str, value: str, entry: str) -
     assert bench.twin.snapshot()["settings"][entry] == int(value, 16)
 
 
-def test_s25_producer_heartbeat(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2B 17 10 00 64 00 00 00
-        < 595 60 17 10 00 00 00 00 00
-        > 615 40 17 10 00 00 00 00 00    # heartbeat time = 100 ms
-        < 595 4B 17 10 00 64 00 00 00
-        > 615 2B 17 10 00 00 00 00 00    # switch off
-        < 595 60 17 10 00 00 00 00 00
-        > 615 2B 17 10 00 32 00 00 00    # 50 ms
-        < 595 60 17 10 00 00 00 00 00
-        > 615 2B 17 10 00 F4 01 00 00    # 500 ms
-        < 595 60 17 10 00 00 00 00 00
-    """)
-
-
 def test_s25_heartbeat_message_sequence() -> None:
     bench = Bench(KeypadTwin())
     bench.replay("""
@@ -271,35 +351,6 @@ def test_s25_heartbeat_message_sequence() -> None:
 # -- identity and communication objects (§26-§43) ----------------------------------------------
 
 
-def test_s26_device_type(bench: Bench) -> None:
-    bench.replay("> 615 40 00 10 00 00 00 00 00\n< 595 43 00 10 00 91 01 0B 00")
-
-
-def test_s27_error_register_not_implemented(bench: Bench) -> None:
-    bench.replay("> 615 40 01 10 00 00 00 00 00\n< 595 80 01 10 00 00 00 02 06")
-
-
-def test_s28_device_name_segmented(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 08 10 00 00 00 00 00
-        < 595 41 08 10 00 0B 00 00 00
-        > 615 60 00 00 00 00 00 00 00
-        < 595 00 42 6C 69 6E 6B 4D 61    # BlinkMa
-        > 615 70 00 00 00 00 00 00 00
-        < 595 17 72 69 6E 65 00 00 00    # rine
-    """)
-
-
-def test_s29_s30_versions_as_printed_by_the_firmware(bench: Bench) -> None:
-    # errata P5/P6 (Q): the firmware profile sends the strings reversed, as printed
-    bench.replay("""
-        > 615 40 09 10 00 00 00 00 00
-        < 595 43 09 10 00 31 30 5F 56
-        > 615 40 0A 10 00 00 00 00 00
-        < 595 43 0A 10 00 32 2E 32 56
-    """)
-
-
 def test_s29_s30_versions_in_cia301_order() -> None:
     bench = Bench(KeypadTwin(quirks="cia301"))
     bench.replay("""
@@ -309,26 +360,6 @@ def test_s29_s30_versions_in_cia301_order() -> None:
         < 595 43 09 10 00 56 5F 30 31    # V_01
         > 615 40 0A 10 00 00 00 00 00
         < 595 43 0A 10 00 56 32 2E 32    # V2.2
-    """)
-
-
-def test_s31_model_id_segmented(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 0B 10 00 00 00 00 00
-        < 595 41 0B 10 00 09 00 00 00
-        > 615 60 00 00 00 00 00 00 00
-        < 595 00 50 4B 50 32 36 30 30    # PKP2600
-        > 615 70 00 00 00 00 00 00 00
-        < 595 1B 53 49 00 00 00 00 00    # SI
-    """)
-
-
-def test_s32_identity(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 18 10 00 00 00 00 00
-        < 595 4F 18 10 00 04 00 00 00
-        > 615 40 18 10 01 00 00 00 00
-        < 595 43 18 10 01 E2 03 00 00
     """)
 
 
@@ -358,58 +389,6 @@ def test_s37_to_s40_rpdo_mappings(bench: Bench, index: str, entries: list[str]) 
         trace += [f"> 615 40 {index} 16 {sub:02X} 00 00 00 00",
                   f"< 595 43 {index} 16 {sub:02X} {entry}"]
     bench.replay("\n".join(trace))
-
-
-def test_s41a_tpdo_parameter(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 00 18 00 00 00 00 00
-        < 595 4F 00 18 00 05 00 00 00
-        > 615 40 00 18 01 00 00 00 00
-        < 595 43 00 18 01 95 01 00 00
-        > 615 40 00 18 02 00 00 00 00
-        < 595 4F 00 18 02 FE 00 00 00
-        > 615 40 00 18 05 00 00 00 00
-        < 595 4B 00 18 05 00 00 00 00    # errata P3: 2 bytes, 4Bh (printed 4Fh)
-    """)
-
-
-def test_s41b_periodic_state_transmission(started: Bench) -> None:
-    started.replay("""
-        > 615 2B 00 18 05 00 00 00 00    # switch off
-        < 595 60 00 18 05 00 00 00 00
-        > 615 2B 00 18 05 32 00 00 00    # 50 ms
-        < 595 60 00 18 05 00 00 00 00
-        wait 0.05
-        < 195 00 00 00 00 ??
-        wait 0.05
-        < 195 00 00 00 00 ??
-        > 615 2B 00 18 05 F4 01 00 00    # 500 ms
-        < 595 60 00 18 05 00 00 00 00    # errata P4: printed "60 0 18 05"
-        wait 0.25
-        < -
-        wait 0.25
-        < 195 00 00 00 00 ??
-    """)
-
-
-def test_s42_tpdo_mapping(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 00 1A 00 00 00 00 00
-        < 595 4F 00 1A 00 01 00 00 00
-        > 615 40 00 1A 01 00 00 00 00
-        < 595 43 00 1A 01 10 01 00 20
-    """)
-
-
-def test_s43_serial_number_segmented(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 00 22 00 00 00 00 00
-        < 595 41 00 22 00 08 00 00 00
-        > 615 60 00 00 00 00 00 00 00
-        < 595 00 46 46 46 46 46 46 46
-        > 615 70 00 00 00 00 00 00 00
-        < 595 1D 46 00 00 00 00 00 00
-    """)
 
 
 def test_s44_switch_to_j1939_and_back(bench: Bench) -> None:

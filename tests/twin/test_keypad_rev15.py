@@ -7,6 +7,8 @@ Sections whose frames equal rev 1.1's (NMT, 2000h, the PDO bit tables, 1000h, 10
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 
 from blinkcan.twin import KeypadTwin
@@ -33,18 +35,27 @@ def started(bench: Bench) -> Bench:
 
 # -- unchanged sections: the rev 1.1 traces pass on generation 2 ----------------------------------
 
-@pytest.mark.parametrize("trace", [
-    rev11.test_s10_key_state_examples, rev11.test_s12_alternate_blink_follows_the_bit_table,
-    rev11.test_s26_device_type, rev11.test_s28_device_name_segmented,
-    rev11.test_s31_model_id_segmented, rev11.test_s32_identity, rev11.test_s42_tpdo_mapping,
-    rev11.test_s43_serial_number_segmented, rev11.test_s44_switch_to_j1939_and_back,
-    rev11.test_s25_producer_heartbeat,
-])
-def test_unchanged_sections(trace: object, bench: Bench) -> None:
-    if trace in (rev11.test_s10_key_state_examples,
-                 rev11.test_s12_alternate_blink_follows_the_bit_table):
+#: rev 1.1's examples whose frames rev 1.5 keeps (the first two on a started keypad)
+UNCHANGED = ["s10_key_state_examples", "s12_alternate_blink_follows_the_bit_table",
+             "s26_device_type", "s28_device_name_segmented", "s31_model_id_segmented",
+             "s32_identity", "s42_tpdo_mapping", "s43_serial_number_segmented",
+             "s44_switch_to_j1939_and_back", "s25_producer_heartbeat"]
+
+
+def rev11_example(name: str) -> Callable[[Bench], None]:
+    """Rev 1.1's example ``name``: its trace replayed, or its test where it checks more."""
+    for table in (rev11.EXAMPLES, rev11.STARTED_EXAMPLES):
+        if name in table:
+            return lambda bench: bench.replay(table[name])
+    test: Callable[[Bench], None] = getattr(rev11, f"test_{name}")
+    return test
+
+
+@pytest.mark.parametrize("name", UNCHANGED)
+def test_unchanged_sections(name: str, bench: Bench) -> None:
+    if name in UNCHANGED[:2]:
         bench.replay("> 000 01 15")
-    trace(bench)  # type: ignore[operator]
+    rev11_example(name)(bench)
 
 
 @pytest.mark.parametrize(("keys", "reply"), [((), "00 00"), ((10,), "00 02"),
@@ -354,7 +365,7 @@ def test_s44a_synchronous_key_state(started: Bench) -> None:
 
 
 def test_s44b_periodic_state_transmission(started: Bench) -> None:
-    rev11.test_s41b_periodic_state_transmission(started)
+    started.replay(rev11.STARTED_EXAMPLES["s41b_periodic_state_transmission"])
 
 
 @pytest.mark.parametrize(("data", "expected"), [  # rev 1.5 §12

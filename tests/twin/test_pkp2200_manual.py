@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from blinkcan.twin import KeypadTwin
-from tests.twin.trace import Bench
+from tests.twin.trace import Bench, replayed
 
 
 @pytest.fixture
@@ -17,19 +17,15 @@ def bench() -> Bench:
     return bench
 
 
-def masks(bench: Bench, prefix: str) -> tuple[int, int, int]:
-    objects = bench.twin.objects
-    return (objects.get_int(f"{prefix}_red"), objects.get_int(f"{prefix}_green"),
-            objects.get_int(f"{prefix}_blue"))
-
-
 def test_s7_stop_and_s8_boot_up(bench: Bench) -> None:
     bench.replay("> 000 01 15\n> 000 02 15\n> 000 81 15\n< 715 00")
     assert bench.twin.nmt_state.name == "PRE_OPERATIONAL"
 
 
-def test_s11_key_state(bench: Bench) -> None:
-    bench.replay("""
+#: the manual's examples replayed as they stand, on the booted device (``bench``): a
+#: case each, named by its section and subject
+EXAMPLES = {
+    "s11_key_state": """
         > 000 01 15
         press 1
         < 195 01 00 00 00 ??    # key 1
@@ -47,7 +43,25 @@ def test_s11_key_state(bench: Bench) -> None:
         < 195 07 00 00 00 ??
         press 4
         < 195 0F 00 00 00 ??    # all keys
-    """)
+    """,
+    "s43a_key_pdo_parameters": """
+        > 615 40 00 18 00 00 00 00 00
+        < 595 4F 00 18 00 05 00 00 00
+        > 615 40 00 18 01 00 00 00 00
+        < 595 43 00 18 01 95 01 00 00
+        > 615 40 00 18 02 00 00 00 00
+        < 595 4F 00 18 02 FE 00 00 00
+        > 615 40 00 18 05 00 00 00 00
+        < 595 4B 00 18 05 00 00 00 00   # periodic transmission disabled
+        > 615 2F 00 18 02 01 00 00 00   # (the row is cut on p. 31) every SYNC
+        < 595 60 00 18 02 00 00 00 00
+        > 000 01 15
+        press 2
+        > 080
+        < 195 02 00 00 00 ??
+    """,
+}
+test_example = replayed(EXAMPLES)
 
 
 @pytest.mark.parametrize(("data", "on"), [
@@ -61,7 +75,7 @@ def test_s11_key_state(bench: Bench) -> None:
 ])
 def test_s12_led_on_pdo(bench: Bench, data: str, on: tuple[int, int, int]) -> None:
     bench.replay(f"> 000 01 15\n> 215 {data}")
-    assert masks(bench, "led_on") == on
+    assert bench.masks("led_on") == on
 
 
 @pytest.mark.parametrize(("index", "cob", "prefix", "data", "lit"), [
@@ -83,25 +97,6 @@ def test_s35_s36_synchronous_led_pdos(bench: Bench, index: str, cob: str, prefix
         > 080
         > {data} 00 00 00 00 00         # buffered
     """)
-    assert masks(bench, prefix) == (0, 0, 0)
+    assert bench.masks(prefix) == (0, 0, 0)
     bench.replay("> 080")  # processed at this SYNC
-    assert masks(bench, prefix) == lit
-
-
-def test_s43a_key_pdo_parameters(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 00 18 00 00 00 00 00
-        < 595 4F 00 18 00 05 00 00 00
-        > 615 40 00 18 01 00 00 00 00
-        < 595 43 00 18 01 95 01 00 00
-        > 615 40 00 18 02 00 00 00 00
-        < 595 4F 00 18 02 FE 00 00 00
-        > 615 40 00 18 05 00 00 00 00
-        < 595 4B 00 18 05 00 00 00 00   # periodic transmission disabled
-        > 615 2F 00 18 02 01 00 00 00   # (the row is cut on p. 31) every SYNC
-        < 595 60 00 18 02 00 00 00 00
-        > 000 01 15
-        press 2
-        > 080
-        < 195 02 00 00 00 ??
-    """)
+    assert bench.masks(prefix) == lit

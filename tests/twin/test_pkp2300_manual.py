@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from blinkcan.twin import KeypadTwin
-from tests.twin.trace import Bench
+from tests.twin.trace import Bench, replayed
 
 
 @pytest.fixture
@@ -17,8 +17,10 @@ def bench() -> Bench:
     return bench
 
 
-def test_s20_s21_boot_up_and_active_on_startup(bench: Bench) -> None:
-    bench.replay("""
+#: the manual's examples replayed as they stand, on the booted device (``bench``): a
+#: case each, named by its section and subject
+EXAMPLES = {
+    "s20_s21_boot_up_and_active_on_startup": """
         > 615 2F 11 20 00 00 00 00 00   # boot-up service not active
         < 595 60 11 20 00 00 00 00 00
         > 615 2F 12 20 00 01 00 00 00   # active on start-up
@@ -27,11 +29,8 @@ def test_s20_s21_boot_up_and_active_on_startup(bench: Bench) -> None:
         on                              # no boot-up frame, and operational
         press 6
         < 195 20 00 00 00 ??
-    """)
-
-
-def test_s25_producer_heartbeat(bench: Bench) -> None:
-    bench.replay("""
+    """,
+    "s25_producer_heartbeat": """
         > 615 2B 17 10 00 64 00 00 00   # the example's state: 100 ms (E4)
         < 595 60 17 10 00 00 00 00 00
         > 615 40 17 10 00 00 00 00 00
@@ -50,13 +49,12 @@ def test_s25_producer_heartbeat(bench: Bench) -> None:
         > 000 01 15                     # start
         wait 0.5
         < 715 05                        # operational
-    """)
-
-
-def test_s26_device_type(bench: Bench) -> None:
-    bench.replay("""
+    """,
+    "s26_device_type": """
         > 615 40 00 10 00 00 00 00 00
         < 595 43 00 10 00 91 01 0B 00   # device profile number B0191h
         > 615 40 01 10 00 00 00 00 00   # 1001h: not implemented
         < 595 80 01 10 00 00 00 02 06
-    """)
+    """,
+}
+test_example = replayed(EXAMPLES)

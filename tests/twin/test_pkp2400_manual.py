@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from blinkcan.twin import KeypadTwin
-from tests.twin.trace import Bench
+from tests.twin.trace import Bench, replayed
 
 
 @pytest.fixture
@@ -16,8 +16,10 @@ def bench() -> Bench:
     return bench
 
 
-def test_s17_default_colour_and_startup_levels(bench: Bench) -> None:
-    bench.replay("""
+#: the manual's examples replayed as they stand, on the booted device (``bench``): a
+#: case each, named by its section and subject
+EXAMPLES = {
+    "s17_default_colour_and_startup_levels": """
         > 615 2F 03 20 04 04 00 00 00   # d) yellow backlight colour
         < 595 60 03 20 04 00 00 00 00
         > 615 2F 03 20 05 2D 00 00 00   # e) "75 %" (erratum E1: 2Dh is 71 %, stored as sent)
@@ -26,18 +28,12 @@ def test_s17_default_colour_and_startup_levels(bench: Bench) -> None:
         < 595 60 03 20 06 00 00 00 00
         > 615 40 03 20 05 00 00 00 00
         < 595 4F 03 20 05 2D 00 00 00
-    """)
-
-
-def test_s18_baud_rate(bench: Bench) -> None:
-    bench.replay("""
+    """,
+    "s18_baud_rate": """
         > 615 2F 10 20 00 02 00 00 00   # 500k
         < 595 60 10 20 00 00 00 00 00
-    """)
-
-
-def test_s40b_periodic_state_transmission(bench: Bench) -> None:
-    bench.replay("""
+    """,
+    "s40b_periodic_state_transmission": """
         > 000 01 15
         > 615 2B 00 18 05 00 00 00 00   # off
         < 595 60 00 18 05 00 00 00 00
@@ -47,16 +43,15 @@ def test_s40b_periodic_state_transmission(bench: Bench) -> None:
         < 195 00 00 00 00 ??
         > 615 2B 00 18 05 F4 01 00 00   # 500 ms
         < 595 60 00 18 05 00 00 00 00
-    """)
-
-
-def test_s41_key_pdo_mapping_is_eight_key_bits(bench: Bench) -> None:
-    bench.replay("""
+    """,
+    "s41_key_pdo_mapping_is_eight_key_bits": """
         > 615 40 00 1A 00 00 00 00 00
         < 595 4F 00 1A 00 01 00 00 00
         > 615 40 00 1A 01 00 00 00 00
         < 595 43 00 1A 01 08 01 00 20   # 2000h/01, 8 bits
-    """)
+    """,
+}
+test_example = replayed(EXAMPLES)
 
 
 def test_keys_in_byte_0_and_leds_one_word_per_colour(bench: Bench) -> None:

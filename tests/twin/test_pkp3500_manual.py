@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from blinkcan.protocol import Frame
 from blinkcan.twin import KeypadTwin
 from blinkcan.twin.pkp3500 import Pkp3500Twin
-from tests.twin.trace import Bench
+from tests.twin.trace import Bench, replayed
 
 
 def twin_of(bench: Bench) -> Pkp3500Twin:
@@ -51,8 +51,10 @@ def read(bench: Bench, request: str, reply: str) -> None:
 
 # -- §4-§9 NMT, boot-up, heartbeat ----------------------------------------------------------------
 
-def test_s4_to_s8_nmt_examples(bench: Bench) -> None:
-    bench.replay("""
+#: the manual's examples replayed as they stand, on the booted device (``bench``): a
+#: case each, named by its section and subject
+EXAMPLES = {
+    "s4_to_s8_nmt_examples": """
         > 000 01 15      # §4 start
         < -
         > 000 80 15      # §5 enter pre-operational
@@ -65,7 +67,176 @@ def test_s4_to_s8_nmt_examples(bench: Bench) -> None:
         < -
         > 000 81 15      # §6 reset node
         < 715 00         # §8 boot-up
-    """)
+    """,
+    "s19c_startup_tick_counter": """
+        > 615 2B 00 20 03 09 00 00 00    # startup counter 9
+        < 595 60 00 20 03 00 00 00 00
+        > 615 40 00 20 03 00 00 00 00
+        < 595 4B 00 20 03 00 00 00 00    # M40: a read is the live counter
+        > 000 81 15
+        < 715 00
+        > 615 40 00 20 03 00 00 00 00
+        < 595 4B 00 20 03 08 00 00 00    # M40: starts at min(9, TOP 8)
+        > 615 2B 00 20 05 03 00 00 00
+        < 595 60 00 20 05 00 00 00 00
+        off
+        on
+        < 715 00
+        > 615 40 00 20 05 00 00 00 00
+        < 595 4B 00 20 05 03 00 00 00    # stored: survives a power cycle
+    """,
+    "s19f_g_top_position": """
+        > 615 40 00 20 06 00 00 00 00
+        < 595 4F 00 20 06 08 00 00 00    # §3 default 08h
+        > 615 2F 00 20 07 01 00 00 00
+        < 595 80 00 20 07 30 00 09 06    # M39: 01h is not valid
+        > 615 2F 00 20 07 11 00 00 00
+        < 595 80 00 20 07 30 00 09 06
+        > 615 2F 00 20 07 10 00 00 00
+        < 595 60 00 20 07 00 00 00 00
+        > 615 2B 00 20 02 01 00 00 00
+        < 595 80 00 20 02 02 00 01 06    # M41: read-only
+    """,
+    "s21_blink_sdo_examples": """
+        > 615 2B 02 20 01 02 00 00 00    # red #2 blinks
+        < 595 60 02 20 01 00 00 00 00
+        > 615 2B 02 20 03 00 01 00 00    # blue #9 blinks
+        < 595 60 02 20 03 00 00 00 00
+        > 615 2B 02 20 01 FF FF 00 00    # M27: holes ignored, no abort
+        < 595 60 02 20 01 00 00 00 00
+        > 615 40 02 20 01 00 00 00 00
+        < 595 4B 02 20 01 FE 7B 00 00    # all red LEDs blink
+        > 615 23 02 20 04 02 00 00 00    # M3: ring LED #2 blinks
+        < 595 60 02 20 04 00 00 00 00
+        > 615 23 02 20 04 00 08 00 00
+        < 595 60 02 20 04 00 00 00 00
+        > 615 40 02 20 04 00 00 00 00
+        < 595 43 02 20 04 00 08 00 00    # only LED #12 blinks
+    """,
+    "s23_digital_inputs": """
+        set_digital_input 0 1
+        set_analog 3 2.5
+        set_analog 2 2.49
+        > 615 40 04 20 01 00 00 00 00
+        < 595 4F 04 20 01 09 00 00 00    # IN0 and IN3 from 2.5 V (M46)
+        > 615 40 04 20 00 00 00 00 00
+        < 595 4F 04 20 00 01 00 00 00
+    """,
+    "s24_analog_input_examples": """
+        > 615 40 05 20 00 00 00 00 00
+        < 595 4F 05 20 00 04 00 00 00    # M5: the sub-index echo is 00
+        set_analog 0 1.0
+        set_analog 1 2.0
+        set_analog 2 3.0
+        set_analog 3 4.0
+        > 615 40 05 20 01 00 00 00 00
+        < 595 4F 05 20 01 33 00 00 00    # 1 V
+        > 615 40 05 20 02 00 00 00 00
+        < 595 4F 05 20 02 66 00 00 00    # 2 V
+        > 615 40 05 20 03 00 00 00 00
+        < 595 4F 05 20 03 99 00 00 00    # 3 V
+        > 615 40 05 20 04 00 00 00 00
+        < 595 4F 05 20 04 CC 00 00 00    # 4 V
+        set_analog 0 5.0
+        > 615 40 05 20 01 00 00 00 00
+        < 595 4F 05 20 01 FF 00 00 00    # 5 V
+        set_analog 0 12.0
+        > 615 40 05 20 01 00 00 00 00
+        < 595 4F 05 20 01 FF 00 00 00    # above 5 V: full scale (M45)
+    """,
+    "s25_analog_period": """
+        > 615 2F 06 20 00 64 00 00 00    # period 1 s
+        < 595 60 06 20 00 00 00 00 00
+        > 615 40 06 20 00 00 00 00 00
+        < 595 4F 06 20 00 64 00 00 00    # M6: reads back what was written
+        > 615 40 03 18 02 00 00 00 00
+        < 595 4F 03 18 02 64 00 00 00    # M12: 1803h/02 is this byte
+        > 615 2F 06 20 00 00 00 00 00
+        < 595 80 06 20 00 30 00 09 06    # M47: 00h does not switch it off
+        > 000 01 15
+        wait 0.99
+        < -
+        wait 0.01
+        < 495 00 00 00 00 00 00 00 00
+    """,
+    "s29_node_id_in_use_at_once": """
+        > 615 2F 13 20 00 19 00 00 00
+        < 599 60 13 20 00 00 00 00 00    # M7: acknowledged from the new id
+        > 619 40 13 20 00 00 00 00 00
+        < 599 4F 13 20 00 19 00 00 00
+    """,
+    "s42_s43_synchronous_rpdos": """
+        > 000 01 15
+        > 615 2F 00 14 02 01 00 00 00    # synchronous RPDO 0
+        < 595 60 00 14 02 00 00 00 00
+        > 080
+        > 215 02 00 00 00 00 00 00 00    # M9: red #2 (the printed 01h lights nothing)
+        > 615 40 01 20 01 00 00 00 00
+        < 595 4B 01 20 01 00 00 00 00    # held until the SYNC
+        > 080
+        > 615 40 01 20 01 00 00 00 00
+        < 595 4B 01 20 01 02 00 00 00
+        > 615 2F 01 14 02 00 00 00 00    # synchronous RPDO 1
+        < 595 60 01 14 02 00 00 00 00
+        > 315 00 00 02 00 00 00 00 00    # M10: green #2
+        > 080
+        > 615 40 02 20 02 00 00 00 00
+        < 595 4B 02 20 02 02 00 00 00
+        > 615 2F 02 14 02 01 00 00 00
+        < 595 80 02 14 02 30 00 09 06    # M70: 1402h takes FEh only
+    """,
+    "s50_synchronous_key_state_and_timer": """
+        > 000 01 15
+        > 615 2F 00 18 02 01 00 00 00    # cyclic every SYNC
+        < 595 60 00 18 02 00 00 00 00
+        > 080
+        < 195 00 00 00 00 ??
+        press 1
+        > 080
+        < 195 01 00 00 00 ??
+        > 615 2F 00 18 02 FE 00 00 00
+        < 595 60 00 18 02 00 00 00 00
+        > 615 2B 00 18 05 00 00 00 00
+        < 595 60 00 18 05 00 00 00 00
+        > 615 2B 00 18 05 32 00 00 00    # 50 ms
+        < 595 60 00 18 05 00 00 00 00
+        wait 0.05
+        < 195 01 00 00 00 ??
+        > 615 2B 00 18 05 F4 01 00 00    # 500 ms
+        < 595 60 00 18 05 00 00 00 00
+        > 615 2B 00 18 05 31 00 00 00    # M72: 49 ms is too short
+        < 595 80 00 18 05 30 00 09 06
+    """,
+    "s57_serial_number": """
+        > 615 40 00 22 00 00 00 00 00
+        < 595 41 00 22 00 08 00 00 00
+        > 615 60 00 00 00 00 00 00 00
+        < 595 00 46 46 46 46 46 46 46
+        > 615 70 00 00 00 00 00 00 00
+        < 595 1D 46 00 00 00 00 00 00
+    """,
+}
+test_example = replayed(EXAMPLES)
+
+
+#: the manual's examples replayed as they stand, on the started device (``started``): a
+#: case each, named by its section and subject
+STARTED_EXAMPLES = {
+    "encoder_clamps_at_top_and_zero_and_counts_net_movement": """
+        turn 1 -1                         # default TOP 08h (§3): clamped at 0 (M34)
+        < 295 81 00 00 08 00 00 00 00
+        > 000 80 15                       # not operational: ticks accumulate (M37)
+        turn 1 10
+        > 615 40 00 20 02 00 00 00 00
+        < 595 4F 00 20 02 0A 00 00 00    # 10 ticks CW since the last PDO (M37)
+        > 615 40 00 20 03 00 00 00 00
+        < 595 4B 00 20 03 08 00 00 00    # clamped at TOP
+        > 000 01 15
+        turn 1 -1
+        < 295 09 07 00 08 00 00 00 00    # net +9 since the last frame (M37)
+    """,
+}
+test_example_started = replayed(STARTED_EXAMPLES, on="started")
 
 
 def test_s33_heartbeat_messages(bench: Bench) -> None:
@@ -172,22 +343,6 @@ def test_s13_encoder_2_examples(started: Bench) -> None:
     """)
     frames = twin_of(bench).turn(2, 16, bench.now)
     assert frames[-1] == Frame(0x395, bytes.fromhex("0110001000000000"))  # 16 CW, TOP 16
-
-
-def test_encoder_clamps_at_top_and_zero_and_counts_net_movement(started: Bench) -> None:
-    started.replay("""
-        turn 1 -1                         # default TOP 08h (§3): clamped at 0 (M34)
-        < 295 81 00 00 08 00 00 00 00
-        > 000 80 15                       # not operational: ticks accumulate (M37)
-        turn 1 10
-        > 615 40 00 20 02 00 00 00 00
-        < 595 4F 00 20 02 0A 00 00 00    # 10 ticks CW since the last PDO (M37)
-        > 615 40 00 20 03 00 00 00 00
-        < 595 4B 00 20 03 08 00 00 00    # clamped at TOP
-        > 000 01 15
-        turn 1 -1
-        < 295 09 07 00 08 00 00 00 00    # net +9 since the last frame (M37)
-    """)
 
 
 # -- §14 analog inputs ----------------------------------------------------------------------------
@@ -324,41 +479,6 @@ def test_s19b_d_direction_counters(bench: Bench, sub: int, ticks: int, reply: st
     read(bench, f"40 00 20 {sub:02X} 00 00 00 00", f"4F 00 20 {sub:02X} {reply} 00 00 00")
 
 
-def test_s19c_startup_tick_counter(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2B 00 20 03 09 00 00 00    # startup counter 9
-        < 595 60 00 20 03 00 00 00 00
-        > 615 40 00 20 03 00 00 00 00
-        < 595 4B 00 20 03 00 00 00 00    # M40: a read is the live counter
-        > 000 81 15
-        < 715 00
-        > 615 40 00 20 03 00 00 00 00
-        < 595 4B 00 20 03 08 00 00 00    # M40: starts at min(9, TOP 8)
-        > 615 2B 00 20 05 03 00 00 00
-        < 595 60 00 20 05 00 00 00 00
-        off
-        on
-        < 715 00
-        > 615 40 00 20 05 00 00 00 00
-        < 595 4B 00 20 05 03 00 00 00    # stored: survives a power cycle
-    """)
-
-
-def test_s19f_g_top_position(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 00 20 06 00 00 00 00
-        < 595 4F 00 20 06 08 00 00 00    # §3 default 08h
-        > 615 2F 00 20 07 01 00 00 00
-        < 595 80 00 20 07 30 00 09 06    # M39: 01h is not valid
-        > 615 2F 00 20 07 11 00 00 00
-        < 595 80 00 20 07 30 00 09 06
-        > 615 2F 00 20 07 10 00 00 00
-        < 595 60 00 20 07 00 00 00 00
-        > 615 2B 00 20 02 01 00 00 00
-        < 595 80 00 20 02 02 00 01 06    # M41: read-only
-    """)
-
-
 def test_s20_key_led_sdo_examples(bench: Bench) -> None:
     bench.replay("""
         > 615 2B 01 20 01 08 00 00 00    # red #4 on
@@ -380,25 +500,6 @@ def test_s20_key_led_sdo_examples(bench: Bench) -> None:
     assert (keys[3]["colour"], keys[14]["colour"]) == ("red", "blue")
 
 
-def test_s21_blink_sdo_examples(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2B 02 20 01 02 00 00 00    # red #2 blinks
-        < 595 60 02 20 01 00 00 00 00
-        > 615 2B 02 20 03 00 01 00 00    # blue #9 blinks
-        < 595 60 02 20 03 00 00 00 00
-        > 615 2B 02 20 01 FF FF 00 00    # M27: holes ignored, no abort
-        < 595 60 02 20 01 00 00 00 00
-        > 615 40 02 20 01 00 00 00 00
-        < 595 4B 02 20 01 FE 7B 00 00    # all red LEDs blink
-        > 615 23 02 20 04 02 00 00 00    # M3: ring LED #2 blinks
-        < 595 60 02 20 04 00 00 00 00
-        > 615 23 02 20 04 00 08 00 00
-        < 595 60 02 20 04 00 00 00 00
-        > 615 40 02 20 04 00 00 00 00
-        < 595 43 02 20 04 00 08 00 00    # only LED #12 blinks
-    """)
-
-
 @pytest.mark.parametrize(("sub", "value"), [
     (1, "0D"), (2, "20"), (3, "06"), (4, "04"), (5, "2D"), (6, "00"),
 ])
@@ -408,61 +509,6 @@ def test_s22_brightness_examples(bench: Bench, sub: int, value: str) -> None:
         < 595 60 03 20 {sub:02X} 00 00 00 00
         > 615 40 03 20 {sub:02X} 00 00 00 00
         < 595 4F 03 20 {sub:02X} {value} 00 00 00
-    """)
-
-
-def test_s23_digital_inputs(bench: Bench) -> None:
-    bench.replay("""
-        set_digital_input 0 1
-        set_analog 3 2.5
-        set_analog 2 2.49
-        > 615 40 04 20 01 00 00 00 00
-        < 595 4F 04 20 01 09 00 00 00    # IN0 and IN3 from 2.5 V (M46)
-        > 615 40 04 20 00 00 00 00 00
-        < 595 4F 04 20 00 01 00 00 00
-    """)
-
-
-def test_s24_analog_input_examples(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 05 20 00 00 00 00 00
-        < 595 4F 05 20 00 04 00 00 00    # M5: the sub-index echo is 00
-        set_analog 0 1.0
-        set_analog 1 2.0
-        set_analog 2 3.0
-        set_analog 3 4.0
-        > 615 40 05 20 01 00 00 00 00
-        < 595 4F 05 20 01 33 00 00 00    # 1 V
-        > 615 40 05 20 02 00 00 00 00
-        < 595 4F 05 20 02 66 00 00 00    # 2 V
-        > 615 40 05 20 03 00 00 00 00
-        < 595 4F 05 20 03 99 00 00 00    # 3 V
-        > 615 40 05 20 04 00 00 00 00
-        < 595 4F 05 20 04 CC 00 00 00    # 4 V
-        set_analog 0 5.0
-        > 615 40 05 20 01 00 00 00 00
-        < 595 4F 05 20 01 FF 00 00 00    # 5 V
-        set_analog 0 12.0
-        > 615 40 05 20 01 00 00 00 00
-        < 595 4F 05 20 01 FF 00 00 00    # above 5 V: full scale (M45)
-    """)
-
-
-def test_s25_analog_period(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2F 06 20 00 64 00 00 00    # period 1 s
-        < 595 60 06 20 00 00 00 00 00
-        > 615 40 06 20 00 00 00 00 00
-        < 595 4F 06 20 00 64 00 00 00    # M6: reads back what was written
-        > 615 40 03 18 02 00 00 00 00
-        < 595 4F 03 18 02 64 00 00 00    # M12: 1803h/02 is this byte
-        > 615 2F 06 20 00 00 00 00 00
-        < 595 80 06 20 00 30 00 09 06    # M47: 00h does not switch it off
-        > 000 01 15
-        wait 0.99
-        < -
-        wait 0.01
-        < 495 00 00 00 00 00 00 00 00
     """)
 
 
@@ -477,15 +523,6 @@ def test_s26_to_s30_settings(bench: Bench, index: str, value: str) -> None:
         < 595 60 {index} 20 00 00 00 00 00
         > 615 40 {index} 20 00 00 00 00 00
         < 595 4F {index} 20 00 {value} 00 00 00
-    """)
-
-
-def test_s29_node_id_in_use_at_once(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2F 13 20 00 19 00 00 00
-        < 599 60 13 20 00 00 00 00 00    # M7: acknowledged from the new id
-        > 619 40 13 20 00 00 00 00 00
-        < 599 4F 13 20 00 19 00 00 00
     """)
 
 
@@ -629,54 +666,6 @@ def test_s40_restore_defaults(quirks: str, ack: str) -> None:
     """)
 
 
-def test_s42_s43_synchronous_rpdos(bench: Bench) -> None:
-    bench.replay("""
-        > 000 01 15
-        > 615 2F 00 14 02 01 00 00 00    # synchronous RPDO 0
-        < 595 60 00 14 02 00 00 00 00
-        > 080
-        > 215 02 00 00 00 00 00 00 00    # M9: red #2 (the printed 01h lights nothing)
-        > 615 40 01 20 01 00 00 00 00
-        < 595 4B 01 20 01 00 00 00 00    # held until the SYNC
-        > 080
-        > 615 40 01 20 01 00 00 00 00
-        < 595 4B 01 20 01 02 00 00 00
-        > 615 2F 01 14 02 00 00 00 00    # synchronous RPDO 1
-        < 595 60 01 14 02 00 00 00 00
-        > 315 00 00 02 00 00 00 00 00    # M10: green #2
-        > 080
-        > 615 40 02 20 02 00 00 00 00
-        < 595 4B 02 20 02 02 00 00 00
-        > 615 2F 02 14 02 01 00 00 00
-        < 595 80 02 14 02 30 00 09 06    # M70: 1402h takes FEh only
-    """)
-
-
-def test_s50_synchronous_key_state_and_timer(bench: Bench) -> None:
-    bench.replay("""
-        > 000 01 15
-        > 615 2F 00 18 02 01 00 00 00    # cyclic every SYNC
-        < 595 60 00 18 02 00 00 00 00
-        > 080
-        < 195 00 00 00 00 ??
-        press 1
-        > 080
-        < 195 01 00 00 00 ??
-        > 615 2F 00 18 02 FE 00 00 00
-        < 595 60 00 18 02 00 00 00 00
-        > 615 2B 00 18 05 00 00 00 00
-        < 595 60 00 18 05 00 00 00 00
-        > 615 2B 00 18 05 32 00 00 00    # 50 ms
-        < 595 60 00 18 05 00 00 00 00
-        wait 0.05
-        < 195 01 00 00 00 ??
-        > 615 2B 00 18 05 F4 01 00 00    # 500 ms
-        < 595 60 00 18 05 00 00 00 00
-        > 615 2B 00 18 05 31 00 00 00    # M72: 49 ms is too short
-        < 595 80 00 18 05 30 00 09 06
-    """)
-
-
 def test_encoder_event_timer_sends_with_nothing_moved(bench: Bench) -> None:
     slow_analog(bench)
     bench.replay("""
@@ -685,17 +674,6 @@ def test_encoder_event_timer_sends_with_nothing_moved(bench: Bench) -> None:
         > 000 01 15
         wait 0.1
         < 295 00 00 00 08 00 00 00 00    # M38: direction 00h, nothing moved
-    """)
-
-
-def test_s57_serial_number(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 00 22 00 00 00 00 00
-        < 595 41 00 22 00 08 00 00 00
-        > 615 60 00 00 00 00 00 00 00
-        < 595 00 46 46 46 46 46 46 46
-        > 615 70 00 00 00 00 00 00 00
-        < 595 1D 46 00 00 00 00 00 00
     """)
 
 

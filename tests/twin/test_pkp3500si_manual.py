@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from blinkcan.twin import KeypadTwin
-from tests.twin.trace import Bench
+from tests.twin.trace import Bench, replayed
 
 
 @pytest.fixture
@@ -17,14 +17,10 @@ def bench() -> Bench:
     return bench
 
 
-def masks(bench: Bench, prefix: str) -> tuple[int, int, int]:
-    objects = bench.twin.objects
-    return (objects.get_int(f"{prefix}_red"), objects.get_int(f"{prefix}_green"),
-            objects.get_int(f"{prefix}_blue"))
-
-
-def test_s11_key_state(bench: Bench) -> None:
-    bench.replay("""
+#: the manual's examples replayed as they stand, on the booted device (``bench``): a
+#: case each, named by its section and subject
+EXAMPLES = {
+    "s11_key_state": """
         press 1
         < 195 01 00 00 00 ??    # only key 1
         release 1
@@ -41,7 +37,39 @@ def test_s11_key_state(bench: Bench) -> None:
         < 195 00 01 00 00 ??
         press 15
         < 195 00 41 00 00 ??    # keys 9 and 15
-    """)
+    """,
+    "s19_start_up_levels": """
+        > 615 2F 03 20 05 2D 00 00 00   # e) "75 %" (B3: 71 %, stored as sent)
+        < 595 60 03 20 05 00 00 00 00
+        > 615 40 03 20 05 00 00 00 00
+        < 595 4F 03 20 05 2D 00 00 00
+        > 615 2F 03 20 06 00 00 00 00   # f) 0 %
+        < 595 60 03 20 06 00 00 00 00
+        > 615 40 03 20 06 00 00 00 00
+        < 595 4F 03 20 06 00 00 00 00
+    """,
+    "s23_node_id_in_use_at_once": """
+        > 615 2F 13 20 00 17 00 00 00
+        < 597 60 13 20 00 00 00 00 00   # B4: the acknowledge comes from the new id
+        > 617 40 13 20 00 00 00 00 00
+        < 597 4F 13 20 00 17 00 00 00
+    """,
+    "s33_model_id": """
+        > 615 40 0B 10 00 00 00 00 00
+        < 595 41 0B 10 00 09 00 00 00
+        > 615 60 00 00 00 00 00 00 00
+        < 595 00 50 4B 50 33 35 30 30   # PKP3500
+        > 615 70 00 00 00 00 00 00 00
+        < 595 1B 53 49 00 00 00 00 00   # SI
+    """,
+    "s34_restore_defaults_load": """
+        > 615 40 11 10 00 00 00 00 00
+        < 595 4F 11 10 00 01 00 00 00
+        > 615 23 11 10 01 6C 6F 61 64   # 'load'
+        < 595 43 11 10 01 00 00 00 00   # B5: 43h, as printed
+    """,
+}
+test_example = replayed(EXAMPLES)
 
 
 @pytest.mark.parametrize(("data", "on"), [
@@ -59,7 +87,7 @@ def test_s11_key_state(bench: Bench) -> None:
 ])
 def test_s12_led_on_pdo(bench: Bench, data: str, on: tuple[int, int, int]) -> None:
     bench.replay(f"> 215 {data}")
-    assert masks(bench, "led_on") == on
+    assert bench.masks("led_on") == on
 
 
 @pytest.mark.parametrize(("data", "blink"), [
@@ -73,7 +101,7 @@ def test_s12_led_on_pdo(bench: Bench, data: str, on: tuple[int, int, int]) -> No
 ])
 def test_s13_led_blink_pdo(bench: Bench, data: str, blink: tuple[int, int, int]) -> None:
     bench.replay(f"> 315 {data}")
-    assert masks(bench, "led_blink") == blink
+    assert bench.masks("led_blink") == blink
 
 
 def test_s13_alternate_red_and_blue(bench: Bench) -> None:
@@ -104,48 +132,6 @@ def test_s16_keys_state_object(bench: Bench, keys: tuple[int, ...], reply: str) 
     bench.replay(f"> 615 40 00 20 01 00 00 00 00\n< 595 4B 00 20 01 {reply} 00 00")
 
 
-def test_s19_start_up_levels(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2F 03 20 05 2D 00 00 00   # e) "75 %" (B3: 71 %, stored as sent)
-        < 595 60 03 20 05 00 00 00 00
-        > 615 40 03 20 05 00 00 00 00
-        < 595 4F 03 20 05 2D 00 00 00
-        > 615 2F 03 20 06 00 00 00 00   # f) 0 %
-        < 595 60 03 20 06 00 00 00 00
-        > 615 40 03 20 06 00 00 00 00
-        < 595 4F 03 20 06 00 00 00 00
-    """)
-
-
-def test_s23_node_id_in_use_at_once(bench: Bench) -> None:
-    bench.replay("""
-        > 615 2F 13 20 00 17 00 00 00
-        < 597 60 13 20 00 00 00 00 00   # B4: the acknowledge comes from the new id
-        > 617 40 13 20 00 00 00 00 00
-        < 597 4F 13 20 00 17 00 00 00
-    """)
-
-
-def test_s33_model_id(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 0B 10 00 00 00 00 00
-        < 595 41 0B 10 00 09 00 00 00
-        > 615 60 00 00 00 00 00 00 00
-        < 595 00 50 4B 50 33 35 30 30   # PKP3500
-        > 615 70 00 00 00 00 00 00 00
-        < 595 1B 53 49 00 00 00 00 00   # SI
-    """)
-
-
-def test_s34_restore_defaults_load(bench: Bench) -> None:
-    bench.replay("""
-        > 615 40 11 10 00 00 00 00 00
-        < 595 4F 11 10 00 01 00 00 00
-        > 615 23 11 10 01 6C 6F 61 64   # 'load'
-        < 595 43 11 10 01 00 00 00 00   # B5: 43h, as printed
-    """)
-
-
 def test_s36_synchronous_led_pdo(bench: Bench) -> None:
     bench.replay("""
         > 615 40 00 14 00 00 00 00 00
@@ -159,6 +145,6 @@ def test_s36_synchronous_led_pdo(bench: Bench) -> None:
         > 080
         > 215 01 00 00 00 00 00 00 00   # buffered
     """)
-    assert masks(bench, "led_on") == (0, 0, 0)
+    assert bench.masks("led_on") == (0, 0, 0)
     bench.replay("> 080")  # processed at this SYNC
-    assert masks(bench, "led_on") == (1, 0, 0)
+    assert bench.masks("led_on") == (1, 0, 0)

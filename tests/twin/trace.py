@@ -10,6 +10,10 @@ power; any other verb calls the twin's method of that name with its numbers and 
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+
+import pytest
+
 from blinkcan.protocol import Frame
 from blinkcan.twin.base import CanopenTwin
 from tests.conftest import frame
@@ -74,3 +78,23 @@ class Bench:
 
     def _check_drained(self, where: str) -> None:
         assert not self.pending, f"before {where!r}: unlisted frames {self.pending}"
+
+    def masks(self, prefix: str) -> tuple[int, int, int]:
+        """The red, green and blue bit masks of the LED objects ``PREFIX_red`` etc."""
+        objects = self.twin.objects
+        return (objects.get_int(f"{prefix}_red"), objects.get_int(f"{prefix}_green"),
+                objects.get_int(f"{prefix}_blue"))
+
+
+def replayed(examples: Mapping[str, str], on: str = "bench") -> Callable[..., None]:
+    """One test that replays each of a manual's ``examples`` (its section and subject -> its
+    trace) on the test module's fixture ``on``: a case per example, named by it, so that every
+    manual's traces go through one replay however many models there are."""
+
+    @pytest.mark.parametrize("example", list(examples))
+    def test_example(request: pytest.FixtureRequest, example: str) -> None:
+        bench = request.getfixturevalue(on)
+        assert isinstance(bench, Bench)
+        bench.replay(examples[example])
+
+    return test_example

@@ -107,9 +107,12 @@ def _device(target: Target, start: bool = False, check: Check | None = None
             ) -> Iterator[Any]:
     """The driver of the device at the target's node id: the model its 100Bh names (or
     ``--model``), driven by that model's driver class from the registry. ``check`` runs
+    first against every model of the kind that may answer (before the bus opens), then
     against that model before anything but the identity reads is sent, then ``start`` starts
     the device (NMT): a bad argument never reaches it."""
     kind, node_id = target
+    if check is not None:
+        _arguments(kind, check)
     address = _j1939_address()
     if address is not None:
         _refuse_unless_j1939_has(click.get_current_context().info_name or "")
@@ -335,7 +338,6 @@ for group in (keypad, keybox):
             within("heartbeat period in ms", milliseconds,
                    entry_spans(descriptions, "producer_heartbeat_time"))
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             device.set_heartbeat(milliseconds / 1000)
         _done(target, f"heartbeat every {milliseconds} ms" if milliseconds else "heartbeat off")
@@ -358,7 +360,6 @@ for group in (keypad, keybox):
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             within("node id", new_id, entry_spans(descriptions, "node_id"))
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             if new_id != target[1]:
                 device.check_free(new_id)  # before asking: a taken id is refused anyway
@@ -384,7 +385,6 @@ for group in (keypad, keybox):
                 raise ValueError(f"bit rate {bit_rate} bit/s is not one of "
                                  f"{', '.join(map(str, rates))}")
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             confirm(f"The {target[0]} will leave this bus for {bit_rate} bit/s at its next "
                      "reset", yes)
@@ -408,6 +408,35 @@ for group in (keypad, keybox):
                      "heartbeat...) goes back to its factory value at the next reset", yes)
             device.restore_factory_defaults(confirm=True)
         _done(target, "factory defaults restored; they apply at the next reset")
+
+    @group.command("read")
+    @click.argument("name")
+    @bus_options
+    @node_id_option
+    @click.pass_obj
+    def read(target: Target, name: str) -> None:
+        """Read one object of the model's dictionary by NAME (as ``export eds`` lists them,
+        e.g. encoder_1_top)."""
+        with _device(target) as device:
+            entry = _entry(device, name)
+            value = device.read(name)
+        shown = f"{value} ({value:#x})" if isinstance(value, int) else value
+        click.echo(f"{name} ({entry.index:04X}h/{entry.subindex:02X}): {shown}")
+
+    @group.command("write")
+    @click.argument("name")
+    @click.argument("value")
+    @bus_options
+    @node_id_option
+    @click.pass_obj
+    def write(target: Target, name: str, value: str) -> None:
+        """Write one object of the model's dictionary by NAME; VALUE is checked against the
+        model's valid values first."""
+        with _device(target) as device:
+            entry = _entry(device, name)
+            number: int | str = value if entry.data_type.is_string else parse_int(value)
+            device.write(name, number)
+        _done(target, f"{name} ({entry.index:04X}h/{entry.subindex:02X}) = {value}")
 
 
 def _set_j1939_address(target: Target, address: int, yes: bool) -> None:
@@ -456,7 +485,6 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
             if name is not None:
                 known(name)
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         if device.j1939 is None:  # CANopen: the LED PDO carries every key, so read them first
@@ -482,7 +510,6 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
         if level is not None:
             within("backlight level", level, entry_spans(descriptions, "backlight_brightness"))
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_backlight(colour, level)
@@ -502,7 +529,6 @@ def brightness(target: Target, level: int) -> None:
     def check(descriptions: Sequence[DeviceDescription]) -> None:
         within("brightness", level, entry_spans(descriptions, "indicator_brightness"))
 
-    _arguments(target[0], check)
     with _device(target, start=True, check=check) as device:
         assert isinstance(device, Keypad)
         device.set_brightness(level)
@@ -519,7 +545,6 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             within("pin", pin, merged(spans_of(d.face.pin_numbers) for d in descriptions))
 
-        _arguments(target[0], check)
         with _device(target, check=check) as device:
             getattr(device, action)(pin)
         _done(target, done.format(pin=pin))
@@ -565,7 +590,6 @@ def pwm(target: Target, pins: str, duty: str) -> None:
         else:
             within("PWM duty", level, ((0, top),))
 
-    _arguments(target[0], check)
     with _device(target, check=check) as device:
         assert isinstance(device, Keybox)
         device.set_pwm(chosen, tenths)
@@ -678,37 +702,6 @@ def inputs(target: Target) -> None:
         parts = ([f"{volts[number]:.2f} V"] if number in volts else []) + (
             [f"digital {'high' if levels[number] else 'low'}"] if number in levels else [])
         click.echo(f"IN{number}: {', '.join(parts)}")
-
-
-for group in (keypad, keybox):
-    @group.command("read")
-    @click.argument("name")
-    @bus_options
-    @node_id_option
-    @click.pass_obj
-    def read(target: Target, name: str) -> None:
-        """Read one object of the model's dictionary by NAME (as ``export eds`` lists them,
-        e.g. encoder_1_top)."""
-        with _device(target) as device:
-            entry = _entry(device, name)
-            value = device.read(name)
-        shown = f"{value} ({value:#x})" if isinstance(value, int) else value
-        click.echo(f"{name} ({entry.index:04X}h/{entry.subindex:02X}): {shown}")
-
-    @group.command("write")
-    @click.argument("name")
-    @click.argument("value")
-    @bus_options
-    @node_id_option
-    @click.pass_obj
-    def write(target: Target, name: str, value: str) -> None:
-        """Write one object of the model's dictionary by NAME; VALUE is checked against the
-        model's valid values first."""
-        with _device(target) as device:
-            entry = _entry(device, name)
-            number: int | str = value if entry.data_type.is_string else parse_int(value)
-            device.write(name, number)
-        _done(target, f"{name} ({entry.index:04X}h/{entry.subindex:02X}) = {value}")
 
 
 def _entry(device: Any, name: str) -> ObjectEntry:

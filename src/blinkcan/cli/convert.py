@@ -17,6 +17,7 @@ from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.targets import check_target, writing
 from blinkcan.errors import BlinkcanError
 from blinkcan.formats.logs import FrameWriter, LogError, read_messages
+from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 
 
 @click.command("convert")
@@ -27,21 +28,28 @@ def convert(source: str, target: str, force: bool) -> None:
     """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap.
     Every frame is kept whole (identifier, kind, flags, data, channel, time) where TARGET's
     format can hold it; what it cannot (e.g. .csv: channel, CAN FD flags) is counted, named
-    and explained, one line each."""
+    and explained, one line each. A line of SOURCE that is no frame is named and counted,
+    the frames after it converted, and the exit status is 1 (no format holds such a line)."""
     check_target(target, force)
     unread: LogError | None = None
+    unreadable = UnreadableCount()
     try:
         with writing(target), FrameWriter(target, replace=force) as writer:
             try:
-                for message in read_messages(source):
-                    writer.write_message(message)
+                for message in read_messages(source, unreadable=True):
+                    if isinstance(message, UnreadableLine):
+                        unreadable.add(message)
+                    else:
+                        writer.write_message(message)
             except LogError as error:
                 if not writer.count:
                     raise  # nothing read: no file at all
-                # the frames before the line that cannot be read are kept (a capture cut off
-                # by a killed logger ends so): nothing recorded is lost
+                # the frames before what ended the reading are kept (a line over 4096 bytes:
+                # not a candump log from there on): nothing recorded is lost
                 unread = error
     except LogError as error:
+        for bad in unreadable.named:
+            click.echo(f"{source}: {bad}", err=True)
         raise click.ClickException(str(error)) from None
     click.echo(f"{writer.count} frames written to {target}", err=True)
     if (skipped := writer.skipped_text()) is not None:
@@ -51,6 +59,13 @@ def convert(source: str, target: str, force: bool) -> None:
     if unread is not None:
         raise click.ClickException(f"{unread}; the {writer.count} frames before it are in "
                                    f"{target}")
+    if unreadable.count:
+        for bad in unreadable.named:
+            click.echo(f"{source}: {bad}", err=True)
+        # a candump comment would hold the line, but readers skip comments: it would be
+        # hidden again, so the exit status says it
+        raise click.ClickException(unreadable.summary(
+            source, f"not in {target}, which holds frames only", writer.count))
 
 
 class _StopError(BlinkcanError):

@@ -18,6 +18,7 @@ from blinkcan.decode import Decoder, Event
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.logs import LogError, describe_frame, frame_kind, read_log
+from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # a candump log decodes without python-can (start-up: issue 22)
@@ -118,43 +119,15 @@ def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Prog
                       absolute: bool = False) -> None:
     """Every frame's line on stdout: JSON, or the text with the frame (and a progress
     display on a terminal): its time since the first frame, or with ``absolute`` the wall
-    clock."""
-    lines: list[str] = []  # written in batches (one write per line costs a tenth of decoding)
-    add = lines.append
+    clock. A line of the log that is no frame is in the output in its place (JSON: an
+    ``unreadable`` object with its text), named on stderr and counted (issue 23)."""
+    output = _Output()
+    unreadable = UnreadableCount()
     try:
         if as_json:
-            json_line = decoder.json_line
-            for timestamp, frame in read_log(file):
-                if isinstance(frame, Frame):
-                    add(json_line(frame, timestamp))
-                else:
-                    add(json.dumps(other_event(decoder, frame).to_json()))
-                if len(lines) >= _BATCH:
-                    _write(lines)
-            return
-        task = progress.add_task("decode") if progress is not None else None
-        if progress is not None:
-            progress.start()
-        start: float | None = None
-        idents = _IdentColumns()
-        text_of = decoder.text
-        for count, (timestamp, item) in enumerate(read_log(file), start=1):
-            if isinstance(item, Frame):
-                frame, event = item, text_of(item, timestamp)
-            else:
-                other = other_event(decoder, item)
-                frame, event = other.frame, str(other)
-            ident = idents[frame.can_id, frame.extended]
-            if absolute:
-                shown = iso_utc(timestamp)
-            else:
-                start = timestamp if start is None else start
-                shown = f"{timestamp - start:12.6f}"
-            add(f"{shown}  {ident}  {frame.data.hex(' ').upper():<23}  {event}")
-            if len(lines) >= _BATCH:
-                _write(lines)
-                if progress is not None and task is not None:
-                    progress.update(task, completed=count)
+            _json_lines(decoder, file, output, unreadable)
+        else:
+            _text_lines(decoder, file, output, unreadable, progress, absolute)
     except LogError as error:
         raise click.ClickException(str(error)) from None
     except BrokenPipeError:
@@ -162,11 +135,90 @@ def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Prog
     finally:
         if progress is not None:
             progress.stop()
-        if lines:  # what was decoded before an error is written before its message
+        if output.lines:  # what was decoded before an error is written before its message
             try:
-                _write(lines)
+                output.write()
             except BrokenPipeError:
                 sys.stderr.close()
+        if unreadable.count and not sys.stderr.closed:
+            for line in unreadable.named:
+                click.echo(f"{file}: {line}", err=True)
+            click.echo(unreadable.summary(file, "in the output as 'unreadable', in place",
+                                          output.written - unreadable.count), err=True)
+
+
+class _Output:
+    """stdout's lines, written in batches (one write per line costs a tenth of decoding)."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.written = 0
+
+    def write(self) -> None:
+        self.written += len(self.lines)
+        _write(self.lines)
+
+
+def _json_lines(decoder: Decoder, file: str, output: _Output,
+                unreadable: UnreadableCount) -> None:
+    lines = output.lines
+    add = lines.append
+    json_line = decoder.json_line
+    for timestamp, frame in read_log(file):
+        if isinstance(frame, Frame):
+            add(json_line(frame, timestamp))
+        elif isinstance(frame, UnreadableLine):
+            unreadable.add(frame)
+            add(json.dumps(frame.to_json()))
+        else:
+            add(json.dumps(other_event(decoder, frame).to_json()))
+        if len(lines) >= _BATCH:
+            output.write()
+
+
+def _text_lines(decoder: Decoder, file: str, output: _Output, unreadable: UnreadableCount,
+                progress: Progress | None, absolute: bool) -> None:
+    lines = output.lines
+    add = lines.append
+    task = progress.add_task("decode") if progress is not None else None
+    if progress is not None:
+        progress.start()
+    start: float | None = None
+    idents = _IdentColumns()
+    text_of = decoder.text
+    for timestamp, item in read_log(file):
+        if isinstance(item, Frame):
+            frame, event = item, text_of(item, timestamp)
+        elif isinstance(item, UnreadableLine):
+            unreadable.add(item)
+            add(_unreadable_text(item, start, absolute))
+            continue
+        else:
+            other = other_event(decoder, item)
+            frame, event = other.frame, str(other)
+        ident = idents[frame.can_id, frame.extended]
+        if absolute:
+            shown = iso_utc(timestamp)
+        else:
+            start = timestamp if start is None else start
+            shown = f"{timestamp - start:12.6f}"
+        add(f"{shown}  {ident}  {frame.data.hex(' ').upper():<23}  {event}")
+        if len(lines) >= _BATCH:
+            output.write()
+            if progress is not None and task is not None:
+                progress.update(task, completed=output.written)
+
+
+def _unreadable_text(line: UnreadableLine, start: float | None, absolute: bool) -> str:
+    """The text output's line for a log line that is no frame: its time where it has one
+    (and the clock has started), then what is wrong with it."""
+    if line.time is not None and absolute:
+        shown = iso_utc(line.time)
+    elif line.time is not None and start is not None:
+        shown = f"{line.time - start:12.6f}"
+    else:
+        shown = " " * (len(iso_utc(0.0)) if absolute else 12)
+    return f"{shown}  {'?':>8}  {'':<23}  unreadable {line}"
 
 
 #: lines written at once

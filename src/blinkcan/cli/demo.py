@@ -83,6 +83,14 @@ class Controller:
             else:
                 self.keybox.off(key)
 
+    def settle(self, timeout: float = 5.0) -> None:
+        """Wait until the controller has taken every frame the devices sent so far and done
+        what they asked: the Keybox answers the controller's look at its outputs (SDO) after
+        those frames (one emulator, one bus: in order), then the worker's queue is waited
+        out. A fixed sleep was too short for a loaded host."""
+        self.keybox.states()
+        self.idle(timeout)
+
     def idle(self, timeout: float = 5.0) -> None:
         """Wait until the worker has done what was asked so far."""
         done = threading.Event()
@@ -226,8 +234,7 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
             for step in SCRIPT:
                 show.say(f"== {step.title}")
                 step.act(emulator, keypad_twin, keybox_twin)
-                time.sleep(0.05)
-                controller.idle()
+                controller.settle()
                 time.sleep(max(pause, 0.05))
                 show.draw(step.title)
             if pause:  # the keypad plays its show again after the power cycle, then the LEDs

@@ -30,6 +30,7 @@ from blinkcan.decode import Decoder, Event
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.decode.view import BusView
 from blinkcan.formats.logs import LogError, read_log
+from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import to_frame
 
@@ -173,10 +174,14 @@ def _replay(log_file: str, speed: float, duration: float | None,
     started = time.monotonic()
     end = None if duration is None else started + duration
     first: float | None = None
+    unreadable = UnreadableCount()
     try:
         with _screen(picture, console) as live:
             shown = started
             for frame_time, item in read_log(log_file):
+                if isinstance(item, UnreadableLine):  # no frame: named and counted below
+                    unreadable.add(item)
+                    continue
                 first = frame_time if first is None else first
                 wait = replay_wait(first, frame_time, started, time.monotonic(), speed)
                 if end is not None and time.monotonic() + wait > end:
@@ -194,3 +199,8 @@ def _replay(log_file: str, speed: float, duration: float | None,
         raise click.ClickException(str(error)) from None
     except KeyboardInterrupt:
         pass
+    finally:
+        for line in unreadable.named:
+            click.echo(f"{log_file}: {line}", err=True)
+        if unreadable.count:
+            click.echo(unreadable.summary(log_file, "skipped"), err=True)

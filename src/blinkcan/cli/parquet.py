@@ -18,6 +18,8 @@ from blinkcan.cli.extras import install_command
 if TYPE_CHECKING:
     from rich.progress import Progress
 
+    from blinkcan.fleet.task import FileResult
+
 
 def check_extra() -> None:
     """One line naming the install command when the [fleet] extra is missing."""
@@ -42,11 +44,21 @@ def _progress_bar(total: int) -> Progress:
     return progress
 
 
+def unreadable_text(result: FileResult) -> str:
+    """"x.log: 3 lines could not be read (named above): kept as 'unreadable' rows with their
+    text; its 2,998 frames are in the dataset"."""
+    plural = "s" if result.unreadable != 1 else ""
+    more = f", the first {len(result.unreadable_lines)}" \
+        if result.unreadable > len(result.unreadable_lines) else ""
+    return (f"{result.source}: {result.unreadable:,} line{plural} could not be read (named "
+            f"above{more}): kept as 'unreadable' row{plural} with {'their' if plural else 'its'}"
+            f" text; its {result.frames:,} frames are in the dataset")
+
+
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                       devices: dict[int, str]) -> None:
     check_extra()
     from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
-    from blinkcan.fleet.task import FileResult  # noqa: PLC0415
 
     total = len(log_files(files))
     start = time.monotonic()
@@ -80,9 +92,10 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
             say(f"cannot decode {result.source}: {result.error}")
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
             frames += result.frames
-        if result.cut_off is not None:
-            say(f"{result.source}: {result.cut_off}; the {result.frames:,} frames before it "
-                "are in the dataset")
+        if result.unreadable:
+            for line in result.unreadable_lines:
+                say(f"{result.source}: {line}")
+            say(unreadable_text(result))
         show(advance=1)
 
     frames_heard: Callable[[int], None] | None = on_frames if jobs == 1 else None

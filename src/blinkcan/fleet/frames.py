@@ -20,6 +20,7 @@ from blinkcan.decode.decoder import Decoder, Event, Kind
 from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows
 from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.logs import describe_frame, frame_kind
+from blinkcan.formats.unreadable import UnreadableLine
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:
@@ -39,9 +40,9 @@ class Segment:
 
     times: list[float] = field(default_factory=list)
     channels: list[str | None] = field(default_factory=list)
-    ids: list[int] = field(default_factory=list)
-    extended: list[bool] = field(default_factory=list)
-    data: list[bytes] = field(default_factory=list)
+    ids: list[int | None] = field(default_factory=list)  # None: an unreadable line
+    extended: list[bool | None] = field(default_factory=list)
+    data: list[bytes | None] = field(default_factory=list)
     nodes: list[int | None] = field(default_factory=list)
     models: list[str | None] = field(default_factory=list)
     texts: list[str] = field(default_factory=list)
@@ -67,6 +68,19 @@ class Segment:
 
     def __len__(self) -> int:
         return len(self.texts)
+
+    def add_unreadable(self, line: UnreadableLine, time: float) -> None:
+        """A line of the log that is no frame: an ``unreadable`` row with its raw text, its
+        line number as the value, and no identifier or data (issue 23)."""
+        self.times.append(time)
+        self.channels.append(None)
+        self.ids.append(None)
+        self.extended.append(None)
+        self.data.append(None)
+        self.nodes.append(None)
+        self.models.append(None)
+        self.texts.append(line.text)
+        self.add_rows([Detail("unreadable", value=line.number)])
 
     def number(self, detail: Detail) -> int:
         """The number of a detail in ``details`` (added if new)."""
@@ -138,7 +152,14 @@ class FrameDecoder:
                 position = self._decode_run(block, position, other, segment, limit)
                 if segment.rows >= limit:
                     return position
-            event = other_event(self._decoder, others[other])
+            item = others[other]
+            if isinstance(item, UnreadableLine):
+                segment.add_unreadable(item, block.times[other])
+                position = other + 1
+                if segment.rows >= limit:
+                    return position
+                continue
+            event = other_event(self._decoder, item)
             node, model, details = self._rows.rows(event)
             frame = event.frame
             segment.times.append(block.times[other])

@@ -22,7 +22,7 @@ from blinkcan.devices.registry import describe_device
 
 #: the event kinds of the table, in the order the schema documents them
 KINDS = ("key", "led", "output", "fault", "heartbeat", "nmt", "sdo", "j1939", "pdo", "sync",
-         "remote", "error", "undecoded")
+         "remote", "error", "undecoded", "unreadable")
 _DARK = (0, 0, 0)
 _LED_STATES = {"led_on": "on", "led_blink": "blink"}
 _COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))

@@ -26,8 +26,8 @@ SCHEMA = pa.schema([
     _field("time", pa.timestamp("us", tz="UTC"), doc="when the frame was logged"),
     _field("source", pa.string(), nullable=False, doc="the log file, as an absolute path"),
     _field("channel", pa.string(), doc="the log's channel (can0, 1), null when it has none"),
-    _field("can_id", pa.int32(), nullable=False, doc="11- or 29-bit identifier"),
-    _field("extended", pa.bool_(), nullable=False, doc="29-bit identifier"),
+    _field("can_id", pa.int32(), doc="11- or 29-bit identifier (null: an unreadable line)"),
+    _field("extended", pa.bool_(), doc="29-bit identifier (null: an unreadable line)"),
     _field("node", pa.int16(), doc="CANopen node id or J1939 address the row is about"),
     _field("kind", pa.string(), nullable=False, doc="rows.KINDS"),
     _field("key", pa.int16(), doc="key number (key and led rows)"),
@@ -35,8 +35,10 @@ SCHEMA = pa.schema([
     _field("state", pa.string(), doc="pressed/released, on/blink, high/off, fault/cleared, "
                                       "the NMT state, the SDO step, unchanged"),
     _field("colour", pa.string(), doc="LED colour (led rows)"),
-    _field("value", pa.int64(), doc="a number the event carries (SDO value, level, ...)"),
-    _field("text", pa.string(), nullable=False, doc="what blinkcan decode prints"),
-    _field("data", pa.binary(), nullable=False, doc="the frame's data bytes"),
+    _field("value", pa.int64(), doc="a number the event carries (SDO value, level, ...; "
+                                     "an unreadable line's line number)"),
+    _field("text", pa.string(), nullable=False,
+           doc="what blinkcan decode prints; an unreadable line's text as the log holds it"),
+    _field("data", pa.binary(), doc="the frame's data bytes (null: an unreadable line)"),
 ])
 PARTITIONS = ("model", "date")

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, BinaryIO, TextIO
 from blinkcan.formats.candump import read_candump_columns
 from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.logs import LogError, frame_kind, read_messages
+from blinkcan.formats.unreadable import UnreadableLine
 
 if TYPE_CHECKING:  # python-can loads where a log needs it: a candump log decodes without it
     import can
@@ -82,15 +83,20 @@ class _ZstdReader(io.RawIOBase):
 
 def _zstd_text(path: Path) -> TextIO:
     reader = io.BufferedReader(_ZstdReader(path.open("rb")))
-    return io.TextIOWrapper(reader, encoding="utf-8")
+    return io.TextIOWrapper(reader, encoding="utf-8", errors=_BYTES_KEPT)
+
+
+#: a byte that is not UTF-8 read as a surrogate escape: its line is unreadable, the others
+#: of its block are read (formats/candump.py)
+_BYTES_KEPT = "surrogateescape"
 
 
 def _open_text(path: Path, compression: str) -> TextIO:
     if compression == ".gz":
-        return gzip.open(path, "rt", encoding="utf-8")
+        return gzip.open(path, "rt", encoding="utf-8", errors=_BYTES_KEPT)
     if compression == ".zst":
         return _zstd_text(path)
-    return path.open(encoding="utf-8")
+    return path.open(encoding="utf-8", errors=_BYTES_KEPT)
 
 
 def _candump(path: Path, compression: str) -> Iterator[FrameColumns]:
@@ -98,11 +104,14 @@ def _candump(path: Path, compression: str) -> Iterator[FrameColumns]:
         yield from read_candump_columns(stream)
 
 
-def message_columns(messages: Iterable[can.Message], block: int = BLOCK
+def message_columns(messages: Iterable[can.Message | UnreadableLine], block: int = BLOCK
                     ) -> Iterator[FrameColumns]:
     """python-can's messages (any format's reader) as blocks of ``block`` frames."""
     columns = FrameColumns()
     for message in messages:
+        if isinstance(message, UnreadableLine):
+            columns.add_unreadable(message)
+            continue
         channel = None if message.channel is None else str(message.channel)
         if frame_kind(message) == "data":
             columns.times.append(message.timestamp)
@@ -129,7 +138,7 @@ def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameCo
             else:
                 with _ZstdReader(path.open("rb")) as source:
                     shutil.copyfileobj(source, target)
-        yield from message_columns(read_messages(Path(name)))
+        yield from message_columns(read_messages(Path(name), unreadable=True))
     finally:
         os.unlink(name)
 
@@ -146,4 +155,4 @@ def read_columns(path: str | os.PathLike[str]) -> Iterator[FrameColumns]:
         return _candump(source, compression)
     if compression:
         return _decompressed(source, suffix, compression)
-    return message_columns(read_messages(source))
+    return message_columns(read_messages(source, unreadable=True))

@@ -13,7 +13,8 @@ Whole or nothing, and never twice:
   skipped unless ``force``.
 
 ``<key>`` is a hash of the source's absolute path, so one source always writes the same names.
-A file that cannot be read is a failed result with the reason, never an exception.
+A file that cannot be read is a failed result with the reason, never an exception; a line
+that is no frame is an ``unreadable`` row, counted and named in the result (and the manifest).
 """
 
 from __future__ import annotations
@@ -36,8 +37,8 @@ from blinkcan.fleet.frames import FrameDecoder, Segment
 from blinkcan.fleet.schema import ROWS_PER_GROUP
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.writer import PartitionWriter
-from blinkcan.formats.log_source import CutOffError
 from blinkcan.formats.logs import LogError
+from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 
 META = "_blinkcan"
 #: how often (in frames) a local task reports its progress
@@ -60,6 +61,10 @@ class FileResult:
     #: a decoded file's last line that was cut off (a logger killed mid-write): every frame
     #: before it is in the dataset, the line is named here
     cut_off: str | None = None
+    #: the lines of a decoded file that are no frame (each an ``unreadable`` row with its
+    #: text), and the first few of them named
+    unreadable: int = 0
+    unreadable_lines: tuple[str, ...] = ()
 
 
 def source_key(source: str) -> str:
@@ -155,11 +160,13 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
     if not force and old is not None and all(old.get(k) == v for k, v in identity.items()):
         outputs = old.get("outputs", [])
         return FileResult(path, "skipped", int(old.get("frames", 0)), int(old.get("rows", 0)),
-                          tuple(outputs))
+                          tuple(outputs), cut_off=old.get("cut_off"),
+                          unreadable=int(old.get("unreadable", 0)),
+                          unreadable_lines=tuple(old.get("unreadable_lines", ())))
     attempt = f"{store.temporary}/{store.key}-{uuid.uuid4().hex}"
     writer = PartitionWriter(store.fs, attempt, f"{store.key}.parquet", path, rows_per_group)
     try:
-        frames, cut_off = _decode_into(writer, path, devices, progress)
+        frames, unreadable = _decode_into(writer, path, devices, progress)
         outputs = writer.close()
     except Exception as error:  # a file that cannot be read (or decoded): named and skipped
         writer.abandon()
@@ -169,31 +176,32 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
         writer.abandon()
         store.remove(attempt)
         raise
-    manifest = {**identity, "outputs": outputs, "frames": frames, "rows": writer.rows}
+    cut_off = None if unreadable.cut_off is None else str(unreadable.cut_off)
+    named = [str(line) for line in unreadable.named]
+    manifest = {**identity, "outputs": outputs, "frames": frames, "rows": writer.rows,
+                "unreadable": unreadable.count, "unreadable_lines": named, "cut_off": cut_off}
     store.commit(attempt, outputs, manifest)
-    return FileResult(path, "decoded", frames, writer.rows, tuple(outputs), cut_off=cut_off)
+    return FileResult(path, "decoded", frames, writer.rows, tuple(outputs), cut_off=cut_off,
+                      unreadable=unreadable.count, unreadable_lines=tuple(named))
 
 
 def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] | None,
-                 progress: Callable[[int], None] | None) -> tuple[int, str | None]:
-    """The frames decoded, and the cut-off last line (a capture ends so when its logger was
-    killed: the frames before it are kept, the file is decoded, the line is named)."""
+                 progress: Callable[[int], None] | None) -> tuple[int, UnreadableCount]:
+    """The frames decoded, and the lines that are no frame (each an ``unreadable`` row; a
+    capture whose logger was killed ends in one, cut off)."""
     frames = FrameDecoder(make_decoder(devices))
     segment = Segment()
     limit = writer.rows_per_group
     count = reported = 0
-    cut_off = None
-    blocks = read_columns(path)
-    while True:
-        try:
-            block = next(blocks, None)
-        except CutOffError as error:
-            cut_off = str(error)
-            break
-        if block is None:
-            break
+    unreadable = UnreadableCount()
+    for block in read_columns(path):
         position, size = 0, len(block)
-        while position < size:
+        if block.others:
+            for item in block.others.values():
+                if isinstance(item, UnreadableLine):
+                    unreadable.add(item)
+                    size -= 1
+        while position < len(block):
             position = frames.decode(block, position, segment, limit)
             if segment.rows >= limit:
                 writer.write(segment)
@@ -205,7 +213,7 @@ def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] 
     writer.write(segment)
     if progress is not None and count > reported:
         progress(count - reported)
-    return count, cut_off
+    return count, unreadable
 
 
 def _reason(error: BaseException) -> str:

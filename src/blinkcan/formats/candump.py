@@ -12,23 +12,24 @@ python-can's by construction, with one correction where python-can loses what th
 path against python-can's reader (plus that correction) on generated logs.
 
 Lines are read with a bounded length (:func:`~blinkcan.formats.log_source.bounded_lines`): a
-file without newlines is refused at its first line, never read whole.
+file without newlines is refused at its first line, never read whole. A line that is no frame
+(bad digits, a byte that is not UTF-8, the half line of a capture cut off) is an
+:class:`~blinkcan.formats.unreadable.UnreadableLine` in its place and reading goes on (issue
+23); comments (``#``) and blank lines are skipped, as candump-style tools do.
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
+import math
+import re
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, TextIO
 
 from blinkcan.formats.columns import FrameColumns
-from blinkcan.formats.log_source import (
-    CutOffError,
-    LineTooLongError,
-    UnterminatedLine,
-    bounded_line_blocks,
-    bounded_lines,
-)
+from blinkcan.formats.log_source import LineTooLongError, UnterminatedLine, bounded_line_blocks
+from blinkcan.formats.unreadable import UnreadableLine, printable, shown
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
@@ -41,25 +42,38 @@ _new_tuple = tuple.__new__  # Frame.trusted without the call: the ids and data a
 
 
 def _python_can(line: str) -> can.Message | None:
-    """The message python-can reads from one line (None for a blank line)."""
+    """The message python-can reads from one line (None for a blank line); ValueError for
+    what :func:`_checked` refuses."""
     from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
 
-    fields = line.split()
-    if 0 < len(fields) < 3:  # e.g. the last line of a capture cut off by a killed candump
-        raise _plainly(line, ValueError(line))
-    if len(fields) >= 3 and len(fields[2].partition("#")[0]) > 8:
-        # candump writes 3 hex digits (11-bit) or 8 (29-bit, with the error flag): python-can
-        # would read the flag bits of a longer identifier and call the line an error frame
-        raise ValueError(f"identifier {fields[2].partition('#')[0]} has more than 8 hex digits")
+    _checked(line.split(), line)
     reader = CanutilsLogReader(io.StringIO(line))
     message = next(iter(reader), None)
     return restore_error_details(message, line) if message is not None else None
 
 
-def _shown(line: str) -> str:
-    """A line as an error message names it: quoted, at most 40 characters."""
-    text = line.strip()
-    return repr(text if len(text) <= 40 else text[:40] + "...")
+def _checked(fields: list[str], line: str) -> None:
+    """Refuse a line python-can would misread (``fields``: its words): not whole (a capture
+    cut off mid-line), an identifier over 8 digits, data of an odd number of hex digits."""
+    if 0 < len(fields) < 3 or (len(fields) >= 3 and "#" not in fields[2]):
+        # e.g. the last line of a capture cut off by a killed candump
+        raise ValueError(_not_whole(line))
+    if len(fields) < 3:
+        return
+    ident, _, body = fields[2].partition("#")
+    if len(ident) > 8:
+        # candump writes 3 hex digits (11-bit) or 8 (29-bit, with the error flag): python-can
+        # would read the flag bits of a longer identifier and call the line an error frame
+        raise ValueError(f"identifier {ident} has more than 8 hex digits")
+    data = body[2:] if body[:1] == "#" else body  # CAN FD: '#', its flags digit, the data
+    if data[:1] not in ("R", "r") and len(data) % 2:
+        # can-utils' parse_canframe (lib.c) refuses a lone digit: python-can would read
+        # '0102030' (a line cut inside its data) as 01 02 03 00
+        raise ValueError(f"data {data} has an odd number of hex digits")
+
+
+def _not_whole(line: str) -> str:
+    return f"{shown(line)} is not a whole candump line ((TIME) CHANNEL ID#DATA)"
 
 
 def restore_error_details(message: can.Message, line: str) -> can.Message:
@@ -89,32 +103,66 @@ def with_error_details(messages: Iterator[can.Message], lines: Iterator[str]
         yield restore_error_details(message, line)
 
 
-def candump_messages(stream: TextIO) -> Iterator[can.Message]:
+def candump_messages(stream: TextIO) -> Iterator[can.Message | UnreadableLine]:
     """python-can's messages of a candump log, each error frame completed from its line, the
-    lines bounded: one pass, so a stream is read once."""
-    last = [""]  # the line python-can's reader read last: the one of the message it yields
-    number = [0]  # and its number
-
-    def lines() -> Iterator[str]:
-        for line in bounded_lines(stream, "candump"):
-            last[0] = line
-            number[0] += 1
-            yield line
-
+    lines bounded, in one pass (a stream is read once); a line that is not a frame is an
+    :class:`UnreadableLine` in its place, and reading goes on. Comments (``#``) and blank
+    lines are skipped."""
     from can.io.canutils import CanutilsLogReader  # noqa: PLC0415
 
-    messages = iter(CanutilsLogReader(lines()))  # type: ignore[arg-type]  # iterates it only
+    last = [""]  # the line python-can's reader read last: the one of the message it yields
+    number = [0]  # and its number
+    passed: list[UnreadableLine] = []  # lines refused before python-can saw them
+    cut = [False]  # the line is the file's last, no newline after it
+    frames = 0
+    first: UnreadableLine | None = None
+
+    def lines() -> Iterator[str]:
+        for block in bounded_line_blocks(stream, "candump"):
+            suspect = type(block) is not list  # not ASCII, or the file's last line
+            cut[0] = type(block) is UnterminatedLine
+            for line in block:
+                number[0] += 1
+                fields = line.split()
+                if not fields or fields[0][0] == "#":
+                    continue
+                try:
+                    if suspect and _escaped(line):
+                        raise ValueError(f"{shown(line)} is not UTF-8 text")
+                    _checked(fields, line)
+                except ValueError as error:
+                    passed.append(_unreadable(line, number[0], error, cut[0]))
+                    continue
+                last[0] = line
+                yield line
+
+    source = lines()
+    messages = iter(CanutilsLogReader(source))  # type: ignore[arg-type]  # iterates it only
     while True:
         try:
             message = next(messages, None)
-            if message is None:
-                return
-            message = restore_error_details(message, last[0])
-        except (LineTooLongError, UnicodeDecodeError):
-            raise  # they name their place themselves
+            if message is not None:
+                message = restore_error_details(message, last[0])
+                if message.timestamp - message.timestamp:
+                    _not_finite(last[0].split()[0])
         except Exception as error:
-            raise _on_line(number[0], _plainly(last[0], error)) from error
+            if isinstance(error, LineTooLongError) or \
+                    not isinstance(error, ValueError | IndexError | KeyError | TypeError):
+                raise  # a line over MAX_LINE (not a candump log), the stream failing, ...
+            passed.append(_unreadable(last[0], number[0], error, cut[0]))
+            # python-can's reader ends with its error: a new one goes on from the next line
+            messages = iter(CanutilsLogReader(source))  # type: ignore[arg-type]
+            continue
+        if passed:
+            first = first or passed[0]
+            yield from passed
+            passed.clear()
+        if message is None:
+            break
+        frames += 1
         yield message
+    if first is not None and not frames:
+        raise ValueError(_no_frame(first))
 
 
 #: identifier texts remembered per log (then they start over): a log has few distinct ones
@@ -137,10 +185,13 @@ def _plain_id(ident: str) -> tuple[int, bool] | None:
     return can_id, size > 3
 
 
-def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
+def read_candump(stream: TextIO
+                 ) -> Iterator[tuple[float, Frame | can.Message | UnreadableLine]]:
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
-    ``can.Message`` python-can reads for anything else (remote, error, CAN FD). Lines over
-    MAX_LINE raise :class:`~blinkcan.formats.log_source.LineTooLongError`."""
+    ``can.Message`` python-can reads for anything else (remote, error, CAN FD), an
+    :class:`UnreadableLine` for a line that is no frame (its timestamp NaN where it has
+    none). Lines over MAX_LINE raise :class:`~blinkcan.formats.log_source.LineTooLongError`;
+    a log none of whose lines is a frame raises ValueError once it is read."""
     new = _new_tuple
     for block in read_candump_columns(stream):
         others = block.others
@@ -157,85 +208,123 @@ def read_candump(stream: TextIO) -> Iterator[tuple[float, Frame | can.Message]]:
 
 def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
     """The log as :class:`~blinkcan.formats.columns.FrameColumns`, a block of lines at a time,
-    each frame's channel the line's; a line that cannot be read raises once the frames before
-    it are yielded."""
-    fromhex = bytes.fromhex
+    each frame's channel the line's; a line that is not a frame is an
+    :class:`~blinkcan.formats.unreadable.UnreadableLine` among them, in its place, and
+    reading goes on. Comments (``#``) and blank lines are skipped. A log none of whose lines
+    is a frame raises ValueError once it is read."""
     idents: dict[str, tuple[int, bool] | None] = {}
     read = 0  # lines in the blocks before this one
+    frames = 0
+    first: UnreadableLine | None = None
     for lines in bounded_line_blocks(stream, "candump"):
         columns = FrameColumns()
-        add_time, add_channel, add_id = (columns.times.append, columns.channels.append,
-                                         columns.ids.append)
-        add_extended, add_data = columns.extended.append, columns.data.append
-        try:
-            for line in lines:
-                fields = line.split()
-                count = len(fields)
-                if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
-                    stamp = fields[0]
-                    ident, _, data = fields[2].partition("#")
-                    plain = idents.get(ident, _UNSEEN)
-                    if plain is _UNSEEN:
-                        if len(idents) >= _IDENTS_KEPT:
-                            idents.clear()
-                        plain = idents[ident] = _plain_id(ident)
-                    size = len(data)
-                    if plain is not None and stamp[0] == "(" and size <= 16 and not size & 1 \
-                            and data[:1] not in _NOT_DATA:
-                        try:
-                            payload = fromhex(data)
-                            timestamp = float(stamp[1:-1])
-                        except ValueError:
-                            pass
-                        else:
-                            if timestamp - timestamp:  # nan or inf: x - x is 0.0 if finite
-                                _not_finite(stamp)
-                            add_time(timestamp)
-                            add_channel(fields[1])
-                            add_id(plain[0])
-                            add_extended(plain[1])
-                            add_data(payload)
-                            continue
-                if not fields:
-                    continue
-                message = _python_can(line)
-                if message is not None:
-                    if message.timestamp - message.timestamp:
-                        _not_finite(fields[0])
-                    columns.add_other(message, fields[1] if count > 1 else None)
-        except Exception as error:
-            if columns.times:  # the frames before the line, then what is wrong with it
-                yield columns
-            # the first line of the block that reads so (a line reads the same every time)
-            raise _failed_line(lines, read + lines.index(line) + 1, error) from error
+        if type(lines) is list:
+            _read_lines(lines, columns, idents, read, False)
+        else:  # not ASCII (a byte that is not UTF-8 is a surrogate escape), or the last line
+            cut_off = type(lines) is UnterminatedLine
+            start = 0
+            for index, line in enumerate(lines):
+                if not line.isascii() and _escaped(line):
+                    _read_lines(lines[start:index], columns, idents, read + start, cut_off)
+                    columns.add_unreadable(_unreadable(
+                        line, read + index + 1, ValueError(f"{shown(line)} is not UTF-8 text"),
+                        cut_off))
+                    start = index + 1
+            _read_lines(lines[start:], columns, idents, read + start, cut_off)
         read += len(lines)
         if columns.times:
+            if columns.others:
+                unreadable = [o for o in columns.others.values() if type(o) is UnreadableLine]
+                first = first or (unreadable[0] if unreadable else None)
+                frames += len(columns.times) - len(unreadable)
+            else:
+                frames += len(columns.times)
             yield columns
+    if first is not None and not frames:
+        raise ValueError(_no_frame(first))
 
 
-def _plainly(line: str, error: Exception) -> Exception:
-    """python-can's error for a line, said as a user reads it when the line is not whole
-    (python-can says "not enough values to unpack")."""
-    if 0 < len(line.split()) < 3:
-        return ValueError(f"{_shown(line)} is not a whole candump line ((TIME) CHANNEL ID#DATA)")
-    return error
+def _read_lines(lines: list[str], columns: FrameColumns,
+                idents: dict[str, tuple[int, bool] | None], read: int, cut_off: bool) -> None:
+    """Lines ``read + 1`` on of a log into ``columns``."""
+    fromhex = bytes.fromhex
+    add_time, add_channel, add_id = (columns.times.append, columns.channels.append,
+                                     columns.ids.append)
+    add_extended, add_data = columns.extended.append, columns.data.append
+    skipped = 0  # the lines of ``lines`` so far that are no row (blank, comments)
+    rows_before = len(columns.times)
+    for line in lines:
+        fields = line.split()
+        count = len(fields)
+        if count == 3 or (count == 4 and fields[3] in _DIRECTIONS):
+            stamp = fields[0]
+            ident, hashed, data = fields[2].partition("#")
+            plain = idents.get(ident, _UNSEEN)
+            if plain is _UNSEEN:
+                if len(idents) >= _IDENTS_KEPT:
+                    idents.clear()
+                plain = idents[ident] = _plain_id(ident)
+            size = len(data)
+            if plain is not None and hashed and stamp[0] == "(" and size <= 16 \
+                    and not size & 1 and data[:1] not in _NOT_DATA:
+                try:
+                    payload = fromhex(data)
+                    timestamp = float(stamp[1:-1])
+                except ValueError:
+                    pass
+                else:
+                    if not timestamp - timestamp:  # not nan or inf: x - x is 0.0 if finite
+                        add_time(timestamp)
+                        add_channel(fields[1])
+                        add_id(plain[0])
+                        add_extended(plain[1])
+                        add_data(payload)
+                        continue
+        if not fields or fields[0][0] == "#":
+            skipped += 1
+            continue
+        number = read + len(columns.times) - rows_before + skipped + 1
+        try:
+            message = _python_can(line)
+            if message is None:  # python-can found nothing on a line that is not blank
+                raise ValueError(f"{shown(line)} holds no frame")
+            if message.timestamp - message.timestamp:
+                _not_finite(fields[0])
+        except Exception as error:  # python-can's reader raises what its parsing meets
+            columns.add_unreadable(_unreadable(line, number, error, cut_off))
+            continue
+        columns.add_other(message, fields[1])
 
 
-def _failed_line(lines: list[str], number: int, error: Exception) -> ValueError:
-    """The error of line ``number`` of ``lines``: :class:`CutOffError` when it is the file's
-    last line with no newline after it (a capture cut off by a killed logger)."""
-    failed = _on_line(number, error)
-    if isinstance(lines, UnterminatedLine):
-        return CutOffError(f"{failed}: the capture ends there, cut off")
-    return failed
+def _escaped(line: str) -> bool:
+    """The line holds a byte that is not UTF-8 (a surrogate escape)."""
+    return _SURROGATE.search(line) is not None
 
 
-def _on_line(number: int, error: Exception) -> ValueError:
-    """``error`` of a candump line, naming the line (1-based) so a user can find it."""
-    return ValueError(f"line {number}: {str(error) or type(error).__name__}")
+_SURROGATE = re.compile("[\udc80-\udcff]")
+
+
+def _unreadable(line: str, number: int, error: Exception, cut_off: bool) -> UnreadableLine:
+    """The record of line ``number``, which ``error`` says is no frame."""
+    reason = str(error) or type(error).__name__
+    if shown(line) not in reason:  # python-can's words ("not enough values to unpack")
+        reason = (_not_whole(line) if len(line.split()) < 3
+                  else f"{shown(line)} is not a candump line ({reason})")
+    stamp = line.split(maxsplit=1)[0] if line.strip() else ""
+    time = None
+    if stamp[:1] == "(" and stamp[-1:] == ")":
+        with contextlib.suppress(ValueError):
+            time = float(stamp[1:-1])
+    if time is not None and not math.isfinite(time):
+        time = None
+    return UnreadableLine(number, printable(line), reason, time, cut_off)
+
+
+def _no_frame(first: UnreadableLine) -> str:
+    """A log none of whose lines is a frame: not a candump log."""
+    return f"no line is a candump frame ({first})"
 
 
 def _not_finite(stamp: str) -> None:
-    """A candump time is seconds, a finite number (DESIGN: non-finite times are bad input);
-    raised as python-can's reader raises for a time it cannot read, so callers name the file."""
+    """A candump time is seconds, a finite number (DESIGN: non-finite times are bad input)."""
     raise ValueError(f"time {stamp} is not a finite number of seconds")

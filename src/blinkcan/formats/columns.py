@@ -3,13 +3,18 @@ writer) reads without an object per frame.
 
 Classic data frames are plain values in the lists; a frame that is not one (remote, error,
 CAN FD) keeps python-can's message in ``others`` at its position, its time and channel in the
-lists beside the others' and its identifier, flag and data as the message has them.
+lists beside the others' and its identifier, flag and data as the message has them. A line
+that is no frame (formats/unreadable.py) is in ``others`` too, in its place: its time (NaN
+where it has none) in ``times``, nothing in the other lists but a placeholder.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
+
+from blinkcan.formats.unreadable import UnreadableLine
 
 if TYPE_CHECKING:  # python-can loads where a log needs it: a candump log reads without it
     import can
@@ -25,8 +30,9 @@ class FrameColumns:
     ids: list[int] = field(default_factory=list)
     extended: list[bool] = field(default_factory=list)
     data: list[bytes] = field(default_factory=list)
-    #: the rows that are not classic data frames: position -> python-can's message
-    others: dict[int, can.Message] = field(default_factory=dict)
+    #: the rows that are not classic data frames: position -> python-can's message, or the
+    #: line that is no frame
+    others: dict[int, can.Message | UnreadableLine] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.times)
@@ -40,3 +46,12 @@ class FrameColumns:
         self.extended.append(message.is_extended_id)
         self.data.append(bytes(message.data))
 
+
+    def add_unreadable(self, line: UnreadableLine) -> None:
+        """A line that is no frame, in its place (:mod:`blinkcan.formats.unreadable`)."""
+        self.others[len(self.times)] = line
+        self.times.append(math.nan if line.time is None else line.time)
+        self.channels.append(None)
+        self.ids.append(0)
+        self.extended.append(False)
+        self.data.append(b"")

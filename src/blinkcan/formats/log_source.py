@@ -17,6 +17,7 @@ Nothing in a log is trusted, not even what its path names:
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import stat
 import sys
@@ -46,14 +47,16 @@ class LineTooLongError(BlinkcanError, ValueError):
     """A line of a text log over :data:`MAX_LINE` bytes; the message says which."""
 
 
-class CutOffError(BlinkcanError, ValueError):
-    """The last line of a text log is not whole and no newline follows it: the capture was
-    cut off there (a logger killed mid-write). Every frame before it was read."""
-
-
 class UnterminatedLine(list[str]):
     """The block :func:`bounded_line_blocks` ends with when the file's last line has no
-    newline after it: a reader that cannot read that line raises :class:`CutOffError`."""
+    newline after it: a line a reader cannot read there was cut off (a logger killed
+    mid-write)."""
+
+
+class NonAsciiLines(list[str]):
+    """A block of :func:`bounded_line_blocks` with a character that is not ASCII: text read
+    with ``errors="surrogateescape"`` holds each byte that is not UTF-8 as a surrogate there
+    (an ASCII block cannot: a reader checks only these)."""
 
 
 @dataclass(frozen=True)
@@ -69,7 +72,7 @@ class LogSource:
     @property
     def kind(self) -> str:
         """"candump", "ASC", ...: what a line-length error says the file is not."""
-        return _KIND.get(self.suffix, self.suffix)
+        return kind_of(self.suffix)
 
     @property
     def stdin(self) -> bool:
@@ -77,6 +80,11 @@ class LogSource:
 
     def __str__(self) -> str:
         return "standard input" if self.stdin else str(self.path)
+
+
+def kind_of(suffix: str) -> str:
+    """What a log of ``suffix`` is called: ".log" is "candump", ".asc" "ASC", ..."""
+    return _KIND.get(suffix, suffix)
 
 
 def log_source(path: str | os.PathLike[str]) -> LogSource:
@@ -109,13 +117,22 @@ def log_source(path: str | os.PathLike[str]) -> LogSource:
 
 
 @contextlib.contextmanager
-def open_text(source: LogSource, encoding: str | None = None) -> Iterator[TextIO]:
-    """The source as text (``encoding`` None: the locale's, as python-can reads)."""
+def open_text(source: LogSource, encoding: str | None = None,
+              errors: str | None = None) -> Iterator[TextIO]:
+    """The source as text (``encoding`` None: the locale's, as python-can reads; ``errors``
+    as :func:`open` takes it, standard input included)."""
     if source.stdin:
-        yield sys.stdin
+        if errors is None:
+            yield sys.stdin
+            return
+        stdin = io.TextIOWrapper(sys.stdin.buffer, encoding=encoding, errors=errors)
+        try:
+            yield stdin
+        finally:
+            stdin.detach()  # standard input stays open for whoever reads it next
         return
     try:
-        stream = source.path.open(encoding=encoding)
+        stream = source.path.open(encoding=encoding, errors=errors)
     except OSError as error:
         raise LogError(f"cannot read {source}: {error.strerror}") from None
     with stream:
@@ -148,13 +165,16 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
     rest = ""
     number = 0  # lines yielded so far
     while chunk := read(_CHUNK):
-        lines = (rest + chunk).split("\n") if rest else chunk.split("\n")
+        text = rest + chunk if rest else chunk
+        lines = text.split("\n")
+        if not text.isascii():  # O(1): a str knows whether it is ASCII
+            lines = NonAsciiLines(lines)
         rest = lines.pop()
         if len(rest) > MAX_LINE or (lines and max(map(len, lines)) > MAX_LINE):
             long = next((n for n, line in enumerate(lines) if len(line) > MAX_LINE),
                         len(lines))
             if long:  # the lines before it first: what a log holds before a bad line is kept
-                yield lines[:long]
+                yield type(lines)(lines[:long])
             raise LineTooLongError(f"line {number + long + 1} is over {MAX_LINE} bytes: "
                                    f"not a {kind} log")
         number += len(lines)

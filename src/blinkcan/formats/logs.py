@@ -2,7 +2,9 @@
 TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type.
 
 Reading checks what a path is and reads text in lines of a bounded length (a stream, a
-device, a file without newlines: formats/log_source.py).
+device, a file without newlines: formats/log_source.py), a ``.gz`` text log's too. A candump
+line that is no frame is an :class:`~blinkcan.formats.unreadable.UnreadableLine` in its place
+and reading goes on (formats/candump.py).
 
 Lossless: remote (RTR), error and CAN FD frames are read and written like data frames, each
 whole (formats/log_writers.py mends python-can's writers where they change one; reading mends
@@ -17,16 +19,20 @@ flush (:class:`FrameWriter`).
 
 from __future__ import annotations
 
+import contextlib
+import gzip
 import io
+import math
 import os
 import sqlite3
 import struct
 import tempfile
+import zlib
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal, TextIO, overload
 
 from blinkcan.formats.candump import candump_messages, read_candump
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
@@ -35,10 +41,12 @@ from blinkcan.formats.log_source import (
     LogError,
     LogSource,
     bounded_lines,
+    kind_of,
     log_source,
     open_binary,
     open_text,
 )
+from blinkcan.formats.unreadable import UnreadableLine
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads without it
@@ -46,8 +54,8 @@ if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads
 
     from blinkcan.formats.pcap import PcapWriter
 
-__all__ = ["FrameWriter", "LogError", "describe_frame", "frame_kind", "read_frames", "read_log",
-           "read_messages"]
+__all__ = ["FrameWriter", "LogError", "UnreadableLine", "describe_frame", "frame_kind",
+           "read_frames", "read_log", "read_messages"]
 
 
 def _read_errors() -> tuple[type[BaseException], ...]:
@@ -57,7 +65,8 @@ def _read_errors() -> tuple[type[BaseException], ...]:
     from can.io.blf import BLFParseError  # noqa: PLC0415
 
     return (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError, sqlite3.Error,
-            EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError)
+            EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError,
+            gzip.BadGzipFile, zlib.error)
 
 
 def is_pcap(path: Path) -> bool:
@@ -76,16 +85,51 @@ def frame_kind(message: can.Message) -> str:
     return "fd" if message.is_fd or len(message.data) > 8 else "data"
 
 
-def read_messages(path: str | os.PathLike[str]) -> Iterator[can.Message]:
-    """Every frame of a log file as python-can messages: data, remote, error, CAN FD. The
-    path is checked and text is read in bounded lines (formats/log_source.py)."""
-    return _messages(log_source(path))
+@overload
+def read_messages(path: str | os.PathLike[str], unreadable: Literal[False] = False
+                  ) -> Iterator[can.Message]: ...
 
 
-def _messages(source: LogSource) -> Iterator[can.Message]:
-    import can  # noqa: PLC0415
+@overload
+def read_messages(path: str | os.PathLike[str], unreadable: Literal[True]
+                  ) -> Iterator[can.Message | UnreadableLine]: ...
+
+
+def read_messages(path: str | os.PathLike[str], unreadable: bool = False
+                  ) -> Iterator[can.Message] | Iterator[can.Message | UnreadableLine]:
+    """Every frame of a log file as python-can messages: data, remote, error, CAN FD. A
+    candump line that is no frame is, with ``unreadable``, an :class:`UnreadableLine` in its
+    place (reading goes on), else a :class:`LogError` naming it. The path is checked and
+    text is read in bounded lines (formats/log_source.py)."""
+    messages = _messages(log_source(path))
+    return messages if unreadable else _strict(messages, path)
+
+
+def _strict(messages: Iterator[can.Message | UnreadableLine], path: str | os.PathLike[str]
+            ) -> Iterator[can.Message]:
+    for message in messages:
+        if isinstance(message, UnreadableLine):
+            raise LogError(f"{path}: {message}")
+        yield message
+
+
+def _text_suffix(source: LogSource) -> str | None:
+    """The text format a log is read in by lines (``.log.gz``: ``.log``), None for the
+    others (binary, or read by python-can whole)."""
+    suffix = Path(source.path.stem).suffix.lower() if source.suffix == ".gz" else source.suffix
+    if source.stream or suffix == ".log":  # a candump log reads without python-can
+        return suffix
     from can.io.generic import TextIOMessageReader  # noqa: PLC0415
     from can.io.player import MESSAGE_READERS  # noqa: PLC0415
+
+    reader_type = MESSAGE_READERS.get(suffix)
+    if reader_type is not None and issubclass(reader_type, TextIOMessageReader):
+        return suffix
+    return None
+
+
+def _messages(source: LogSource) -> Iterator[can.Message | UnreadableLine]:
+    import can  # noqa: PLC0415
 
     from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
 
@@ -96,12 +140,11 @@ def _messages(source: LogSource) -> Iterator[can.Message]:
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
-    suffix = source.suffix
-    reader_type = MESSAGE_READERS.get(suffix)
-    if source.stream or (reader_type is not None and issubclass(reader_type,
-                                                                 TextIOMessageReader)):
-        yield from _text_messages(source, MESSAGE_READERS)
+    text_suffix = _text_suffix(source)
+    if text_suffix is not None:
+        yield from _text_messages(source, text_suffix)
         return
+    suffix = source.suffix
     try:
         reader = can.LogReader(str(source.path))
     except _read_errors() as error:
@@ -114,20 +157,34 @@ def _messages(source: LogSource) -> Iterator[can.Message]:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
 
 
-def _text_messages(source: LogSource, readers: dict[str, type[can.io.generic.MessageReader]]
-                   ) -> Iterator[can.Message]:
-    """A text log's messages from python-can's reader of its format (``readers``: python-can's
-    by suffix), fed bounded lines."""
-    suffix = source.suffix
-    with open_text(source, "utf-8" if suffix == ".log" else None) as stream:
+@contextlib.contextmanager
+def _open_text(source: LogSource, encoding: str | None, errors: str | None = None
+               ) -> Iterator[TextIO]:
+    """A text log's stream, a ``.gz`` one decompressed as it is read."""
+    if source.suffix != ".gz":
+        with open_text(source, encoding, errors) as stream:
+            yield stream
+        return
+    with gzip.open(source.path, "rt", encoding=encoding, errors=errors) as compressed:
+        yield compressed
+
+
+def _text_messages(source: LogSource, suffix: str) -> Iterator[can.Message | UnreadableLine]:
+    """A text log's messages from python-can's reader of its format (``suffix``), fed bounded
+    lines; a candump log's through formats/candump.py."""
+    from can.io.player import MESSAGE_READERS  # noqa: PLC0415
+
+    candump = suffix == ".log"
+    with _open_text(source, "utf-8" if candump else None,
+                    "surrogateescape" if candump else None) as stream:
         try:
-            if suffix == ".log":
+            if candump:
                 yield from candump_messages(stream)
                 return
             # an ASC file's times count from its start date: absolute, as every other format's
             options = {"relative_timestamp": False} if suffix == ".asc" else {}
-            lines = bounded_lines(stream, source.kind)
-            for message in readers[suffix](lines, **options):  # type: ignore[arg-type]
+            lines = bounded_lines(stream, kind_of(suffix))
+            for message in MESSAGE_READERS[suffix](lines, **options):  # type: ignore[arg-type]
                 yield _as_written(message, suffix)
         except LineTooLongError as error:
             raise LogError(f"{source}: {error}") from None
@@ -147,12 +204,15 @@ def _as_written(message: can.Message, suffix: str) -> can.Message:
     return message
 
 
-def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.Message]]:
+def read_log(path: str | os.PathLike[str]
+             ) -> Iterator[tuple[float, Frame | can.Message | UnreadableLine]]:
     """(timestamp, frame) pairs: a :class:`Frame` for each classic data frame, the
-    ``can.Message`` for a remote, error or CAN FD frame. candump logs take a fast path."""
+    ``can.Message`` for a remote, error or CAN FD frame, an :class:`UnreadableLine` for a
+    candump line that is no frame (its timestamp NaN where it has none: its ``time`` says).
+    candump logs (``.gz`` too) take a fast path."""
     source = log_source(path)
-    if source.suffix == ".log":
-        with open_text(source, "utf-8") as stream:
+    if _text_suffix(source) == ".log":
+        with _open_text(source, "utf-8", "surrogateescape") as stream:
             try:
                 yield from read_candump(stream)
             except LineTooLongError as error:
@@ -162,7 +222,9 @@ def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.
         return
     trusted = Frame.trusted  # python-can (or our pcap reader) parsed and checked the frames
     for message in _messages(source):
-        if frame_kind(message) == "data":
+        if isinstance(message, UnreadableLine):
+            yield math.nan if message.time is None else message.time, message
+        elif frame_kind(message) == "data":
             yield message.timestamp, trusted(message.arbitration_id, bytes(message.data),
                                              message.is_extended_id)
         else:
@@ -170,10 +232,13 @@ def read_log(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame | can.
 
 
 def read_frames(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame]]:
-    """(timestamp, frame) pairs of the classic data frames of a log file."""
+    """(timestamp, frame) pairs of the classic data frames of a log file; a line that is no
+    frame raises :class:`LogError` naming it (nothing is skipped unsaid)."""
     for timestamp, item in read_log(path):
         if isinstance(item, Frame):
             yield timestamp, item
+        elif isinstance(item, UnreadableLine):
+            raise LogError(f"{path}: {item}")
 
 
 def _reason(error: BaseException) -> str:

@@ -61,12 +61,16 @@ class _KeyBehaviour:
         self._remove()
 
 
-class Momentary(_KeyBehaviour):
-    """State 1 while held, 0 when released."""
+class _OnOff(_KeyBehaviour):
+    """Two states: 0 shows ``off``, 1 shows ``on``."""
 
     def __init__(self, keypad: Keypad, key: int, on: str = "green", off: str = "off",
                  on_change: Callable[[int], object] | None = None) -> None:
         super().__init__(keypad, key, (off, on), on_change)
+
+
+class Momentary(_OnOff):
+    """State 1 while held, 0 when released."""
 
     def _react(self, action: str) -> None:
         if action == PRESS:
@@ -75,12 +79,8 @@ class Momentary(_KeyBehaviour):
             self._change(0)
 
 
-class Toggle(_KeyBehaviour):
+class Toggle(_OnOff):
     """Each press flips between 0 and 1."""
-
-    def __init__(self, keypad: Keypad, key: int, on: str = "green", off: str = "off",
-                 on_change: Callable[[int], object] | None = None) -> None:
-        super().__init__(keypad, key, (off, on), on_change)
 
     def _react(self, action: str) -> None:
         if action == PRESS:
