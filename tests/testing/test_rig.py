@@ -218,6 +218,12 @@ def test_golden_trace_round_trip_and_mismatch(tmp_path: Path) -> None:
     with pytest.raises(AssertionError, match="the trace has"):
         assert_matches_trace(frames[:-1], trace)
     assert frames_of(frames[:1]) == [frames[0].frame]
+    at = next(i for i in range(len(frames) - 1) if frames[i].time == frames[i + 1].time
+              and frames[i].frame != frames[i + 1].frame)
+    swapped = [*frames[:at], frames[at + 1], frames[at], *frames[at + 2:]]
+    with pytest.raises(AssertionError, match=f"frame {at}: .*same frames at this instant in "
+                                             "another order.*--blinkcan-record"):
+        assert_matches_trace(swapped, trace)
 
 
 def test_no_endpoint_receives_its_own_frames() -> None:
@@ -280,4 +286,36 @@ def test_a_reboot_in_the_middle_of_a_command_is_never_reported_as_success() -> N
         undo()
         rig.advance(1.0)
         assert keybox.state(4) == "off"  # what the rebooted Keybox really does
+        keybox.close()
+
+
+def _keypad_models() -> list[str]:
+    from blinkcan.devices.registry import load_class, models
+
+    return [model.name for model in models()
+            if issubclass(load_class(model.twin, object), KeypadTwin)]
+
+
+@pytest.mark.parametrize("model", _keypad_models())
+def test_a_press_right_after_connect_reaches_the_driver(model: str) -> None:
+    """A first test's trap: connect() sends the NMT start last and returns; a press at that
+    same instant must come after the start has reached the keypad (it was sent first), so
+    the keypad is operational and sends its key PDO (PKP §21: PDOs only when operational)."""
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15, model=model, settings={"startup_led_show": 0}))
+        keypad = Keypad.connect(rig.bus, 0x15)
+        events: list[KeyEvent] = []
+        keypad.keys.subscribe(events.append)
+        rig.press(twin, 1)
+        assert [(e.key, e.action) for e in events] == [(1, "press")]
+        assert rig.snapshot(twin)["nmt_state"] == "operational"
+        keypad.close()
+
+
+def test_the_rig_reads_a_twin_after_what_was_sent_before() -> None:
+    """rig.snapshot() after a driver call sees the device as the frames already sent left it."""
+    with Rig() as rig:
+        twin = rig.add(KeyboxTwin(node_id=0x0C))
+        keybox = Keybox(rig.bus, 0x0C)
+        assert rig.snapshot(twin)["nmt_state"] == "operational"
         keybox.close()

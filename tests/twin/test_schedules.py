@@ -26,9 +26,8 @@ from blinkcan.protocol import Frame
 from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, compose_id
 from blinkcan.protocol.sdo import EXPEDITED_DOWNLOAD_COMMAND
 from blinkcan.twin.base import CanopenTwin
-from blinkcan.twin.hooks import Periodic
 from blinkcan.twin.registry import build_twin
-from blinkcan.twin.schedule import CATCH_UP_PERIODS, Ticker, at
+from blinkcan.twin.schedule import CATCH_UP_PERIODS, Periodic, Ticker, at
 
 #: the stored settings that start, stop or time something (written most often)
 TIMING = ("producer_heartbeat_time", "tpdo1_event_timer", "tpdo2_event_timer",

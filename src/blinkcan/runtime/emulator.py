@@ -355,15 +355,24 @@ class Emulator:
         """Twin ``i``'s deadline came: ``advance`` it."""
         if deadline != self._deadline[i] or not self._running:
             return
-        self._deadline[i] = None
         self._timers[i] = None
         now = self._clock()
-        frames = self._call(i, self.twins[i].advance, now)
-        self._reschedule(i)
-        following = self._deadline[i]
+        twin = self.twins[i]
+        try:  # self._call, inlined: every periodic frame comes this way
+            frames = twin.advance(now)
+        except Exception as error:
+            self._twin_failed(i, error)
+            frames = []
+        # self._reschedule and self._plan, inlined (the timer that ran is gone already)
+        if twin.listening is not self._routes_seen[i]:
+            self._index_dirty = True
+        following = twin.next_deadline()
         stuck = following is not None and following <= now
-        if stuck:  # advance(now) left it due: asking again would spin
-            self._plan(i, None)
+        if stuck or following is None:  # stuck: advance(now) left it due, asking would spin
+            self._deadline[i] = None
+        else:
+            self._deadline[i] = following
+            self._timers[i] = self.scheduler.call_at(following, partial(self._due, i, following))
         if frames:
             self.stats.lateness.append(now - deadline)
             self._emit(i, frames, now)

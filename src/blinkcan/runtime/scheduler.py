@@ -51,6 +51,8 @@ T = TypeVar("T")
 
 _STOP = object()
 _POSTED = object()
+#: the argument of a timer's entry in the simulated scheduler's queue of calls due now
+_TIMER = object()
 _MAX_IDLE_WAIT = 0.5
 _WORKERS = 4  # blocking work (SDO off a handler) per scheduler: bounded, never one per call
 
@@ -146,6 +148,9 @@ class Timer:
 
     def cancel(self) -> None:
         self.cancelled = True
+
+
+_new_timer = object.__new__  # a Timer without the call of its __init__ (set every slot)
 
 
 def guarded(callback: Callable[..., object], *args: object) -> None:
@@ -486,15 +491,18 @@ class SimulatedScheduler(Scheduler):
     simulated = True
 
     def __init__(self, start: float = 0.0) -> None:
-        self._now = check_time("start", start)
+        #: the virtual time, what :meth:`clock` returns (read it, never set it: the wire reads
+        #: it for every frame, where a call costs more than the rest of the read)
+        self.now = check_time("start", start)
         self._failures: list[tuple[Exception, str]] = []
+        #: timers due later than the clock, in order of time, then of scheduling
         self._heap = _Heap()
         self._sequence = self._heap.sequence
-        #: calls :meth:`defer` made, due at the time they were made (never later than the
-        #: clock): (order of scheduling, callback, arguments); they take their turn among the
-        #: heap's timers by that order
-        self._ready: collections.deque[tuple[int, Callable[..., object], tuple[object, ...]]] = (
-            collections.deque())
+        #: what is due now, in the order it was scheduled: ``(callback, argument)`` from
+        #: :meth:`defer`, ``(timer, _TIMER)`` for a timer. The heap's timers join it when the
+        #: clock reaches their time, all of that time at once, before anything runs then, so
+        #: everything due at one instant runs in scheduling order with no sequence to compare
+        self._ready: collections.deque[tuple[Any, Any]] = collections.deque()
         self._depth = 0  # handlers running (waits inside them nest)
         self._base = 0  # depth at which the running background work started
         self._waits = 0
@@ -502,7 +510,7 @@ class SimulatedScheduler(Scheduler):
             collections.deque())
 
     def clock(self) -> float:
-        return self._now
+        return self.now
 
     def start(self) -> None:
         """Nothing to start: the callers drive the simulation."""
@@ -515,16 +523,52 @@ class SimulatedScheduler(Scheduler):
         return self._depth > self._base
 
     def _push(self, timer: Timer) -> Timer:
-        if timer.due < self._now:  # noqa: PLR1730 (max() is a call: this runs per timer)
-            timer.due = self._now
-        self._heap.push(timer)
+        if timer.due <= self.now:  # due now (or late): after what is already due now
+            timer.due = self.now
+            self._ready.append((timer, _TIMER))
+        else:
+            self._heap.push(timer)
         return timer
 
-    def defer(self, callback: Callable[..., object], *args: object) -> None:
-        """``call_soon(lambda: callback(*args))``, without a timer to cancel: the simulated
+    def call_at(self, when: float, callback: Callable[[], object]) -> Timer:
+        # Scheduler.call_at with _push and Timer.__init__ inlined: the emulator plans every
+        # twin deadline here
+        if when.__class__ is not float or when - when:  # not a finite float: check it
+            check_time("when", when)
+        timer = _new_timer(Timer)
+        timer.due = timer.origin = when
+        timer.period = None
+        timer.callback = callback
+        timer.cancelled = False
+        timer.count = 0
+        if when <= self.now:
+            timer.due = self.now
+            self._ready.append((timer, _TIMER))
+        else:
+            heapq.heappush(self._heap.entries, (when, next(self._sequence), timer))
+        return timer
+
+    def deliver(self, callback: Callable[..., object], *args: object) -> None:
+        """Run ``callback(*args)`` at once: a simulated port's frames are handed over by the
+        simulation, inside it."""
+        callback(*args)
+
+    def defer(self, callback: Callable[[Any], object], argument: Any) -> None:
+        """``call_soon(lambda: callback(argument))``, without a timer to cancel: the simulated
         wire hands every frame over this way, and a timer and a closure per frame cost more
-        than the rest of its delivery."""
-        self._ready.append((next(self._sequence), callback, args))
+        than the rest of its delivery. It runs at the time it was made (the clock moves only
+        once everything due now has run)."""
+        self._ready.append((callback, argument))
+
+    def deferrer(self) -> Callable[[tuple[Callable[[Any], object], Any]], None]:
+        """:meth:`defer` as one call taking the pair ``(callback, argument)``: the queue's own
+        append, for the wire's path of every frame."""
+        return self._ready.append
+
+    def deferred(self) -> list[tuple[Callable[[Any], object], Any]]:
+        """The calls :meth:`defer` made that have not run yet, in order."""
+        return [(callback, argument) for callback, argument in self._ready
+                if argument is not _TIMER]
 
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         return action()
@@ -535,17 +579,17 @@ class SimulatedScheduler(Scheduler):
     def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
         check_time("timeout", timeout, infinite=True)
         if background:
-            return self.run_until(signal.is_set, self._now + timeout)
+            return self.run_until(signal.is_set, self.now + timeout)
         self._waits += 1
         try:
-            return self.run_until(signal.is_set, self._now + timeout)
+            return self.run_until(signal.is_set, self.now + timeout)
         finally:
             self._waits -= 1
             if not self._waits and self._background:
                 self.call_soon(self._run_background)
 
     def sleep(self, seconds: float) -> None:
-        self.run_until(None, self._now + check_time("seconds", seconds, 0))
+        self.run_until(None, self.now + check_time("seconds", seconds, 0))
 
     def spawn(self, action: Callable[[], object], key: Hashable | None = None) -> None:
         if key is not None and any(key == pending for pending, _ in self._background):
@@ -566,7 +610,7 @@ class SimulatedScheduler(Scheduler):
 
     def next_due(self) -> float | None:
         due = self._heap.next_due()
-        return self._now if self._ready else due  # a deferred call is due now
+        return self.now if self._ready else due  # a deferred call is due now
 
     def failed(self, error: Exception, what: str = "a blinkcan handler") -> None:
         """Kept, and raised again by the call that drives the simulation."""
@@ -579,30 +623,37 @@ class SimulatedScheduler(Scheduler):
             return
         failures, self._failures = self._failures, []
         for error, what in failures[1:]:
-            log.error("%s also raised at t=%.6f", what, self._now, exc_info=error)
+            log.error("%s also raised at t=%.6f", what, self.now, exc_info=error)
         raise failures[0][0]
 
-    def _pop(self, until: float) -> tuple[Callable[..., object], tuple[object, ...]] | None:
-        """The next event due by ``until``, taken off (a repeating timer re-armed) with the
-        clock moved to it, or None (the clock stays). Timers due now and deferred calls run in
-        the order they were scheduled."""
+    def _next_instant(self, until: float) -> bool:
+        """Move the clock to the next time a timer is due, if it is by ``until``: the timers
+        due then join the queue of what is due now, in order. False when there is none (the
+        clock stays)."""
         entries = self._heap.entries
         while entries and entries[0][2].cancelled:
             heapq.heappop(entries)
-        ready = self._ready
-        if ready and self._now <= until and (
-                not entries or entries[0][0] > self._now or entries[0][1] > ready[0][0]):
-            _, callback, args = ready.popleft()
-            return callback, args
         if not entries or entries[0][0] > until:
+            return False
+        due = entries[0][0]
+        if due > self.now:  # noqa: PLR1730 (max() is a call: this runs per instant)
+            self.now = due
+        ready = self._ready
+        while entries and entries[0][0] <= due:
+            timer = heapq.heappop(entries)[2]
+            if not timer.cancelled:
+                ready.append((timer, _TIMER))
+        return True
+
+    def _take(self, timer: Timer) -> Callable[[], object] | None:
+        """A timer's turn came: its callback (None when cancelled meanwhile), a repeating one
+        re-armed first."""
+        if timer.cancelled:
             return None
-        due, _, timer = heapq.heappop(entries)
-        if due > self._now:  # noqa: PLR1730 (max() is a call: this runs per event)
-            self._now = due
         if timer.period is not None:
-            timer.rearm(self._now)
-            self._heap.push(timer)
-        return timer.callback, ()
+            timer.rearm(self.now)
+            self._push(timer)
+        return timer.callback
 
     def _run(self, callback: Callable[..., object], args: tuple[object, ...]) -> None:
         """Run one event; an exception its handlers raised is raised here once they are done
@@ -622,39 +673,59 @@ class SimulatedScheduler(Scheduler):
         An exception the event's handlers raised is raised here once they are done."""
         if until - until and until != math.inf:  # NaN or -inf (+inf: no end)
             check_time("until", until, infinite=True)
-        event = self._pop(until)
-        if event is None:
-            return False
-        self._run(*event)
-        return True
+        ready = self._ready
+        while True:
+            if ready and self.now <= until:
+                callback, argument = ready.popleft()
+                if argument is not _TIMER:
+                    self._run(callback, (argument,))
+                    return True
+                action = self._take(callback)
+                if action is not None:
+                    self._run(action, ())
+                    return True
+            elif not self._next_instant(until):
+                return False
 
     def run_until(self, predicate: Callable[[], object] | None, until: float) -> bool:
         """Run events in order until ``predicate()`` is true (True) or the clock reaches
         ``until`` (False; the clock then stands at ``until``; +inf: no end)."""
         check_time("until", until, infinite=True)
-        entries, ready, pop = self._heap.entries, self._ready, self._pop
+        ready, next_instant, mark = self._ready, self._next_instant, _TIMER
+        popleft = ready.popleft
         while True:
             if predicate is not None and predicate():
                 met = True
                 break
-            # _pop and _run, inlined (this loop runs every event of a simulation); first the
-            # usual event, a deferred call with no timer due before it
-            if ready and self._now <= until and (
-                    not entries or entries[0][0] > self._now or entries[0][1] > ready[0][0]):
-                _, callback, args = ready.popleft()
-            else:
-                event = pop(until)
-                if event is None:
-                    if until != math.inf:  # with no end given, the clock stays at the last event
-                        self._now = max(self._now, until)
-                    met = bool(predicate()) if predicate is not None else True
-                    break
-                callback, args = event
+            if not (ready and self.now <= until):
+                if next_instant(until):
+                    continue
+                if until != math.inf:  # with no end given, the clock stays at the last event
+                    self.now = max(self.now, until)
+                met = bool(predicate()) if predicate is not None else True
+                break
+            # step() and _run(), inlined: this loop runs every event of a simulation. With no
+            # predicate to ask between events, everything due now runs in one go, inside one
+            # depth (in_loop): no one looks between two of them
             self._depth += 1
             try:
-                callback(*args)
-            except Exception as error:
-                self.failed(error)
+                while True:
+                    callback, argument = popleft()
+                    if argument is not mark:
+                        try:
+                            callback(argument)
+                        except Exception as error:
+                            self.failed(error)
+                    elif not callback.cancelled:  # a timer
+                        if callback.period is not None:
+                            callback.rearm(self.now)
+                            self._push(callback)
+                        try:
+                            callback.callback()
+                        except Exception as error:
+                            self.failed(error)
+                    if predicate is not None or not ready or self._failures or self.now > until:
+                        break
             finally:
                 self._depth -= 1
             if not self._depth and self._failures:

@@ -40,7 +40,7 @@ import collections
 import logging
 import threading
 from collections.abc import Callable, Sequence
-from typing import Any, NamedTuple
+from typing import Any
 
 import can
 from can.broadcastmanager import (
@@ -54,87 +54,127 @@ from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
 from blinkcan.runtime.virtual_waits import RECV_FOREVER, install_virtual_waits
+from blinkcan.runtime.wire_log import TimedFrame, WireLog
+
+__all__ = ["FrameHandler", "Receiver", "SimulatedBus", "SimulatedCyclicTask",
+           "SimulatedNetwork", "TimedFrame", "WireLog"]
 
 log = logging.getLogger(__name__)
 FrameHandler = Callable[[Frame, float], None]
+#: an endpoint of the wire: takes every frame the others send, at the time it was sent (the
+#: scheduler's ``now``)
+Receiver = Callable[[Frame], None]
+#: frames an endpoint keeps for recv() (the oldest go first)
+_KEPT = 100_000
 #: wall seconds between two looks of a parked notifier thread at whether its notifier stopped
 _PARKED_POLL = 0.005
 #: a wire rule: for a frame, None (unchanged), "drop", or extra delay in seconds
 Rule = Callable[[Frame], "str | float | None"]
 
 
-_timed = tuple.__new__  # TimedFrame without its __new__: a frame and a time made here
-
-
-class TimedFrame(NamedTuple):
-    """A frame as it went on the wire at virtual time ``time``."""
-
-    time: float
-    frame: Frame
-
-    def __str__(self) -> str:
-        return f"{self.time:10.6f}  {self.frame}"
-
-
 class SimulatedNetwork:
-    """The shared wire of one simulation."""
+    """The shared wire of one simulation.
+
+    A frame sent is recorded in :attr:`frames` (a :class:`WireLog`) and handed to every other
+    endpoint, each endpoint's turn an event of its own, in order, at the time it was sent: no
+    copy, record object, closure or timer per frame.
+    """
 
     def __init__(self, scheduler: SimulatedScheduler, latency: float = 0.0) -> None:
         check_time("latency", latency, 0)
         self.scheduler = scheduler
         self.latency = latency
-        self.frames: list[TimedFrame] = []
+        self._frames = WireLog()
         self.up = True
-        #: the endpoints' handlers, a tuple: delivery reads it for every frame, attach and
+        #: the endpoints' receivers, a tuple: delivery reads it for every frame, connect and
         #: detach (rare) replace it
-        self._endpoints: tuple[FrameHandler, ...] = ()
+        self._receivers: tuple[Receiver, ...] = ()
+        #: the receiver made for each handler :meth:`attach` took
+        self._attached: dict[FrameHandler, Receiver] = {}
         self._rules: list[Rule] = []
-        self.in_flight = 0
+        #: frames held back by the latency or a delay rule, not yet arrived
+        self._late = 0
+
+    @property
+    def frames(self) -> WireLog:
+        """Every frame that went on the wire, with its time (reads as a list of TimedFrame;
+        one log for the network's life: its senders write to it)."""
+        return self._frames
+
+    @property
+    def in_flight(self) -> int:
+        """Frames sent and not yet handed over: one per endpoint still to receive it, and one
+        per frame the latency or a delay rule holds back."""
+        receivers = self._receivers
+        waiting = sum(1 for callback, _ in self.scheduler.deferred()
+                      if any(callback is receiver for receiver in receivers))
+        return self._late + waiting
+
+    def connect(self, receiver: Receiver) -> Callable[[], None]:
+        """Hand every frame sent by others to ``receiver(frame)``, at the time it was sent
+        (``scheduler.now``); the receiver checks :attr:`up` first (a frame in flight when the
+        bus went down is not delivered). Returns the detach."""
+        self._receivers += (receiver,)
+
+        def detach() -> None:
+            self._receivers = tuple(known for known in self._receivers if known is not receiver)
+
+        return detach
 
     def attach(self, handler: FrameHandler) -> Callable[[], None]:
         """Deliver every frame sent by others to ``handler(frame, now)``; returns the detach."""
-        self._endpoints += (handler,)
 
-        def detach() -> None:
-            endpoints = list(self._endpoints)
-            if handler in endpoints:
-                endpoints.remove(handler)
-                self._endpoints = tuple(endpoints)
+        scheduler = self.scheduler
 
-        return detach
+        def receive(frame: Frame) -> None:
+            if self.up:
+                handler(frame, scheduler.now)
+
+        self._attached[handler] = receive
+        detach = self.connect(receive)
+
+        def detach_handler() -> None:
+            detach()
+            if self._attached.get(handler) is receive:
+                del self._attached[handler]
+
+        return detach_handler
 
     def add_rule(self, rule: Rule) -> Callable[[], None]:
         """A rule that may drop or delay frames; returns the function that removes it."""
         self._rules.append(rule)
         return lambda: self._rules.remove(rule) if rule in self._rules else None
 
-    def transmit(self, frame: Frame, sender: FrameHandler | None) -> None:
-        """Put ``frame`` on the wire; raises ``can.CanOperationError`` when the bus is gone."""
+    def transmit(self, frame: Frame, sender: Receiver | FrameHandler | None) -> None:
+        """Put ``frame`` on the wire as the endpoint ``sender`` (its receiver, or the handler
+        it attached; None: no endpoint's); raises ``can.CanOperationError`` when the bus is
+        gone."""
         self.sender(sender)(frame)
 
-    def sender(self, handler: FrameHandler | None) -> Callable[[Frame], None]:
-        """``transmit(frame, handler)`` as a function of the frame: the send of the endpoint
-        attached as ``handler``, made once (every frame of a simulation comes this way)."""
+    def sender(self, endpoint: Receiver | FrameHandler | None) -> Callable[[Frame], None]:
+        """``transmit(frame, endpoint)`` as a function of the frame: the send of that
+        endpoint, made once (every frame of a simulation comes this way)."""
+        mine: object = self._attached.get(endpoint, endpoint)  # type: ignore[arg-type]
         scheduler = self.scheduler
-        defer, clock, handover = scheduler.defer, scheduler.clock, self._handover
+        defer = scheduler.deferrer()
+        record_time, record_frame = self._frames.writers()
 
         def send(frame: Frame) -> None:
             if not self.up:
                 raise can.CanOperationError("the simulated bus is down")
             if self._rules or self.latency:
-                self._transmit_late(frame, handler)
+                self._transmit_late(frame, mine)
                 return
             # _deliver, inlined
-            now = clock()
-            self.frames.append(_timed(TimedFrame, (now, frame)))
-            for endpoint in self._endpoints:  # a tuple: an endpoint attached meanwhile waits
-                if endpoint != handler:  # bound methods: equal, not identical, per access
-                    self.in_flight += 1
-                    defer(handover, endpoint, frame, now)
+            record_time(scheduler.now)
+            record_frame(frame)
+            for receiver in self._receivers:  # a tuple: an endpoint attached meanwhile waits
+                if receiver is not mine:
+                    defer((receiver, frame))
 
         return send
 
-    def _transmit_late(self, frame: Frame, sender: FrameHandler | None) -> None:
+    def _transmit_late(self, frame: Frame, sender: object) -> None:
         """``frame`` through the rules, then on the wire after the latency and delays."""
         delay = self.latency
         for rule in self._rules:
@@ -144,33 +184,24 @@ class SimulatedNetwork:
             if isinstance(verdict, (int, float)):
                 delay += float(verdict)
         if delay:
-            self.in_flight += 1
+            self._late += 1
             self.scheduler.call_later(delay, lambda: self._arrive(frame, sender))
         elif self.up:
             self._deliver(frame, sender)
 
-    def _arrive(self, frame: Frame, sender: FrameHandler | None) -> None:
-        self.in_flight -= 1
+    def _arrive(self, frame: Frame, sender: object) -> None:
+        self._late -= 1
         if self.up:
             self._deliver(frame, sender)
 
-    def _deliver(self, frame: Frame, sender: FrameHandler | None) -> None:
+    def _deliver(self, frame: Frame, sender: object) -> None:
         """Record ``frame`` and hand it to every other endpoint after what runs now (each
         endpoint's turn is an event of its own, in order, at this same time)."""
         scheduler = self.scheduler
-        now = scheduler.clock()
-        self.frames.append(_timed(TimedFrame, (now, frame)))
-        for handler in self._endpoints:
-            if handler != sender:
-                self.in_flight += 1
-                scheduler.defer(self._handover, handler, frame, now)
-
-    def _handover(self, handler: FrameHandler, frame: Frame, now: float) -> None:
-        """``frame`` reaches the endpoint of ``handler`` (at ``now``: a deferred call runs at
-        the time it was made)."""
-        self.in_flight -= 1
-        if self.up:
-            handler(frame, now)
+        self._frames.record(scheduler.now, frame)
+        for receiver in self._receivers:
+            if receiver is not sender:
+                scheduler.defer(receiver, frame)
 
 
 class SimulatedBus(can.BusABC):
@@ -190,11 +221,16 @@ class SimulatedBus(can.BusABC):
         self.network = network
         self.scheduler = network.scheduler
         self.channel_info = f"simulated bus {channel}"
-        self._received: collections.deque[TimedFrame] = collections.deque(maxlen=100_000)
+        #: frames received and not yet read by recv(), and their times (two columns: no
+        #: object per frame, see runtime.wire_log)
+        self._received: collections.deque[Frame] = collections.deque(maxlen=_KEPT)
+        self._received_times: collections.deque[float] = collections.deque(maxlen=_KEPT)
         self._listeners: list[FrameHandler] = []
-        self._detach = network.attach(self._on_frame)
+        #: this endpoint on the wire (one bound method, known by identity)
+        self._receiver: Receiver = self._receive
+        self._detach = network.connect(self._receiver)
         #: put a frame on the wire as this endpoint's (not heard back here)
-        self.send_frame = network.sender(self._on_frame)
+        self.send_frame = network.sender(self._receiver)
         #: the can.Notifiers this bus delivers to (stopped ones are dropped on the next frame)
         self._notifiers: list[can.Notifier] = []
         #: every notifier adopted (their threads are recognised until they stop)
@@ -214,12 +250,16 @@ class SimulatedBus(can.BusABC):
         """The handlers :meth:`add_frame_listener` attached."""
         return list(self._listeners)
 
-    def _on_frame(self, frame: Frame, now: float) -> None:
-        notifiers = self._notifiers
-        if notifiers:
+    def _receive(self, frame: Frame) -> None:
+        """A frame another endpoint sent reaches this one, at the time it was sent."""
+        if not self.network.up:
+            return  # in flight when the bus went down
+        now = self.scheduler.now
+        if self._notifiers:
             self._notify(frame, now)
         else:
-            self._received.append(_timed(TimedFrame, (now, frame)))
+            self._received.append(frame)
+            self._received_times.append(now)
         for listener in self._listeners:
             listener(frame, now)
 
@@ -252,7 +292,8 @@ class SimulatedBus(can.BusABC):
         message = to_message(frame, now)
         if not active or not self._matches_filters(message):
             if not active:
-                self._received.append(_timed(TimedFrame, (now, frame)))
+                self._received.append(frame)
+                self._received_times.append(now)
             return
         self._held.append(message)
         if self._delivering:
@@ -311,10 +352,10 @@ class SimulatedBus(can.BusABC):
             check_time("timeout", timeout, infinite=True)
         wait = RECV_FOREVER if timeout is None or timeout == float("inf") else max(0.0, timeout)
         end = scheduler.clock() + wait
+        times = self._received_times
         while True:
             while received:
-                when, frame = received.popleft()
-                message = to_message(frame, when)
+                message = to_message(received.popleft(), times.popleft())
                 if self._matches_filters(message):
                     return message
             if scheduler.clock() >= end or not scheduler.run_until(lambda: received, end):
@@ -333,6 +374,7 @@ class SimulatedBus(can.BusABC):
 
     def clear_received(self) -> None:
         self._received.clear()
+        self._received_times.clear()
 
     def shutdown(self) -> None:
         """Detach from the wire, stop the notifiers still reading this bus (their threads

@@ -41,7 +41,9 @@ def assert_matches_trace(frames: Sequence[tuple[float, Frame]],
         have_time, have_frame = have[0] - base_got, have[1]
         if want_frame != have_frame:
             raise AssertionError(f"frame {i}: expected {want_frame} at {want_time:.6f} s, "
-                                 f"got {have_frame} at {have_time:.6f} s")
+                                 f"got {have_frame} at {have_time:.6f} s"
+                                 + _reordered(expected[i:], base_expected, got[i:], base_got,
+                                              tolerance))
         if abs(want_time - have_time) > tolerance:
             raise AssertionError(f"frame {i} ({have_frame}): at {have_time:.6f} s, expected "
                                  f"{want_time:.6f} s +- {tolerance} s")
@@ -50,3 +52,21 @@ def assert_matches_trace(frames: Sequence[tuple[float, Frame]],
         raise AssertionError(f"{len(got)} frames, the trace has {len(expected)}; first "
                              f"{'extra' if len(got) > len(expected) else 'missing'}: "
                              f"{extra[1]} at {extra[0]:.6f} s")
+
+
+def _reordered(expected: Sequence[tuple[float, Frame]], base_expected: float,
+               got: Sequence[tuple[float, Frame]], base_got: float, tolerance: float) -> str:
+    """A hint when the frames at the first difference's instant are the same ones in another
+    order: the rig now lets frames already sent arrive before an input or fault call at the
+    same instant (``Rig.catch_up``), which reorders traces recorded before it."""
+    start = expected[0][0] - base_expected
+
+    def instant(frames: Sequence[tuple[float, Frame]], base: float) -> list[Frame]:
+        return [frame for time, frame in frames if abs(time - base - start) <= tolerance]
+
+    mine, theirs = instant(got, base_got), instant(expected, base_expected)
+    if sorted(mine) != sorted(theirs):
+        return ""
+    return ("; the same frames at this instant in another order (a rig input or fault call "
+            "now lets the frames already sent arrive first; a trace recorded before it did may "
+            "differ so: if the new order is right, record it again, pytest --blinkcan-record)")

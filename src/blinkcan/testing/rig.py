@@ -32,7 +32,8 @@ from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.emulator import Emulator
 from blinkcan.runtime.scheduler import SimulatedScheduler
-from blinkcan.runtime.simbus import SimulatedBus, SimulatedNetwork, TimedFrame
+from blinkcan.runtime.simbus import SimulatedBus, SimulatedNetwork
+from blinkcan.runtime.wire_log import TimedFrame, WireLog
 from blinkcan.twin.base import CanopenTwin
 
 T = TypeVar("T")
@@ -71,13 +72,14 @@ class Rig:
         return self.scheduler.clock()
 
     @property
-    def frames(self) -> list[TimedFrame]:
-        """Every frame that went on the wire, in order, with its virtual time."""
+    def frames(self) -> WireLog:
+        """Every frame that went on the wire, in order, with its virtual time: read it as a
+        list of :class:`TimedFrame` (index, slice, iterate, ``len``, compare with a list)."""
         return self.network.frames
 
     def frames_since(self, start: float) -> list[TimedFrame]:
         check_time("start", start)
-        return [timed for timed in self.network.frames if timed.time >= start]
+        return self.network.frames.since(start)
 
     def advance(self, seconds: float) -> None:
         """Run ``seconds`` of virtual time."""
@@ -154,14 +156,29 @@ class Rig:
     def act(self, action: Callable[[float], T]) -> T:
         """Run ``action(now)`` on a twin (``lambda now: kp.press(3, now)``); the frames it
         returns go on the bus as the device's, and everything they cause at this instant
-        (the drivers' handlers) has run when this returns."""
+        (the drivers' handlers) has run when this returns.
+
+        Frames already sent reach the twins first (:meth:`catch_up`): with no latency a frame
+        arrives at the time it was sent, so a press right after ``Keypad(rig.bus, ...)`` comes
+        after the driver's NMT start, to an operational keypad, as on a real bus."""
+        self.catch_up()
         result = self.emulator.run(action)
-        if not self.scheduler.in_loop:
-            self.scheduler.run_until(None, self.now)
+        self.catch_up()
         return result
 
+    def catch_up(self) -> None:
+        """Run what is due at this instant (frames sent and not yet delivered, the handlers
+        they call), not moving the clock; nothing when called from inside the simulation (a
+        handler: what is due runs after it)."""
+        if not self.scheduler.in_loop:
+            self.scheduler.run_until(None, self.now)
+
     def snapshot(self, device: CanopenTwin | int) -> dict[str, Any]:
-        return self.twin(device).snapshot()
+        """The twin's :meth:`snapshot` once the frames already sent have reached it
+        (:meth:`catch_up`)."""
+        twin = self.twin(device)
+        self.catch_up()
+        return twin.snapshot()
 
     # -- fault injection and inputs: a twin, or the node id it answers at ---------------------
 

@@ -53,7 +53,6 @@ from blinkcan.twin.hooks import (
     DeadlineSource,
     ExtraSettings,
     FrameHook,
-    Periodic,
     RpdoHook,
     SnapshotHook,
     StateHook,
@@ -61,7 +60,7 @@ from blinkcan.twin.hooks import (
     WriteHook,
 )
 from blinkcan.twin.nvm import NvmArgument, NvmError, open_nvm
-from blinkcan.twin.schedule import Ticker, milliseconds
+from blinkcan.twin.schedule import Periodic, Ticker, milliseconds
 
 _Route = Callable[[Frame, float], list[Frame]]
 _new_tuple = tuple.__new__
@@ -374,7 +373,7 @@ class CanopenTwin:
 
     def add_timer(self, produce: Action) -> Periodic:
         """A periodic producer of ``produce(now)``; start and stop it with the returned
-        :class:`~blinkcan.twin.hooks.Periodic`. Every timer stops when the device loses power."""
+        :class:`~blinkcan.twin.schedule.Periodic`. Every timer stops when the device loses power."""
         timer = Periodic(produce)
         self._timers.append(timer)
         return timer

@@ -40,10 +40,10 @@ from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import J1939Name
 from blinkcan.protocol.nmt import NmtState
 from blinkcan.protocol.sdo import parse_sdo
-from blinkcan.twin.hooks import Periodic
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
 from blinkcan.twin.nvm import NvmArgument
+from blinkcan.twin.schedule import Periodic
 
 _TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
 #: M15 (Q): the firmware aborts an unknown command specifier with the code the manual lists,

@@ -11,6 +11,9 @@ compares with, and a consumed deadline is always followed by one strictly later.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+
+from blinkcan.protocol.frame import Frame
 
 TICKS_PER_S = 1000
 #: the base period: every period and step of the devices is a whole number of milliseconds
@@ -146,3 +149,58 @@ class Ticker:
 def milliseconds(count: int) -> int:
     """Ticks in ``count`` whole milliseconds (the unit of the CANopen period objects)."""
     return count * TICKS_PER_S // 1000
+
+
+class Periodic(Ticker):
+    """A periodic producer registered with a twin (``twin.add_timer``): ``produce(now)`` runs
+    every ``period`` seconds from :meth:`start` until :meth:`stop`, at exact times
+    (:mod:`blinkcan.twin.schedule`). ``produce`` may change :attr:`period`; the next run is
+    counted from the one that was due. Woken late, it runs once for each period owed
+    (:meth:`~blinkcan.twin.schedule.Ticker.fire`)."""
+
+    __slots__ = ("produce",)
+
+    def __init__(self, produce: Callable[[float], list[Frame]]) -> None:
+        super().__init__()
+        self.produce = produce
+
+    def start(self, period: float, now: float, running: bool = True) -> None:
+        """Run every ``period`` s from ``now`` (a period of 0, or ``running=False``, stops)."""
+        self.run(now, ticks(period), running)
+
+    @property
+    def period(self) -> float:
+        return self.period_ticks / TICKS_PER_S
+
+    @period.setter
+    def period(self, seconds: float) -> None:
+        self.retime(ticks(seconds))
+
+    def advance(self, now: float) -> list[Frame]:
+        due = self.due
+        if due is None or now < due:
+            return []
+        step, origin, count = self._ticks, self._origin, self._count
+        after = origin + (count + step) / TICKS_PER_S
+        if step > 0 and origin < after and now < after:
+            # the usual wake-up, one period owed (overdue() and fire() computed once, inlined:
+            # every periodic frame comes this way): the producer's own list, no copy
+            frames = self.produce(now)
+            if self.due == due and self._ticks == step and self._origin == origin:
+                self._count, self.due = count + step, after  # what fire(now) does here
+            elif self.due == due:  # retimed by produce (not stopped or started again)
+                self.fire(now)
+            return frames
+        owed = self.overdue(now)
+        if owed == 1:
+            frames = self.produce(now)
+            if self.due == due:  # not stopped, started again or retimed by produce
+                self.fire(now)
+            return frames
+        frames = []
+        for _ in range(owed):  # late: the owed periods, late (twin/schedule.py)
+            frames += self.produce(now)
+            if self.due != due:  # stopped, started again or retimed by produce
+                return frames
+        self.fire(now)
+        return frames
