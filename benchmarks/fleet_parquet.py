@@ -26,7 +26,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from benchmarks.realistic_log import (
     device_nodes,
@@ -43,26 +45,31 @@ from blinkcan.devices.registry import describe_device
 from blinkcan.formats import dbc, dbc_j1939
 from blinkcan.fleet.schema import SCHEMA
 
-source, out, devices = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
-known = {}  # (frame id, extended) -> (cantools message, model): unknown ids skipped by lookup
-for node, name in devices.items():
-    description, node = describe_device(name), int(node)
-    for message in dbc.database(description, node).messages:
-        known[message.frame_id, False] = (message, description.model)
-for message in dbc_j1939.database().messages:
-    known[message.frame_id, True] = (message, describe_device("keypad").model)
 schema = SCHEMA.append(pa.field("model", pa.string())).append(pa.field("date", pa.string()))
-rows, days = [], {}
+GROUP = 65536
 
-def flush():
+def known_messages(devices):
+    # (frame id, extended) -> (cantools message, model): unknown ids skipped by lookup
+    known = {}
+    for node, name in devices.items():
+        description, node = describe_device(name), int(node)
+        for message in dbc.database(description, node).messages:
+            known[message.frame_id, False] = (message, description.model)
+    for message in dbc_j1939.database().messages:
+        known[message.frame_id, True] = (message, describe_device("keypad").model)
+    return known
+
+def flush(rows, out):
     columns = list(zip(*rows))
     arrays = [pa.array(values, type=field.type) for field, values in zip(schema, columns)]
     pq.write_to_dataset(pa.Table.from_arrays(arrays, schema=schema), out,
                         partition_cols=["model", "date"])
     rows.clear()
 
-with can.LogReader(source) as reader:
-    for msg in reader:
+def decode(messages, source, known, group):
+    # the rows of the messages, group(rows) called for every GROUP of them
+    rows, days = [], {}
+    for msg in messages:
         ident, data = msg.arbitration_id, bytes(msg.data)
         day = int(msg.timestamp // 86400)
         date = days.get(day)
@@ -81,10 +88,16 @@ with can.LogReader(source) as reader:
             kind, text, model, node = "undecoded", f"frame {ident:X}h", "unknown", None
         rows.append((round(msg.timestamp * 1e6), source, msg.channel, ident, msg.is_extended_id,
                      node, kind, None, None, None, None, None, text, data, model, date))
-        if len(rows) >= 65536:
-            flush()
-if rows:
-    flush()
+        if len(rows) >= GROUP:
+            group(rows)
+    if rows:
+        group(rows)
+
+if __name__ == "__main__":
+    source, out, devices = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
+    known = known_messages(devices)
+    with can.LogReader(source) as reader:
+        decode(reader, source, known, lambda rows: flush(rows, out))
 """
 
 def _run(arguments: list[str]) -> tuple[float, float]:
@@ -121,7 +134,130 @@ def _minutes(frames: float, per_second: float) -> str:
     return f"{frames / per_second / 60:,.0f} min"
 
 
-def main(smoke: bool = False) -> None:
+def _cpu(work: Callable[[], object]) -> float:
+    """CPU seconds of this process for one run of ``work``."""
+    start = time.process_time()
+    work()
+    return time.process_time() - start
+
+
+def _our_stages(log: Path, out: Path) -> dict[str, Callable[[], object]]:
+    """Our pipeline cut into its stages (in process): each re-runs the stages before it
+    where it needs their output, the difference is taken afterwards."""
+    import fsspec
+
+    from blinkcan.fleet.frames import FrameDecoder, Segment
+    from blinkcan.fleet.schema import ROWS_PER_GROUP
+    from blinkcan.fleet.sources import read_columns
+    from blinkcan.fleet.task import make_decoder
+    from blinkcan.fleet.writer import PartitionWriter
+    from blinkcan.protocol.frame import Frame
+
+    blocks = list(read_columns(log))
+    segments: list[Segment] = []
+    new = tuple.__new__
+
+    def decoder() -> None:
+        decode = make_decoder(device_nodes()).decode
+        for block in blocks:
+            for at, ident, data, extended in zip(block.times, block.ids, block.data,
+                                                 block.extended, strict=True):
+                decode(new(Frame, (ident, data, extended)), at)
+
+    def rows() -> None:
+        frames = FrameDecoder(make_decoder(device_nodes()))
+        segments.clear()
+        segment = Segment()
+        for block in blocks:
+            position = 0
+            while position < len(block):
+                position = frames.decode(block, position, segment, ROWS_PER_GROUP)
+                if segment.rows >= ROWS_PER_GROUP:
+                    segments.append(segment)
+                    segment = Segment()
+        segments.append(segment)
+
+    def write() -> None:
+        writer = PartitionWriter(fsspec.filesystem("file"), str(out), "unit.parquet", str(log))
+        for segment in segments:
+            writer.write(segment)
+        writer.close()
+
+    rows()
+    return {"read": lambda: list(read_columns(log)), "decoder": decoder, "rows": rows,
+            "write": write}
+
+
+def _anchor_stages(log: Path, out: Path) -> dict[str, Callable[[], object]]:
+    import can
+
+    anchor: dict[str, Any] = {"__name__": "anchor"}
+    exec(ANCHOR, anchor)  # the anchor's own text: it defines its functions
+    known = anchor["known_messages"](device_nodes())
+    messages = list(can.LogReader(log))
+    groups: list[list[tuple[object, ...]]] = []
+
+    def keep(rows: list[tuple[object, ...]]) -> None:
+        groups.append(rows[:])
+        rows.clear()
+
+    def rows() -> None:
+        groups.clear()
+        anchor["decode"](messages, str(log), known, keep)
+
+    def write() -> None:
+        for group in groups:
+            anchor["flush"](list(group), str(out))
+
+    rows()
+    return {"read": lambda: list(can.LogReader(log)), "rows": rows, "write": write}
+
+
+def stages(log: Path, frames: int, repeats: int, root: Path) -> None:
+    """Where a frame's CPU goes, ours and the anchor's: each stage in this process (medians
+    of interleaved repetitions), the start-up as its own process on a 20-frame log."""
+    ours = _our_stages(log, root / "stages-ours")
+    anchor = _anchor_stages(log, root / "stages-anchor")
+    times: dict[str, list[float]] = {}
+    for _ in range(repeats):
+        for side, work in (("ours", ours), ("anchor", anchor)):
+            for name, run in work.items():
+                times.setdefault(f"{side} {name}", []).append(_cpu(run))
+    tiny = root / "tiny.log"
+    tiny.write_text("".join(log.open().readlines()[:20]))
+    for _ in range(repeats):
+        times.setdefault("ours start-up", []).append(_run(_ours([tiny], root / "tiny-ours"))[1])
+        times.setdefault("anchor start-up", []).append(_run(
+            [sys.executable, "-c", ANCHOR, str(tiny), str(root / "tiny-anchor"),
+             json.dumps(device_nodes())])[1])
+    per_frame = {name: statistics.median(values) / frames * 1e6 for name, values in times.items()}
+    ours_split = {
+        "reading": per_frame["ours read"], "decoder": per_frame["ours decoder"],
+        "rows and texts": per_frame["ours rows"] - per_frame["ours decoder"],
+        "Arrow + Parquet": per_frame["ours write"], "start-up": per_frame["ours start-up"]}
+    anchor_split = {
+        "reading": per_frame["anchor read"], "decoder": 0.0,
+        "rows and texts": per_frame["anchor rows"], "Arrow + Parquet": per_frame["anchor write"],
+        "start-up": per_frame["anchor start-up"]}
+    total_ours, total_anchor = sum(ours_split.values()), sum(anchor_split.values())
+    print(f"where a frame's CPU goes, us/frame ({frames:,} frames; start-up "
+          f"{statistics.median(times['ours start-up']):.2f} s and "
+          f"{statistics.median(times['anchor start-up']):.2f} s spread over them; {_load()})")
+    print(f"  {'':18}{'blinkcan':>10}{'anchor':>10}   (the anchor's rows: cantools' decoding)")
+    for name, value in ours_split.items():
+        print(f"  {name:18}{value:10.2f}{anchor_split[name]:10.2f}   "
+              f"{value / total_ours:4.0%} of ours")
+    print(f"  {'sum':18}{total_ours:10.2f}{total_anchor:10.2f}   ratio "
+          f"{total_anchor / total_ours:.2f}x")
+    floor = ours_split["reading"] + ours_split["decoder"] + ours_split["start-up"]
+    print(f"  3x the anchor is {total_anchor / 3:.2f} us/frame; reading, the decoder and the "
+          f"start-up alone are {floor:.2f} (at most {total_anchor / floor:.2f}x with rows, "
+          "Arrow and Parquet free)")
+
+
+def main(smoke: bool = False, scaling: bool = True, profile: bool = True) -> None:
+    """The end-to-end figures; then where the CPU goes (``profile``) and the -j 2 scaling
+    (``scaling``)."""
     frames = 20_000 if smoke else 300_000
     repeats = 1 if smoke else 3
     with tempfile.TemporaryDirectory() as folder:
@@ -144,6 +280,10 @@ def main(smoke: bool = False) -> None:
               f"{_micros(anchor)}")
         ratios = [o / a for o, a in zip(ours, anchor, strict=True)]
         print(f"  ratio {statistics.median(ratios):.2f}x ({min(ratios):.2f}-{max(ratios):.2f})")
+        if profile:
+            stages(log, frames, repeats, root)
+        if not scaling:
+            return
 
         files = 4
         logs = [root / f"unit-{n}.log" for n in range(files)]

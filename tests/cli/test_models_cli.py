@@ -88,9 +88,9 @@ def test_a_model_without_rings_says_so_in_one_line(bench: Bench) -> None:
     bus, *_ = bench
     result = invoke("keypad", "--node-id", "0x16", "ring", "1", "1", *bus)
     assert result.exit_code == 1
-    assert "PKP-2600-SI keypad has no encoder rings" in result.output
+    assert "no encoder rings (the PKP-2600-SI keypad at node 16h)" in result.output
     unknown = invoke("keypad", "read", "no_such_object", *bus)
-    assert "has no object 'no_such_object'" in unknown.output
+    assert "no object 'no_such_object' (any registered keypad)" in unknown.output
 
 
 def test_help_and_banners_list_the_registry() -> None:

@@ -177,7 +177,7 @@ def emulators() -> dict[int, Path]:
         except OSError:
             continue
         found[int(match.group(1))] = path
-    return found
+    return dict(sorted(found.items()))  # by number: 9956 before 10588
 
 
 def _listening(path: Path) -> bool:

@@ -35,6 +35,8 @@ from blinkcan.cli.ranges import (
 from blinkcan.devices.colours import BacklightColour, led_colour
 from blinkcan.devices.keypad_j1939 import BITRATES as J1939_BITRATES
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS, colour_code
+from blinkcan.devices.keypad_j1939 import TIME_UNIT_S as J1939_TIME_UNIT_S
+from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import DeviceDescription, Face, Model
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.registry import identify, model, models
@@ -94,7 +96,9 @@ def _candidates(kind: str) -> tuple[DeviceDescription, ...]:
 
 def _arguments(kind: str, check: Check) -> None:
     """``check`` against every model that may answer, before the bus: a usage error naming
-    the valid values."""
+    the valid values. A command with no J1939 message is refused first, over J1939."""
+    if _j1939_address() is not None:
+        _refuse_unless_j1939_has(click.get_current_context().info_name or "")
     descriptions = _candidates(kind)
     try:
         check(descriptions)
@@ -151,8 +155,13 @@ J1939_COMMANDS = {
 
 
 def _refuse_unless_j1939_has(command: str) -> None:
-    """A command a keypad in J1939 mode has no J1939 message for is refused before the bus is
-    opened, naming what works over J1939."""
+    """A command a keypad in J1939 mode has no J1939 message for, or a ``--model`` without a
+    J1939 mode, is refused before the bus is opened, naming what works over J1939."""
+    chosen = _chosen_model()
+    if chosen is not None and not candidates("keypad", chosen, "j1939"):
+        having = ", ".join(dict.fromkeys(d.title for d in candidates("keypad", None, "j1939")))
+        raise click.UsageError(f"the {model(chosen).description().title} has no J1939 mode "
+                               f"(J1939: {having})")
     if command not in J1939_COMMANDS:
         raise click.UsageError(f"{command} has no J1939 command on this keypad; over J1939: "
                                f"{', '.join(J1939_COMMANDS.values())}")
@@ -335,6 +344,9 @@ for group in (keypad, keybox):
         """Producer heartbeat period in ms (0 = off)."""
 
         def check(descriptions: Sequence[DeviceDescription]) -> None:
+            if _j1939_address() is not None:  # §18: on, and a period of 05h-FEh x 10 ms
+                _check_j1939_heartbeat(milliseconds)
+                return
             within("heartbeat period in ms", milliseconds,
                    entry_spans(descriptions, "producer_heartbeat_time"))
 
@@ -417,7 +429,7 @@ for group in (keypad, keybox):
     def read(target: Target, name: str) -> None:
         """Read one object of the model's dictionary by NAME (as ``export eds`` lists them,
         e.g. encoder_1_top)."""
-        with _device(target) as device:
+        with _device(target, check=_object_check(name)) as device:
             entry = _entry(device, name)
             value = device.read(name)
         shown = f"{value} ({value:#x})" if isinstance(value, int) else value
@@ -432,11 +444,23 @@ for group in (keypad, keybox):
     def write(target: Target, name: str, value: str) -> None:
         """Write one object of the model's dictionary by NAME; VALUE is checked against the
         model's valid values first."""
-        with _device(target) as device:
+        with _device(target, check=_object_check(name, value)) as device:
             entry = _entry(device, name)
             number: int | str = value if entry.data_type.is_string else parse_int(value)
             device.write(name, number)
         _done(target, f"{name} ({entry.index:04X}h/{entry.subindex:02X}) = {value}")
+
+
+def _check_j1939_heartbeat(milliseconds: int) -> None:
+    """A J1939 heartbeat period the keypad can take (§18: 75h, period 05h-FEh x 10 ms; 0 is
+    off): ValueError naming the range, or the step a period between two steps lacks."""
+    period = next(f for f in j1939_command("heartbeat").fields if f.name == "period")
+    step = round(J1939_TIME_UNIT_S * 1000)
+    within("heartbeat period in ms", milliseconds,
+           ((0, 0), (period.valid.low * step, period.valid.high * step)))
+    if milliseconds % step:
+        raise ValueError(f"heartbeat period {milliseconds} ms is not a multiple of {step} ms "
+                         "(J1939 §18)")
 
 
 def _set_j1939_address(target: Target, address: int, yes: bool) -> None:
@@ -624,10 +648,26 @@ def faults(target: Target) -> None:
 
 # -- what a model's face has besides keys and outputs (the PKP-3500-MT's knobs and inputs) -------
 
-def _needs(device: Any, what: str, count: int) -> None:
-    """A one-line error when the model at the node id has none of ``what`` (its face)."""
-    if not count:
-        raise click.ClickException(f"this {device.description.title} has no {what}")
+def _having(what: str, count: Callable[[Face], int]) -> Check:
+    """A check that the model has some ``what`` on its face (encoders, inputs)."""
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        if not any(count(d.face) for d in descriptions):
+            raise ValueError(f"no {what}")
+
+    return check
+
+
+def _encoder_check(encoder: int, what: str = "encoders") -> Check:
+    """ENCODER is one the model has (its face)."""
+    having = _having(what, lambda face: len(face.encoders))
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        having(descriptions)
+        within("encoder", encoder,
+               merged(spans_of(e.number for e in d.face.encoders) for d in descriptions))
+
+    return check
 
 
 def _led_list(text: str) -> list[int]:
@@ -656,8 +696,16 @@ def ring(target: Target, encoder: int, leds: str) -> None:
     blinkcan keypad ring 2 off
     """
     chosen = _led_list(leds)
-    with _device(target, start=True) as device:
-        _needs(device, "encoder rings", len(device.description.face.encoders))
+    has_encoder = _encoder_check(encoder, "encoder rings")
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        has_encoder(descriptions)
+        ring_leds = merged(spans_of(e.ring_leds) for d in descriptions
+                           for e in d.face.encoders if e.number == encoder)
+        for led in chosen:
+            within(f"ring {encoder} LED", led, ring_leds)
+
+    with _device(target, start=True, check=check) as device:
         device.read_rings()  # the other ring keeps what it shows (read from the keypad first)
         device.set_ring(encoder, chosen)
     shown = ", ".join(map(str, chosen)) if chosen else "off"
@@ -676,8 +724,17 @@ def ring(target: Target, encoder: int, leds: str) -> None:
 def encoder_command(target: Target, encoder: int, top: int | None,
                     counter: int | None) -> None:
     """ENCODER's tick counter and TOP (read); --top and --counter store new ones first."""
-    with _device(target) as device:
-        _needs(device, "encoders", len(device.description.face.encoders))
+    has_encoder = _encoder_check(encoder)
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        has_encoder(descriptions)
+        for what, value, name in (("TOP", top, f"encoder_{encoder}_top"),
+                                  ("counter", counter, f"encoder_{encoder}_ticks")):
+            entries = [d.table[name] for d in descriptions if name in d.table]
+            if value is not None and not any(e.accepts(value) for e in entries):
+                raise ValueError(f"{what} {value} outside {entries[0].describe_valid()}")
+
+    with _device(target, check=check) as device:
         if top is not None:
             device.set_top(encoder, top)
         if counter is not None:
@@ -693,15 +750,49 @@ def encoder_command(target: Target, encoder: int, top: int | None,
 @click.pass_obj
 def inputs(target: Target) -> None:
     """The analog inputs in volts and the digital inputs' levels (read)."""
-    with _device(target) as device:
+    check = _having("inputs", lambda face: face.analog_inputs + face.digital_inputs)
+    with _device(target, check=check) as device:
         face = device.description.face
-        _needs(device, "inputs", face.analog_inputs + face.digital_inputs)
         volts = {number: device.read_analog(number) for number in range(face.analog_inputs)}
         levels = device.digital_inputs() if face.digital_inputs else {}
     for number in sorted(set(volts) | set(levels)):
         parts = ([f"{volts[number]:.2f} V"] if number in volts else []) + (
             [f"digital {'high' if levels[number] else 'low'}"] if number in levels else [])
         click.echo(f"IN{number}: {', '.join(parts)}")
+
+
+def _object_check(name: str, value: str | None = None) -> Check:
+    """NAME is an object of the model (``export eds`` names); a VALUE to write is one that
+    object takes."""
+
+    def check(descriptions: Sequence[DeviceDescription]) -> None:
+        entries = [d.table[name] for d in descriptions if name in d.table]
+        if not entries:
+            close = sorted({e.name for d in descriptions for e in d.table
+                            if name.lower() in e.name})[:8]
+            hint = f"; did you mean {', '.join(close)}" if close else ""
+            raise ValueError(f"no object {name!r}{hint}")
+        if value is None:
+            return
+        writable = [e for e in entries if e.access.writable]
+        if not writable:
+            entry = entries[0]
+            raise ValueError(f"{entry.label} ({entry.index:04X}h/{entry.subindex:02X}) is "
+                             "read-only")
+        entry = writable[0]
+        number: int | str = value if entry.data_type.is_string else _number(value)
+        if not any(e.accepts(number) for e in writable):
+            raise ValueError(f"{entry.label} ({entry.index:04X}h/{entry.subindex:02X}) takes "
+                             f"{entry.describe_valid()}, not {value}")
+
+    return check
+
+
+def _number(text: str) -> int:
+    try:
+        return parse_int(text)
+    except click.BadParameter as error:
+        raise ValueError(error.message) from None
 
 
 def _entry(device: Any, name: str) -> ObjectEntry:

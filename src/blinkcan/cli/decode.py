@@ -15,6 +15,9 @@ import click
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.cli.clock import ABSOLUTE, iso_utc
 from blinkcan.decode import Decoder, Event
+from blinkcan.decode.j1939 import is_j1939_node, j1939_node, parse_j1939_node
+from blinkcan.decode.nodes import NodeKey, split_devices
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.registry import describe_device
 from blinkcan.formats.logs import LogError, describe_frame, frame_kind, read_log
@@ -34,10 +37,13 @@ def default_devices() -> dict[int, str | DeviceDescription]:
     return {d.default_node_id: d for d in descriptions}
 
 
-def assumed_text(devices: dict[int, str | DeviceDescription]) -> str:
+def assumed_text() -> str:
+    """What the decoder assumes where no --device is given (stderr: the output stays data)."""
     named = ", ".join(f"{d.kind if isinstance(d, DeviceDescription) else d} {node:02X}h"
-                      for node, d in sorted(devices.items()))
-    return f"no --device given: assuming {named} (others learned from identity traffic)"
+                      for node, d in sorted(default_devices().items()))
+    return (f"no --device given: assuming {named} and a J1939 keypad at "
+            f"{J1939_DEFAULT_ADDRESS:02X}h (others learned from identity traffic and their "
+            "own messages)")
 
 
 def other_event(decoder: Decoder, message: can.Message) -> Event:
@@ -47,30 +53,47 @@ def other_event(decoder: Decoder, message: can.Message) -> Event:
                                 describe_frame(message))
 
 
-def parse_devices(specs: tuple[str, ...]) -> dict[int, str | DeviceDescription]:
-    """--device options; none given: the default nodes (DEFAULT_DEVICES)."""
-    if not specs:
-        return default_devices()
-    devices: dict[int, str | DeviceDescription] = {}
+def parse_device_specs(specs: tuple[str, ...]) -> dict[NodeKey, str]:
+    """--device NODE=MODEL options as the decoder takes them: a CANopen node id (0x15=keypad)
+    or a J1939 address (j1939:0x30=keypad) to a model name; checked (BadParameter)."""
+    devices: dict[NodeKey, str] = {}
     for spec in specs:
         node_text, separator, model = spec.partition("=")
         if not separator:
-            raise click.BadParameter(f"{spec!r}: write NODE=MODEL, e.g. 0x15=keypad",
-                                     param_hint="--device")
+            raise click.BadParameter(f"{spec!r}: write NODE=MODEL, e.g. 0x15=keypad or "
+                                     "j1939:0x30=keypad", param_hint="--device")
         try:
-            devices[parse_int(node_text)] = describe_device(model)
-        except ValueError as error:
-            raise click.BadParameter(str(error), param_hint="--device") from None
+            node: NodeKey
+            if is_j1939_node(node_text):
+                node = j1939_node(parse_j1939_node(node_text))
+            else:
+                node = parse_int(node_text)
+            split_devices({node: model})
+        except (ValueError, click.BadParameter) as error:
+            message = error.message if isinstance(error, click.BadParameter) else str(error)
+            raise click.BadParameter(message, param_hint="--device") from None
+        devices[node] = model
     return devices
+
+
+def parse_devices(specs: tuple[str, ...]) -> dict[NodeKey, str | DeviceDescription]:
+    """--device options; none given: the default nodes (DEFAULT_DEVICES)."""
+    if not specs:
+        return dict(default_devices().items())
+    return dict(parse_device_specs(specs).items())
+
+
+#: --device's help, the same for decode and monitor
+DEVICE_HELP = ("Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=keypad@1.1; a "
+               "keypad in J1939 mode by its source address: j1939:0x30=keypad (none named: "
+               "21h). Others are learned from identity traffic and their own messages.")
 
 
 @click.command("decode")
 @click.argument("files", metavar="FILE...", nargs=-1, required=True,
                 type=click.Path(allow_dash=True))
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line.")
-@click.option("--device", "devices", multiple=True, metavar="NODE=MODEL",
-              help="Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=keypad@1.1."
-                   " Others are learned from identity traffic.")
+@click.option("--device", "devices", multiple=True, metavar="NODE=MODEL", help=DEVICE_HELP)
 @click.option("--parquet", "parquet", metavar="OUT", default=None,
               help="Decode the logs (files or folders) into the Parquet dataset OUT (a folder "
                    "or an fsspec URL): a row per event, by model and date. Needs "
@@ -95,15 +118,13 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
 
         if as_json:
             raise click.UsageError("--json and --parquet are two outputs: choose one")
-        models = {node: spec.partition("=")[2] for spec in devices
-                  for node in [parse_int(spec.partition("=")[0])]}
-        decode_to_parquet(files, parquet, jobs, force, models)
+        decode_to_parquet(files, parquet, jobs, force, parse_device_specs(devices))
         return
     if len(files) != 1 or jobs != 1 or force:
         raise click.UsageError("several files, -j and --force go with --parquet OUT")
     file = files[0]
     if not devices:
-        click.echo(assumed_text(known), err=True)
+        click.echo(assumed_text(), err=True)
     decoder = Decoder(known)
     progress = None
     if not as_json and sys.stderr.isatty():

@@ -37,17 +37,23 @@ from blinkcan.cli.render import output_console
 from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.typed_commands import typed_commands
 from blinkcan.decode import Decoder
+from blinkcan.decode.j1939 import j1939_node
+from blinkcan.decode.nodes import DeviceSpec, NodeKey
 from blinkcan.devices.keypad_j1939 import NVM_PREFIX
+from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import Model
 from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.formats.nvm_file import nvm_file
-from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX, split_cob_id
+from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, SDO_RX, SDO_TX, split_cob_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.nvm import NvmError
 from blinkcan.twin.registry import build_twin
+
+#: §16: the source addresses a keypad in J1939 mode can take (DEVICE:ADDR)
+J1939_ADDRESSES = j1939_command("source_address").fields[0].valid
 
 
 def _check_applies(option: str, given: bool, chosen: list[Model], having: list[Model]) -> None:
@@ -80,14 +86,18 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
     twins: list[CanopenTwin] = []
     for spec, found in zip(devices, chosen, strict=True):
         model, _, node_text = spec.partition(":")
-        node = parse_node_id(node_text) if node_text else node_id
+        j1939 = protocol != "canopen" and protocol in found.description().features
+        node = (_j1939_address(node_text) if j1939 else parse_node_id(node_text)) \
+            if node_text else node_id
         options: dict[str, object] = {}
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
-        if protocol != "canopen" and protocol in found.description().features:
+        if j1939:
             options["protocol"] = protocol
             if node is not None:  # J1939: DEVICE:ADDR is the source address it claims (§16)
                 options["settings"] = {NVM_PREFIX + "source_address": node}
+                if node > NODE_ID_MAX:  # no CANopen node id: the model's default one
+                    node = None
         try:
             # the file store is opened here, at the edge: the twin layer does no I/O
             store = None if nvm is None else nvm_file(nvm)
@@ -100,18 +110,45 @@ def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
     return twins
 
 
+def _j1939_address(text: str) -> int:
+    """DEVICE:ADDR of a keypad in J1939 mode: its source address, 01h..FDh (§16)."""
+    address = parse_int(text)
+    if address not in J1939_ADDRESSES:
+        raise click.BadParameter(f"J1939 address {address:#x} outside {J1939_ADDRESSES} (§16)",
+                                 param_hint="DEVICE")
+    return address
+
+
 def _refuse_shared_node_ids(twins: list[CanopenTwin]) -> None:
-    """Two devices on one node id answer every SDO request twice: refused."""
-    seen: dict[int, CanopenTwin] = {}
+    """Two devices on one node id answer every SDO request twice, two keypads at one J1939
+    address each other's commands: refused."""
+    seen: dict[tuple[bool, int], CanopenTwin] = {}
     for twin in twins:
-        other = seen.setdefault(twin.node_id, twin)
+        j1939 = isinstance(twin, KeypadTwin) and twin.protocol == "j1939"
+        where = (True, twin.j1939.settings["source_address"]) \
+            if isinstance(twin, KeypadTwin) and j1939 else \
+            (False, twin.node_id)
+        other = seen.setdefault(where, twin)
         if other is not twin:
             for each in twins:
                 each.close()
+            taken = {number for is_j1939, number in seen if is_j1939 == j1939}
+            what = "J1939 address" if j1939 else "node"
             raise click.UsageError(
-                f"{other.description.kind} and {twin.description.kind} both on node "
-                f"{twin.node_id:02X}h; give each its own, e.g. {twin.description.kind}:"
-                f"0x{_free_node_id(twin.node_id, set(seen)):02X}")
+                f"{other.description.kind} and {twin.description.kind} both on {what} "
+                f"{where[1]:02X}h; give each its own, e.g. {twin.description.kind}:"
+                f"0x{_free_node_id(where[1], taken):02X}")
+
+
+def decoder_devices(twins: list[CanopenTwin]) -> dict[NodeKey, DeviceSpec]:
+    """What the emulator's decoder is told: each twin at its node id, and a keypad in J1939
+    mode at its J1939 address too (so a command to it is read as one from the first frame)."""
+    devices: dict[NodeKey, DeviceSpec] = {}
+    for twin in twins:
+        devices[twin.node_id] = twin.description
+        if isinstance(twin, KeypadTwin) and twin.protocol == "j1939":
+            devices[j1939_node(twin.j1939.settings["source_address"])] = twin.description
+    return devices
 
 
 def _free_node_id(near: int, taken: set[int]) -> int:
@@ -167,7 +204,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     except NvmError as error:
         raise click.ClickException(str(error)) from None
     bus = cli_bus()
-    decoder = Decoder({t.node_id: t.description for t in twins})
+    decoder = Decoder(decoder_devices(twins))
     # the emulator's clock is time.monotonic: its start is 0, its offset to the epoch measured
     clock = Clock(absolute, start=time.monotonic(), to_epoch=time.time() - time.monotonic())
     printer = None if quiet else _FramePrinter(console, decoder, clock)

@@ -23,7 +23,7 @@ from rich.text import Text
 from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.clock import ABSOLUTE, Clock
-from blinkcan.cli.decode import assumed_text, other_event, parse_devices
+from blinkcan.cli.decode import DEVICE_HELP, assumed_text, other_event, parse_devices
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.cli.seconds import Factor, Seconds
 from blinkcan.decode import Decoder, Event
@@ -96,9 +96,7 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
 
 
 @click.command("monitor")
-@click.option("--device", "devices", multiple=True, metavar="NODE=MODEL",
-              help="Which node is which device (default: keypad 15h, Keybox 0Ch; others "
-                   "learned from identity traffic).")
+@click.option("--device", "devices", multiple=True, metavar="NODE=MODEL", help=DEVICE_HELP)
 @click.option("--file", "log_file", type=click.Path(dir_okay=False), default=None,
               help="Replay a log file instead of a live bus.")
 @click.option("--speed", type=Factor(), default=1.0, show_default=True,
@@ -117,7 +115,7 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
     terminal: one line per event."""
     known = parse_devices(devices)
     if not devices:
-        click.echo(assumed_text(known), err=True)
+        click.echo(assumed_text(), err=True)
     decoder = Decoder(known)
     view = BusView(decoder)
     log = EventLog(rows, decoder)

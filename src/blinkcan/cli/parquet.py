@@ -14,6 +14,7 @@ import click
 
 from blinkcan import fleet
 from blinkcan.cli.extras import install_command
+from blinkcan.decode.nodes import NodeKey
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -56,7 +57,7 @@ def unreadable_text(result: FileResult) -> str:
 
 
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
-                      devices: dict[int, str]) -> None:
+                      devices: dict[NodeKey, str]) -> None:
     check_extra()
     from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
 

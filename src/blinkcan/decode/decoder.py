@@ -11,7 +11,7 @@ transfer in progress (segmented uploads are reassembled into one value).
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from enum import Enum
 from typing import Any, NamedTuple
 
@@ -25,10 +25,12 @@ from blinkcan.decode.describers import (  # listing, mask_listing, numbers: kept
     pdo_describer,
 )
 from blinkcan.decode.j1939 import J1939KeypadDecoder
+from blinkcan.decode.nodes import DeviceSpec, NodeKey, split_devices
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.pdo import PdoLayout
-from blinkcan.devices.registry import describe_device, identify
+from blinkcan.devices.registry import identify
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
@@ -188,15 +190,15 @@ class _Transfer:
 
 class Decoder:
     """Decode frames of one bus. ``devices`` maps node ids to "keypad", "keybox" (optionally
-    "keypad@1.1") or descriptions; ``learn`` names unknown nodes from identity traffic."""
+    "keypad@1.1") or descriptions, and J1939 addresses (``"j1939:0x30"``) to models that have
+    J1939 (decode/nodes.py; none named: 21h, §5); ``learn`` names unknown nodes from identity
+    traffic. ValueError for a device it cannot name."""
 
-    def __init__(self, devices: dict[int, str | DeviceDescription] | None = None,
+    def __init__(self, devices: Mapping[NodeKey, DeviceSpec] | None = None,
                  learn: bool = True) -> None:
         self.learn = learn
-        self.devices: dict[int, DeviceDescription] = {}
-        for node, device in (devices or {}).items():
-            self.devices[node] = device if isinstance(device, DeviceDescription) else \
-                describe_device(device)
+        named = split_devices(devices)
+        self.devices: dict[int, DeviceDescription] = named.canopen
         self._keys: dict[int, int] = {}
         self._transfers: dict[int, _Transfer] = {}
         self._routes: dict[tuple[int, bool], Callable[[Frame, float], Event]] = {}
@@ -213,7 +215,8 @@ class Decoder:
         #: nodes named from 1000h alone: 100Bh may still correct them (two keypads share it)
         self._guessed: set[int] = set()
         #: keypads in J1939 mode, by address (decode/j1939.py)
-        self.j1939 = J1939KeypadDecoder()
+        self.j1939 = J1939KeypadDecoder(() if named.j1939 else (J1939_DEFAULT_ADDRESS,),
+                                        named.j1939)
         #: 11-bit identifiers no device's frame uses (other ECUs): their event's (text, node,
         #: device) and their JSON line before and after the data; a lookup is all they cost
         self._raw_standard: dict[int, _Raw] = {}

@@ -1,16 +1,19 @@
 """The keypad's J1939 traffic as what happened ("keypad 21h: key 5 pressed"). Pure.
 
 Everything is read from ``devices/keypad_j1939.py`` (command codes, fields, message layouts).
-Which addresses are keypads: 21h (the default, §5) and those learned from the bus: a keypad's
-own messages (heartbeat F9h, software revision reply), a source address command (70h), and an
-address claim with the keypad's NAME. The same command byte 01h means "key state" from the
-keypad and "set LED" to it, so the direction is told by the addresses: a frame to a keypad (or
-to all from a non-keypad) is a command, a frame from a keypad is a message.
+Which addresses are keypads: those the user names (``--device j1939:0x30=keypad``), else 21h
+(the default, §5), and those learned from the bus: a keypad's own messages (heartbeat F9h,
+software revision reply, key message), a source address command (70h), and an address claim
+with the keypad's NAME. The same command byte 01h means "key state" from the keypad and "set
+LED" to it, so the direction is told by the addresses: a frame to a keypad (or to all from a
+non-keypad) is a command, a frame from a keypad is a message. Where the bytes decide (a key
+message is no valid LED command: its secondary colour byte is FFh), they do, whatever the
+addresses; a frame the addresses and bytes leave open is not given a meaning (raw).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any, NamedTuple
 
 from blinkcan.devices.keypad_j1939 import (
@@ -21,20 +24,26 @@ from blinkcan.devices.keypad_j1939 import (
     HEADER,
     HEARTBEAT,
     KEY_MESSAGE,
+    KEY_PRESSED,
+    KEY_RELEASED,
+    KEYS,
     NIBBLE_BLINK,
     PGN_COMMAND,
     PGN_LEDS_COLOUR_1,
     PGN_LEDS_COLOUR_2,
     SOFTWARE_REVISION_REPLY,
     TIME_UNIT_S,
+    UNUSED,
     J1939Command,
     LedState,
     Persistence,
+    command,
     split_nibbles,
 )
 from blinkcan.devices.keypad_j1939 import (
     LEVEL_MAX as J1939_LEVEL_MAX,
 )
+from blinkcan.devices.model import DeviceDescription
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import (
@@ -53,6 +62,47 @@ _BITRATES = {2: "500 kbit/s", 3: "250 kbit/s"}
 
 
 _NO_FIELDS: dict[str, Any] = {}  # shared, never written
+
+#: how a J1939 address is named where a CANopen node id would be: ``--device j1939:0x30=keypad``,
+#: ``Decoder({"j1939:0x30": "keypad"})`` (as ``emulate keypad:0x30 --protocol j1939``)
+J1939_NODE_PREFIX = "j1939:"
+#: §16: the source addresses a keypad can take
+_SOURCE_ADDRESSES = command("source_address").fields[0].valid
+
+
+def j1939_node(address: int) -> str:
+    """0x30 -> "j1939:0x30", the name of a J1939 address among node ids."""
+    return f"{J1939_NODE_PREFIX}0x{address:02X}"
+
+
+def is_j1939_node(node: object) -> bool:
+    return isinstance(node, str) and node.lower().startswith(J1939_NODE_PREFIX)
+
+
+def parse_j1939_node(node: str) -> int:
+    """"j1939:0x30" (or "j1939:48", "j1939:30h") -> 0x30; ValueError naming the form and the
+    range of a keypad's source address (§16)."""
+    text = node[len(J1939_NODE_PREFIX):].strip().lower() if is_j1939_node(node) else None
+    try:
+        address = int(text[:-1], 16) if text and text.endswith("h") else int(text or "", 0)
+    except ValueError:
+        raise ValueError(f"{node!r}: name a J1939 address as j1939:ADDR, e.g. j1939:0x30") \
+            from None
+    if address not in _SOURCE_ADDRESSES:
+        raise ValueError(f"{node!r}: a keypad's J1939 source address is "
+                         f"{_SOURCE_ADDRESSES} (§16), not {address:#x}")
+    return address
+
+
+def is_key_message(data: bytes) -> bool:
+    """Whether the bytes are exactly a §6 key message (``04 1B 01 <key> <00/01> <identifier>
+    FF FF``). No command has them: the single-LED command's byte 6 is a colour (J-2)."""
+    return len(data) == 8 and data[:3] == _KEY_MESSAGE_HEAD and 1 <= data[3] <= KEYS and \
+        data[4] in _KEY_STATES and data[6] == UNUSED and data[7] == UNUSED
+
+
+_KEY_MESSAGE_HEAD = HEADER + bytes((KEY_MESSAGE,))
+_KEY_STATES = frozenset({KEY_PRESSED, KEY_RELEASED})
 
 
 class J1939Meaning(NamedTuple):
@@ -111,10 +161,15 @@ _COMMANDS_KEPT = 1024
 
 
 class J1939KeypadDecoder:
-    """Decodes PKP-2600-SI J1939 frames; remembers which addresses are keypads."""
+    """Decodes PKP-2600-SI J1939 frames; remembers which addresses are keypads. ``models``
+    names the model at an address (the user said it: ``--device j1939:0x30=keypad``); those
+    addresses are keypads too."""
 
-    def __init__(self, addresses: Iterable[int] = (DEFAULT_ADDRESS,)) -> None:
-        self.addresses = set(addresses)
+    def __init__(self, addresses: Iterable[int] = (DEFAULT_ADDRESS,),
+                 models: Mapping[int, DeviceDescription] | None = None) -> None:
+        #: the model at each address the user named (an address learned has none)
+        self.models: dict[int, DeviceDescription] = dict(models or {})
+        self.addresses = set(addresses) | set(self.models)
         #: commands' meanings by (destination, bytes): their fields hold numbers only
         self._commands: dict[tuple[int, bytes], J1939Meaning] = {}
 
@@ -154,14 +209,19 @@ class J1939KeypadDecoder:
 
     def _proprietary(self, source: int, destination: int, data: bytes) -> J1939Meaning | None:
         """PGN EF00h: a command to a keypad or a message from one, told by the addresses."""
-        # only a keypad sends a heartbeat or a software revision (§18, §11)
+        # only a keypad sends a heartbeat, a software revision or a key message (§18, §11,
+        # §6): a keypad at its source address, whether it was known or not
         keypad_only = data[:2] == HEADER and len(data) == 8 and (
-            data[2] == HEARTBEAT or (data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF))
+            data[2] == HEARTBEAT or (data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF)
+            or is_key_message(data))
         addresses = self.addresses
         to_keypad = destination in addresses or (
             destination == GLOBAL_ADDRESS and source not in addresses)
         if to_keypad and data[:2] == HEADER and not keypad_only:
-            return self._command(destination, data)
+            meaning = self._command(destination, data)
+            if meaning.fields["command"] is None and destination not in addresses:
+                return None  # to all from an unknown sender, and no command: nobody can say
+            return meaning
         if source in addresses or keypad_only:
             return self._message(source, data)
         return None

@@ -204,7 +204,7 @@ class FrameDecoder:
         devices = self._decoder.devices
         add_node, add_model = segment.nodes.append, segment.models.append
         add_text, add_code = segment.texts.append, segment.codes.append
-        add_rows = segment.add_rows
+        add_rows, number, find_number = segment.add_rows, segment.number, segment.numbers.get
         simple = segment.simple
         new, frame_type = _new_tuple, Frame
         texts = self._texts
@@ -235,8 +235,13 @@ class FrameDecoder:
                 add_node(node)
                 add_model(model)
                 add_text(str(event))
-                add_rows(details)
-                total += len(details)
+                if len(details) == 1:  # most events are one row
+                    code = find_number(details[0])
+                    add_code(number(details[0]) if code is None else code)
+                    total += 1
+                else:
+                    add_rows(details)
+                    total += len(details)
             if total >= limit:
                 break
         return count

@@ -26,6 +26,7 @@ KINDS = ("key", "led", "output", "fault", "heartbeat", "nmt", "sdo", "j1939", "p
 _DARK = (0, 0, 0)
 _LED_STATES = {"led_on": "on", "led_blink": "blink"}
 _COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))
+_NAMES = {kind: kind.value for kind in Kind}  # an Enum's value is a slow property
 
 
 class Detail(NamedTuple):
@@ -76,6 +77,7 @@ class EventRows:
 
     def __init__(self, decoder: Decoder) -> None:
         self._devices = decoder.devices  # the decoder's own: it learns models from the bus
+        self._j1939_models = decoder.j1939.models  # J1939 addresses the user named
         #: (node, pdo) -> the keys lit red, green, blue (masks: bit 0 is key 1)
         self._leds: dict[tuple[int, str], tuple[int, int, int]] = {}
         self._outputs: dict[int, int] = {}  # node -> the pins HIGH (a mask: bit 0 is pin 1)
@@ -95,8 +97,10 @@ class EventRows:
         if simple is not None:  # most of a fleet's log: other ECUs' frames
             return _new(Rowed, (node, self._model_of(node), simple))
         if kind is Kind.J1939:
-            return _new(Rowed, (node, self._model_named(event.device),
-                                [self._j1939(event.fields)]))
+            named = self._j1939_models.get(node) if node is not None else None
+            model = named.model if named is not None and event.device is not None else \
+                self._model_named(event.device)
+            return _new(Rowed, (node, model, [self._j1939(event.fields)]))
         if kind is Kind.NMT:
             target = event.fields.get("target") or None
             return Rowed(target, self._model_of(target), [
@@ -119,7 +123,7 @@ class EventRows:
             return Rowed(node, model, [Detail("heartbeat", state="boot-up")])
         # SDO services: the kind of step as the state, the value where it is a number
         return _new(Rowed, (node, model, [_new(Detail, (
-            "sdo", None, None, kind.value, None, _int_value(event.fields.get("value"))))]))
+            "sdo", None, None, _NAMES[kind], None, _int_value(event.fields.get("value"))))]))
 
     # -- models -----------------------------------------------------------------------------
 

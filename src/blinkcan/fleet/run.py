@@ -10,6 +10,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from blinkcan.decode.nodes import NodeKey, split_devices
 from blinkcan.fleet.schema import ROWS_PER_GROUP
 from blinkcan.fleet.task import FileResult, decode_file
 
@@ -35,7 +36,7 @@ def log_files(paths: Iterable[str | os.PathLike[str]]) -> list[str]:
 
 def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any = None,
                  jobs: int | None = None, *, force: bool = False,
-                 devices: Mapping[int, str] | None = None,
+                 devices: Mapping[NodeKey, str] | None = None,
                  rows_per_group: int = ROWS_PER_GROUP,
                  on_result: Callable[[FileResult], None] | None = None,
                  on_frames: Callable[[int], None] | None = None) -> list[FileResult]:
@@ -45,9 +46,11 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
     files and ``out``); else ``jobs`` local processes (default 1: this process). Returns one
     result per file, in order; a file that cannot be read is a "failed" result, the others
     go on. ``on_result`` hears each result as it comes, ``on_frames`` frame counts (in this
-    process only). ``devices`` maps node ids to models (``{0x15: "keypad@1.5"}``)."""
+    process only). ``devices`` maps node ids to models (``{0x15: "keypad@1.5"}``) and J1939
+    addresses too (``{"j1939:0x30": "keypad"}``); ValueError for one that names no device."""
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be 1 or more, not {jobs}")
+    split_devices(devices)  # checked here, not once per file on the workers
     sources = log_files(paths)
     task = partial(decode_file, out=out, force=force, devices=dict(devices or {}),
                    rows_per_group=rows_per_group)

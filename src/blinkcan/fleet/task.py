@@ -32,6 +32,7 @@ from fsspec.core import url_to_fs
 
 from blinkcan import __version__
 from blinkcan.decode.decoder import Decoder
+from blinkcan.decode.nodes import NodeKey
 from blinkcan.devices.registry import describe_device
 from blinkcan.fleet.frames import FrameDecoder, Segment
 from blinkcan.fleet.schema import ROWS_PER_GROUP
@@ -71,9 +72,10 @@ def source_key(source: str) -> str:
     return hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
-def make_decoder(devices: Mapping[int, str] | None) -> Decoder:
+def make_decoder(devices: Mapping[NodeKey, str] | None) -> Decoder:
+    """The decoder of ``devices`` (node ids and "j1939:ADDR" to models), else the defaults."""
     if devices:
-        return Decoder(dict(devices))
+        return Decoder(devices)
     known = [describe_device(name) for name in DEFAULT_DEVICES]
     return Decoder({d.default_node_id: d for d in known})
 
@@ -141,7 +143,7 @@ class _Store:
 
 
 def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False,
-                devices: Mapping[int, str] | None = None,
+                devices: Mapping[NodeKey, str] | None = None,
                 rows_per_group: int = ROWS_PER_GROUP,
                 progress: Callable[[int], None] | None = None) -> FileResult:
     """Decode one log file into the dataset at ``out`` (a folder or an fsspec URL).
@@ -152,7 +154,9 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
     except OSError as error:
         return FileResult(path, "failed", error=f"cannot read: {error.strerror or error}")
     store = _Store(out, source_key(path))
-    settings = {"devices": sorted([node, model] for node, model in (devices or {}).items())}
+    # node ids in order, then J1939 addresses ("j1939:0x30"): as before J1939 could be named
+    settings = {"devices": sorted(([node, model] for node, model in (devices or {}).items()),
+                                  key=lambda pair: (isinstance(pair[0], str), pair[0]))}
     identity = {"source": path, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns,
                 "blinkcan": __version__, "settings": settings}
     store.recover()
@@ -185,7 +189,7 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
                       unreadable=unreadable.count, unreadable_lines=tuple(named))
 
 
-def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[int, str] | None,
+def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[NodeKey, str] | None,
                  progress: Callable[[int], None] | None) -> tuple[int, UnreadableCount]:
     """The frames decoded, and the lines that are no frame (each an ``unreadable`` row; a
     capture whose logger was killed ends in one, cut off)."""
