@@ -319,3 +319,18 @@ def test_the_rig_reads_a_twin_after_what_was_sent_before() -> None:
         keybox = Keybox(rig.bus, 0x0C)
         assert rig.snapshot(twin)["nmt_state"] == "operational"
         keybox.close()
+
+
+def test_a_frame_in_flight_when_the_bus_goes_down_is_not_delivered() -> None:
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15, settings={"startup_led_show": 0}))
+        rig.settle()
+        rig.bus.send(can.Message(arbitration_id=0x000, data=[1, 0x15], is_extended_id=False))
+        assert rig.network.in_flight == 1  # sent, not yet handed to the twins' endpoint
+        rig.bus_down()
+        rig.advance(0.01)
+        assert rig.network.in_flight == 0
+        rig.bus_up()
+        rig.advance(0.01)
+        assert twin.snapshot()["nmt_state"] == "pre-operational"  # the start never arrived
+        assert [frame.can_id for _, frame in rig.frames].count(0x000) == 1  # but it was sent

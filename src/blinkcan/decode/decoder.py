@@ -11,7 +11,7 @@ transfer in progress (segmented uploads are reassembled into one value).
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from enum import Enum
 from typing import Any, NamedTuple
 
@@ -25,7 +25,7 @@ from blinkcan.decode.describers import (  # listing, mask_listing, numbers: kept
     pdo_describer,
 )
 from blinkcan.decode.j1939 import J1939KeypadDecoder
-from blinkcan.decode.nodes import DeviceSpec, NodeKey, split_devices
+from blinkcan.decode.nodes import DevicesByNode, split_devices
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
@@ -52,9 +52,9 @@ from blinkcan.protocol.sdo import (
 from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES, SdoError, UploadTransfer
 
 _UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
-#: requests that name an object (CiA 301 §7.2.4.3): initiate download, upload, abort
 #: the SDO functions of an 11-bit identifier (CiA 301 §7.2.4): server to client, client to server
 _SDO_FUNCTIONS = frozenset({SDO_TX, SDO_RX})
+#: requests that name an object (CiA 301 §7.2.4.3): initiate download, upload, abort
 _INITIATE_REQUESTS = frozenset({CCS_INITIATE_DOWNLOAD, CCS_INITIATE_UPLOAD, CCS_ABORT})
 _NMT_TEXT = {
     NmtCommand.START: "start", NmtCommand.STOP: "stop",
@@ -194,7 +194,7 @@ class Decoder:
     J1939 (decode/nodes.py; none named: 21h, §5); ``learn`` names unknown nodes from identity
     traffic. ValueError for a device it cannot name."""
 
-    def __init__(self, devices: Mapping[NodeKey, DeviceSpec] | None = None,
+    def __init__(self, devices: DevicesByNode | None = None,
                  learn: bool = True) -> None:
         self.learn = learn
         named = split_devices(devices)

@@ -19,6 +19,10 @@ J1939 = "j1939"
 DeviceSpec = str | DeviceDescription
 #: a node as the decoder is told it: a CANopen node id, or "j1939:ADDR"
 NodeKey = int | str
+#: devices by node, as callers write them (a mapping's key type is invariant: each spelled)
+DevicesByNode = Mapping[int, DeviceSpec] | Mapping[str, DeviceSpec] | Mapping[NodeKey, DeviceSpec]
+#: model names by node (what crosses to worker processes: plain strings)
+ModelsByNode = Mapping[int, str] | Mapping[str, str] | Mapping[NodeKey, str]
 
 
 class Devices(NamedTuple):
@@ -28,7 +32,7 @@ class Devices(NamedTuple):
     j1939: dict[int, DeviceDescription]
 
 
-def split_devices(devices: Mapping[NodeKey, DeviceSpec] | None) -> Devices:
+def split_devices(devices: DevicesByNode | None) -> Devices:
     """The devices by protocol; ValueError naming what is wrong (an unknown model, a J1939
     address out of range, a model without J1939 at a J1939 address, a key of another type)."""
     split = Devices({}, {})

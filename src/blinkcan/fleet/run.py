@@ -5,12 +5,12 @@ dataset is the same whichever ran it."""
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from blinkcan.decode.nodes import NodeKey, split_devices
+from blinkcan.decode.nodes import ModelsByNode, split_devices
 from blinkcan.fleet.schema import ROWS_PER_GROUP
 from blinkcan.fleet.task import FileResult, decode_file
 
@@ -36,7 +36,7 @@ def log_files(paths: Iterable[str | os.PathLike[str]]) -> list[str]:
 
 def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any = None,
                  jobs: int | None = None, *, force: bool = False,
-                 devices: Mapping[NodeKey, str] | None = None,
+                 devices: ModelsByNode | None = None,
                  rows_per_group: int = ROWS_PER_GROUP,
                  on_result: Callable[[FileResult], None] | None = None,
                  on_frames: Callable[[int], None] | None = None) -> list[FileResult]:

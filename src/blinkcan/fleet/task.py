@@ -23,7 +23,7 @@ import hashlib
 import json
 import os
 import uuid
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,7 +32,7 @@ from fsspec.core import url_to_fs
 
 from blinkcan import __version__
 from blinkcan.decode.decoder import Decoder
-from blinkcan.decode.nodes import NodeKey
+from blinkcan.decode.nodes import ModelsByNode
 from blinkcan.devices.registry import describe_device
 from blinkcan.fleet.frames import FrameDecoder, Segment
 from blinkcan.fleet.schema import ROWS_PER_GROUP
@@ -72,7 +72,7 @@ def source_key(source: str) -> str:
     return hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
-def make_decoder(devices: Mapping[NodeKey, str] | None) -> Decoder:
+def make_decoder(devices: ModelsByNode | None) -> Decoder:
     """The decoder of ``devices`` (node ids and "j1939:ADDR" to models), else the defaults."""
     if devices:
         return Decoder(devices)
@@ -143,7 +143,7 @@ class _Store:
 
 
 def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False,
-                devices: Mapping[NodeKey, str] | None = None,
+                devices: ModelsByNode | None = None,
                 rows_per_group: int = ROWS_PER_GROUP,
                 progress: Callable[[int], None] | None = None) -> FileResult:
     """Decode one log file into the dataset at ``out`` (a folder or an fsspec URL).
@@ -189,7 +189,7 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
                       unreadable=unreadable.count, unreadable_lines=tuple(named))
 
 
-def _decode_into(writer: PartitionWriter, path: str, devices: Mapping[NodeKey, str] | None,
+def _decode_into(writer: PartitionWriter, path: str, devices: ModelsByNode | None,
                  progress: Callable[[int], None] | None) -> tuple[int, UnreadableCount]:
     """The frames decoded, and the lines that are no frame (each an ``unreadable`` row; a
     capture whose logger was killed ends in one, cut off)."""

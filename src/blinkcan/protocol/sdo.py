@@ -32,6 +32,12 @@ DOWNLOAD_ACKNOWLEDGE = 0x60  # initiate download response
 SEGMENTED_UPLOAD_RESPONSE = 0x41  # initiate upload response, size indicated, not expedited
 ABORT = 0x80
 TOGGLE = 0x10
+#: Initiate frames, byte 0: the e bit (data in bytes 4-7) and the s bit (a size is given)
+#: (CiA 301 §7.2.4.3.3, §7.2.4.3.6)
+EXPEDITED = 0x02
+SIZE_INDICATED = 0x01
+#: Segment frames, byte 0: the c bit, no more segments follow (CiA 301 §7.2.4.3.4)
+LAST_SEGMENT = 0x01
 
 #: Expedited upload reply command by value length: PKP §15 4Bh (2 bytes), §26 43h (4), §32 4Fh (1).
 EXPEDITED_UPLOAD_COMMAND = {1: 0x4F, 2: 0x4B, 3: 0x47, 4: 0x43}
@@ -58,39 +64,35 @@ class SdoFrame(NamedTuple):
     request calls the client command specifier (``CCS_*``) and a reply the server one
     (``SCS_*``). Every field of the layouts is offered; the caller, who knows the direction
     and the specifier, reads the ones that frame has (a segment has no multiplexer: its
-    ``object_index`` and ``subindex`` are data bytes).
+    ``object_index``, ``subindex`` and ``mux`` are data bytes). The fields every frame is read
+    by (command, specifier, multiplexer) are computed once, in the parse: a server reads them
+    on every request, and a property costs a Python call each time.
     """
 
     #: byte 0
     command: int
+    #: bits 7-5 of byte 0: the command specifier (ccs of a request, scs of a reply)
+    specifier: int
     #: bytes 1-2 (LSB first) and 3: the object named (CiA 301 §7.2.4.3.3, §7.2.4.3.6);
     #: not ``index``, which a tuple already has
     object_index: int
     subindex: int
+    #: bytes 1-3, the multiplexer, as sent (echoed in replies: KBX §8)
+    mux: bytes
     #: bytes 4-7 as a little-endian number: size, abort code or expedited data
     word: int
     #: the eight bytes as received
     raw: bytes
 
     @property
-    def specifier(self) -> int:
-        """Bits 7-5 of byte 0: the command specifier (ccs of a request, scs of a reply)."""
-        return self.command >> 5
-
-    @property
-    def mux(self) -> bytes:
-        """Bytes 1-3, the multiplexer, as sent (echoed in replies: KBX §8)."""
-        return self.raw[1:4]
-
-    @property
     def expedited(self) -> bool:
         """Initiate frames: the e bit (bit 1), data in bytes 4-7 (CiA 301 §7.2.4.3.3)."""
-        return bool(self.command & 0x02)
+        return bool(self.command & EXPEDITED)
 
     @property
     def size_indicated(self) -> bool:
         """Initiate frames: the s bit (bit 0): a size is given (CiA 301 §7.2.4.3.3)."""
-        return bool(self.command & 0x01)
+        return bool(self.command & SIZE_INDICATED)
 
     @property
     def expedited_data(self) -> bytes:
@@ -101,7 +103,7 @@ class SdoFrame(NamedTuple):
     @property
     def size(self) -> int | None:
         """A segmented initiate's announced size (s set, e clear: bytes 4-7), else None."""
-        return self.word if self.command & 0x03 == 0x01 else None
+        return self.word if self.command & 0x03 == SIZE_INDICATED else None
 
     @property
     def toggle(self) -> int:
@@ -111,7 +113,7 @@ class SdoFrame(NamedTuple):
     @property
     def last(self) -> bool:
         """Segment frames: the c bit (bit 0): no more segments follow (CiA 301 §7.2.4.3.4)."""
-        return bool(self.command & 0x01)
+        return bool(self.command & LAST_SEGMENT)
 
     @property
     def segment_data(self) -> bytes:
@@ -121,7 +123,7 @@ class SdoFrame(NamedTuple):
     @property
     def is_abort(self) -> bool:
         """An abort transfer frame, either direction (CiA 301 §7.2.4.3.17: cs = 4)."""
-        return self.command >> 5 == CCS_ABORT
+        return self.specifier == CCS_ABORT
 
     @property
     def abort_code(self) -> AbortCode | int:
@@ -131,16 +133,19 @@ class SdoFrame(NamedTuple):
     def answers_upload_of(self, mux: bytes) -> bool:
         """A reply that ends or opens the upload of ``mux``: an initiate upload response or an
         abort for that object (CiA 301 §7.2.4.3.6, §7.2.4.3.17)."""
-        return self.raw[1:4] == mux and self.command >> 5 in _ANSWERS_UPLOAD
+        return self.mux == mux and self.specifier in _ANSWERS_UPLOAD
 
 
 def parse_sdo(data: bytes) -> SdoFrame:
     """The SDO frame in ``data``: any eight bytes parse (CiA 301 §7.2.4.3: every SDO frame
     is eight bytes); any other length raises :class:`SdoFrameError`, the only error."""
+    if data.__class__ is not bytes:  # bytes() of bytes costs more than this test
+        data = bytes(data)
     if len(data) != 8:
         raise SdoFrameError(f"an SDO frame has 8 bytes, not {len(data)}")
-    raw = bytes(data)
-    return _new_tuple(SdoFrame, (*_SDO_LAYOUT.unpack(raw), raw))
+    command, object_index, subindex, word = _SDO_LAYOUT.unpack(data)
+    return _new_tuple(SdoFrame, (command, command >> 5, object_index, subindex, data[1:4], word,
+                                 data))
 
 
 def multiplexer(index: int, subindex: int) -> bytes:
@@ -170,7 +175,7 @@ def expedited_upload_reply(mux: bytes, value: bytes) -> bytes:
 
 def expedited_payload(command: int, data: bytes) -> bytes:
     """The data bytes of an expedited transfer: n bytes when the size is indicated, else four."""
-    if command & 0x01:
+    if command & SIZE_INDICATED:
         return data[4 : 8 - ((command >> 2) & 0x03)]
     return data[4:8]
 

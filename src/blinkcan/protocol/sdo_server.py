@@ -15,6 +15,7 @@ Rules:
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Callable
 from enum import IntEnum
 from typing import Protocol
@@ -24,24 +25,29 @@ from blinkcan.protocol.sdo import (
     CCS_DOWNLOAD_SEGMENT,
     CCS_UPLOAD_SEGMENT,
     DOWNLOAD_ACKNOWLEDGE,
+    EXPEDITED,
     EXPEDITED_UPLOAD_COMMAND,
+    LAST_SEGMENT,
     SEGMENTED_UPLOAD_RESPONSE,
+    SIZE_INDICATED,
     TOGGLE,
     ZEROS,
     SdoFrame,
     abort_data,
+    expedited_payload,
     parse_sdo,
+    segment_payload,
 )
 
 #: The largest segmented download the server buffers (both devices have only short objects).
 MAX_DOWNLOAD_SIZE = 1024
 _NO_MULTIPLEXER = b"\x00\x00\x00"
-_ACKNOWLEDGE_PREFIX = [bytes((command,)) for command in range(256)]
+#: an initiate download response: the command, the request's multiplexer echoed (KBX §8),
+#: four bytes reserved (CiA 301 §7.2.4.3.3); packed in one call from the parsed fields
+_ACKNOWLEDGE = struct.Struct("<BHB4x")
 #: client specifiers of segment requests: bytes 1-3 are data, not a multiplexer
 _SEGMENT_REQUESTS = frozenset({CCS_DOWNLOAD_SEGMENT, CCS_UPLOAD_SEGMENT})
-
-
-#: distinct request frames whose parse a server keeps
+#: distinct request frames whose parse a server keeps (a master polls the same few requests)
 _PARSED_KEPT = 256
 
 class ObjectAccess(Protocol):
@@ -70,11 +76,12 @@ _Handler = Callable[[SdoFrame], "bytes | None"]
 class SdoServer:
     """One server channel (one per node)."""
 
-    __slots__ = ("_access", "_buffer", "_handlers", "_idle", "_mux", "_parsed", "_position",
-                 "_replies", "_size", "_state", "_tables", "_toggle")
+    __slots__ = ("_buffer", "_download", "_handlers", "_idle", "_mux", "_parsed", "_position",
+                 "_replies", "_size", "_state", "_tables", "_toggle", "_upload")
 
     def __init__(self, access: ObjectAccess) -> None:
-        self._access = access
+        self._upload = access.sdo_upload  # bound once: called on every request
+        self._download = access.sdo_download
         self._state = TransferState.IDLE
         self._mux = _NO_MULTIPLEXER
         self._buffer = bytearray()
@@ -83,12 +90,14 @@ class SdoServer:
         self._size: int | None = None
         #: mux -> (value bytes, reply): an unchanged value object gets the same reply bytes
         self._replies: dict[bytes, tuple[bytes, bytes]] = {}
-        #: request bytes -> their parse: a controller asks the same few requests again and
-        #: again, and an SdoFrame is immutable (bounded: cleared when full)
+        #: request bytes -> their parse. A master polls the same requests byte for byte (a
+        #: read of an object is always the same eight bytes), an SdoFrame is immutable, and
+        #: parsing costs about a third of a request (a NamedTuple of seven fields; measured,
+        #: benchmarks/sdo_twin.py). Bounded: cleared when full.
         self._parsed: dict[bytes, SdoFrame] = {}
         # state -> handler per client command specifier (0..7; CiA 301 §7.2.4.3): the protocol
-        # as a table. A list
-        # per state, not a dict keyed by (state, ccs): hashing an enum costs a Python call.
+        # as a table. A list per state, not a dict keyed by (state, ccs): hashing an enum costs
+        # a Python call.
         refuse = self._refuse
         self._tables: dict[TransferState, list[_Handler]] = {}
         for state in TransferState:
@@ -117,20 +126,19 @@ class SdoServer:
 
     def on_request(self, data: bytes) -> bytes | None:
         """The eight reply bytes for one request, or None (a client abort needs no reply)."""
-        request = self._parsed.get(data) if type(data) is bytes else None
+        request = self._parsed.get(data) if data.__class__ is bytes else None
         if request is None:
             request = self._parse(data)
-        return self._handlers[request.command >> 5](request)
+        return self._handlers[request.specifier](request)
 
     def _parse(self, data: bytes) -> SdoFrame:
-        raw = bytes(data)
-        if len(raw) < 8:  # errata P10: read as padded with zeros
-            raw += ZEROS[len(raw) :]
-        request = parse_sdo(raw[:8])
-        parsed = self._parsed
-        if len(parsed) >= _PARSED_KEPT:
-            parsed.clear()
-        parsed[bytes(data)] = request
+        # errata P10: a short request reads as padded with zeros
+        request = parse_sdo(data if len(data) == 8 else (bytes(data) + ZEROS)[:8])
+        if data.__class__ is bytes:  # hashable and immutable
+            parsed = self._parsed
+            if len(parsed) >= _PARSED_KEPT:
+                parsed.clear()
+            parsed[data] = request
         return request
 
     # -- handlers -------------------------------------------------------------------------
@@ -149,7 +157,7 @@ class SdoServer:
         mux = request.mux
         if self._handlers is not self._idle:
             self._enter(TransferState.IDLE)
-        value = self._access.sdo_upload(mux)
+        value = self._upload(mux)
         cached = self._replies.get(mux)
         if cached is not None and cached[0] is value:
             return cached[1]
@@ -183,15 +191,15 @@ class SdoServer:
         return bytes((command,)) + chunk + ZEROS[len(chunk) : 7]
 
     def _initiate_download(self, request: SdoFrame) -> bytes:
-        mux = request.mux
+        command, mux = request.command, request.mux  # read once: properties cost a call
         if self._handlers is not self._idle:
             self._enter(TransferState.IDLE)
-        if request.expedited:  # CiA 301 §7.2.4.3.3: n bytes if the size is indicated, else 4
-            result = self._access.sdo_download(mux, request.expedited_data,
-                                               request.size_indicated)
+        if command & EXPEDITED:  # CiA 301 §7.2.4.3.3: n bytes if the size is indicated, else 4
+            result = self._download(mux, expedited_payload(command, request.raw),
+                                    command & SIZE_INDICATED == SIZE_INDICATED)
             if result > 0xFF:
                 return abort_data(mux, result)
-            return _ACKNOWLEDGE_PREFIX[result] + mux + b"\x00\x00\x00\x00"
+            return _ACKNOWLEDGE.pack(result, request.object_index, request.subindex)
         size = request.size
         if size is not None and size > MAX_DOWNLOAD_SIZE:
             return abort_data(mux, AbortCode.OUT_OF_MEMORY)
@@ -203,22 +211,23 @@ class SdoServer:
         return bytes((DOWNLOAD_ACKNOWLEDGE,)) + mux + b"\x00\x00\x00\x00"
 
     def _download_segment(self, request: SdoFrame) -> bytes:
-        toggle = request.toggle  # CiA 301 §7.2.4.3.4: alternates from 0 on each segment
+        command = request.command
+        toggle = command & TOGGLE  # CiA 301 §7.2.4.3.4: alternates from 0 on each segment
         if toggle != self._toggle:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
-        self._buffer += request.segment_data
+        self._buffer += segment_payload(request.raw)
         if len(self._buffer) > MAX_DOWNLOAD_SIZE:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.OUT_OF_MEMORY)
         self._toggle ^= TOGGLE
         reply = bytes((0x20 | toggle,)) + ZEROS[:7]
-        if not request.last:
+        if not command & LAST_SEGMENT:
             return reply
         self._enter(TransferState.IDLE)
         if self._size is not None and self._size != len(self._buffer):
             return abort_data(self._mux, AbortCode.DATA_TYPE_LENGTH_MISMATCH)
-        result = self._access.sdo_download(self._mux, bytes(self._buffer), True)
+        result = self._download(self._mux, bytes(self._buffer), True)
         if result > 0xFF:
             return abort_data(self._mux, result)
         return reply

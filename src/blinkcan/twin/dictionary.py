@@ -30,13 +30,15 @@ Persister = Callable[[dict[str, Value]], "AbortCode | None"]
 class _Slot:
     """One entry's live value and the facts about its type, computed once (hot path)."""
 
-    __slots__ = ("check", "entry", "hook", "keeps_value", "raw", "readable", "reader", "signed",
-                 "size", "spans", "value", "writable")
+    __slots__ = ("acknowledge", "check", "entry", "hook", "keeps_value", "raw", "readable",
+                 "reader", "signed", "size", "spans", "stored", "value", "writable")
 
     def __init__(self, entry: ObjectEntry, value: Value) -> None:
         self.entry = entry
         self.readable = entry.access.readable
         self.writable = entry.access.writable
+        self.stored = entry.stored
+        self.acknowledge = entry.acknowledge
         self.size = entry.data_type.size
         self.signed = entry.data_type.is_signed
         self.spans = _valid_spans(entry)
@@ -123,27 +125,33 @@ class ObjectStore:
         slot = self._by_name[name]
         return self._commit(slot, value)
 
-    def _commit(self, slot: _Slot, value: Value) -> AbortCode | None:
+    def _commit(self, slot: _Slot, value: Value, raw: bytes | None = None) -> AbortCode | None:
+        """Check, persist, hook, store; ``raw`` is the value's wire encoding where the caller
+        has it (an SDO download), so it is not encoded again."""
         if slot.check is not None:
             refusal = slot.check(value)  # type: ignore[arg-type]
             if refusal is not None:
                 return refusal
         # an unchanged stored value is not written again (as devices spare their EEPROM)
-        persist = self.persist if (slot.entry.stored and slot.keeps_value
+        persist = self.persist if (slot.stored and slot.keeps_value
                                    and value != slot.value) else None
         if persist is not None:
             refusal = persist({**self.stored_values(), slot.entry.name: value})
             if refusal is not None:
                 return refusal  # nothing changed: the retry is tried again
-        if slot.hook is not None:
-            refusal = slot.hook(value)  # type: ignore[arg-type]
+        hook = slot.hook
+        if hook is not None:
+            refusal = hook(value)  # type: ignore[arg-type]
             if refusal is not None:
                 if persist is not None:
                     persist(self.stored_values())  # the file back to what memory holds
                 return refusal
             if not slot.keeps_value:
                 return None
-        _store_value(slot, value)
+        if raw is None:
+            _store_value(slot, value)
+        else:
+            slot.value, slot.raw = value, raw
         return None
 
     def entries(self) -> Iterator[ObjectEntry]:
@@ -190,27 +198,31 @@ class ObjectStore:
         if not slot.writable:
             return AbortCode.READ_ONLY
         size = slot.size
-        entry = slot.entry
         if size is None:  # a string
-            text = entry.decode(data)
+            text = slot.entry.decode(data)
             refusal = self._commit(slot, text)
-            return entry.acknowledge if refusal is None else refusal
-        if size_indicated:
-            if len(data) != size:
+            return slot.acknowledge if refusal is None else refusal
+        if len(data) != size:
+            if size_indicated:
                 return AbortCode.DATA_TYPE_LENGTH_MISMATCH
-        elif len(data) != size:
             data = data[:size]
-        value = int.from_bytes(data, "little", signed=slot.signed)
+        # unsigned without the keyword: a call with keywords costs more (every request)
+        value = (int.from_bytes(data, "little", signed=True) if slot.signed
+                 else int.from_bytes(data, "little"))
         for low, high in slot.spans:
             if low <= value <= high:
                 break
         else:
             return AbortCode.INVALID_VALUE
-        if slot.hook is not None or entry.stored:
-            refusal = self._commit(slot, value)
+        # the wire bytes are the value's encoding when they are all of it (not a short
+        # unsized expedited write to a wider entry)
+        raw = None if len(data) != size else data if data.__class__ is bytes else bytes(data)
+        if slot.hook is not None or slot.stored:
+            refusal = self._commit(slot, value, raw)
             if refusal is not None:
                 return refusal
+        elif raw is None:
+            _store_value(slot, value)
         else:
-            slot.value = value
-            slot.raw = bytes(data)
-        return entry.acknowledge
+            slot.value, slot.raw = value, raw
+        return slot.acknowledge

@@ -27,6 +27,10 @@ class PinState(IntEnum):
 
 
 class PinEvent(Enum):
+    # members are singletons, equal only to themselves: the identity hash agrees with that and
+    # is a C slot, where Enum's hashes the name in Python (TRANSITIONS is read per command)
+    __hash__ = object.__hash__
+
     COMMAND_OFF = "off"
     COMMAND_HIGH = "high"  # fuse intact, or a pin that cannot detect faults
     COMMAND_HIGH_FUSE_BLOWN = "high, fuse blown"

@@ -45,6 +45,7 @@ from blinkcan.twin.keypad_display import (
 )
 from blinkcan.twin.keypad_j1939 import J1939Keypad
 from blinkcan.twin.nvm import NvmArgument, open_nvm
+from blinkcan.twin.schedule import milliseconds
 
 PROTOCOLS = {"canopen": PROTOCOL_CANOPEN, "j1939": PROTOCOL_J1939}
 
@@ -160,7 +161,7 @@ class KeypadTwin(CanopenTwin):
         self._register_hooks()
 
     def _register_hooks(self) -> None:
-        self.on_write("tpdo1_event_timer", self._on_event_timer)
+        self.on_write("tpdo1_event_timer", self._schedule_periodic)
         self.on_write("can_protocol", self._on_can_protocol)
         for view in self._led_views:
             self.on_write(view, self._led_view_hook(view), keeps_value=False)
@@ -241,12 +242,20 @@ class KeypadTwin(CanopenTwin):
 
     def _led_view_hook(self, name: str) -> Callable[[int, float], None]:
         prefix, shift, mask = self._led_views[name]
+        bits = mask << shift
+        leds = self._led_mask >> shift  # MT M27: bits that are no LED read back 0
+        # the views a write of this one can change: those sharing its bits (itself, where the
+        # description's fields do not overlap); found once, not on every write
+        touched = [(view, view_shift, view_mask)
+                   for view, (view_prefix, view_shift, view_mask) in self._led_views.items()
+                   if view_prefix == prefix and (view_mask << view_shift) & bits]
+        store = self.objects
 
         def on_write(value: int, now: float) -> None:
-            word = self._words[prefix]
-            value &= self._led_mask >> shift  # MT M27: bits that are no LED read back 0
-            self._words[prefix] = (word & ~(mask << shift)) | (value << shift)
-            self._refresh_led_views(prefix)
+            words = self._words
+            word = words[prefix] = (words[prefix] & ~bits) | ((value & leds) << shift)
+            for view, view_shift, view_mask in touched:
+                store.set(view, (word >> view_shift) & view_mask)
 
         return on_write
 
@@ -369,13 +378,10 @@ class KeypadTwin(CanopenTwin):
         self._schedule_periodic(self.objects.get_int("tpdo1_event_timer"), now)
         return []
 
-    def _on_event_timer(self, value: int, now: float) -> None:
-        self._schedule_periodic(value, now)
-
     def _schedule_periodic(self, period_ms: int, now: float) -> None:
         # the event timer runs in event-driven mode only (rev 1.5 silent; blinkcan decision)
         operational = self.nmt_state is NmtState.OPERATIONAL and not self._tpdo_synchronous()
-        self._periodic.start(period_ms / 1000, now, operational)
+        self._periodic.run(now, milliseconds(period_ms), operational)
 
     def _periodic_key_state(self, now: float) -> list[Frame]:
         return [self._key_state_frame(now)]  # PKP §41b periodic state transmission
