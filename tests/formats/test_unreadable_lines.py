@@ -150,3 +150,28 @@ def test_a_gz_candump_log_decodes_as_the_plain_one(tmp_path: Path) -> None:
     assert [str(i) for _, i in read_log(packed)] == [str(i) for _, i in read_log(plain)]
     assert [type(i) for _, i in read_log(packed)] == [Frame, UnreadableLine, type(
         next(m for m in read_messages(plain)))]
+
+
+@pytest.mark.parametrize(("last", "frames"), [
+    ("(1.2) can0 12", 2),                 # cut inside the identifier: it read as frame 012#
+    ("(1.2) can0 123#0102030", 2),        # cut inside the data: python-can read 01 02 03
+    ("(1.2) can0 123##", 2),              # cut after a CAN FD mark
+    ("(1.2", 2),                          # cut inside the time
+    ("", 3),                              # an empty last line: nothing cut
+])
+@pytest.mark.parametrize("ending", ["\n", "\r\n"])
+def test_a_capture_cut_anywhere_keeps_its_frames_and_names_the_cut(
+        tmp_path: Path, last: str, frames: int, ending: str) -> None:
+    log = tmp_path / "cut.log"
+    whole = ["(1.000000) can0 123#01", "(1.100000) can0 123#02"] + (
+        ["(1.150000) can0 123#03", ""] if not last else [last])
+    log.write_bytes(ending.join(whole).encode())
+    for reader, items in _items(log).items():
+        unreadable = [item for item in items if isinstance(item, UnreadableLine)]
+        assert len(items) - len(unreadable) == frames, reader
+        if last:
+            [line] = unreadable
+            assert (line.number, line.text, line.cut_off) == (3, last, True), reader
+            assert str(line).endswith(": the capture ends there, cut off")
+        else:
+            assert not unreadable, reader

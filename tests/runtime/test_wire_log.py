@@ -52,3 +52,13 @@ def test_a_long_simulation_keeps_no_object_per_frame() -> None:
         grown, sent = len(gc.get_objects()) - before, len(rig.frames) - frames
     assert sent > 13_000
     assert grown < sent / 100, f"{grown} objects more after {sent} frames"
+
+
+def test_the_wire_log_adds_to_a_list_as_the_list_it_replaced_did() -> None:
+    log = WireLog()
+    first, second = Frame(0x715, b"\x00"), Frame(0x195, b"\x01")
+    log.record(0.0, first)
+    log.record(0.5, second)
+    earlier = [TimedFrame(-1.0, second)]
+    assert log + earlier == [TimedFrame(0.0, first), TimedFrame(0.5, second), *earlier]
+    assert earlier + log == [*earlier, TimedFrame(0.0, first), TimedFrame(0.5, second)]

@@ -76,32 +76,35 @@ def command_socket(commands: TypedCommands, console: Console) -> Iterator[Path |
         yield None
         return
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    try:
-        path = runtime_dir() / f"emulate-{os.getpid()}.sock"
-        if _listening(path):
-            raise SocketError(f"{path} is in use: another process listens on it")
-        path.unlink(missing_ok=True)  # this process id's, nobody listening: an earlier one's
-        server.bind(str(path))  # in the 0700 directory: no one else reaches it meanwhile
-        path.chmod(0o600)
-        server.listen()
-        server.settimeout(_ACCEPT_POLL_S)
-    except OSError as error:
-        server.close()
-        console.print(f"warning: blinkcan act cannot reach this emulator: {error}",
-                      markup=False, highlight=False)
-        yield None
-        return
     stopping = threading.Event()
     thread = threading.Thread(target=_serve, args=(server, commands, stopping),
                               name="blinkcan-command-socket", daemon=True)
-    thread.start()
+    bound: Path | None = None  # ours to remove, however the emulator stops (even starting)
     try:
+        try:
+            path = runtime_dir() / f"emulate-{os.getpid()}.sock"
+            if _listening(path):
+                raise SocketError(f"{path} is in use: another process listens on it")
+            path.unlink(missing_ok=True)  # this process id's, nobody listening: an earlier one's
+            server.bind(str(path))  # in the 0700 directory: no one else reaches it meanwhile
+            bound = path
+            path.chmod(0o600)
+            server.listen()
+            server.settimeout(_ACCEPT_POLL_S)
+        except OSError as error:
+            console.print(f"warning: blinkcan act cannot reach this emulator: {error}",
+                          markup=False, highlight=False)
+            yield None
+            return
+        thread.start()  # (a stop signal may come while it starts: the socket still goes)
         yield path
     finally:
         stopping.set()
-        thread.join(timeout=2 * _ACCEPT_POLL_S + 1)
+        if thread.is_alive():
+            thread.join(timeout=2 * _ACCEPT_POLL_S + 1)
         server.close()
-        path.unlink(missing_ok=True)
+        if bound is not None:
+            bound.unlink(missing_ok=True)
 
 
 def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.Event) -> None:
@@ -129,15 +132,16 @@ def _answer(connection: socket.socket, reply: Callable[[str], list[str]],
     the connection closed."""
     with connection:
         try:
-            connection.settimeout(LINE_TIMEOUT_S)
-            line = _read_line(connection)
-            answer = (reply(line.decode(errors="replace")) if line is not None
-                      else [f"Error: send one command line of at most {MAX_LINE} bytes"])
+            try:
+                connection.settimeout(LINE_TIMEOUT_S)
+                line = _read_line(connection)
+                answer = (reply(line.decode(errors="replace")) if line is not None
+                          else [f"Error: send one command line of at most {MAX_LINE} bytes"])
+            finally:
+                done()  # before the answer goes: a client that has it may ask again at once
             connection.sendall("".join(f"{text}\n" for text in answer).encode())
         except OSError:  # a client gone, or too slow
             pass
-        finally:
-            done()
 
 
 def _read_line(connection: socket.socket) -> bytes | None:

@@ -28,8 +28,10 @@ def convert(source: str, target: str, force: bool) -> None:
     """Convert a CAN log to another format (by file name), e.g. candump .log to .pcap.
     Every frame is kept whole (identifier, kind, flags, data, channel, time) where TARGET's
     format can hold it; what it cannot (e.g. .csv: channel, CAN FD flags) is counted, named
-    and explained, one line each. A line of SOURCE that is no frame is named and counted,
-    the frames after it converted, and the exit status is 1 (no format holds such a line)."""
+    and explained, one line each; a frame it cannot hold at all (.trc: error frames) refuses
+    the conversion, naming how many, and nothing is written. A line of SOURCE that is no
+    frame is named and counted, the frames after it converted, and the exit status is 1 (no
+    format holds such a line)."""
     check_target(target, force)
     unread: LogError | None = None
     unreadable = UnreadableCount()
@@ -47,13 +49,13 @@ def convert(source: str, target: str, force: bool) -> None:
                 # the frames before what ended the reading are kept (a line over 4096 bytes:
                 # not a candump log from there on): nothing recorded is lost
                 unread = error
+            if writer.skipped:  # frames TARGET cannot hold: refused, TARGET left as it was
+                raise writer.refusal(source)
     except LogError as error:
         for bad in unreadable.named:
             click.echo(f"{source}: {bad}", err=True)
         raise click.ClickException(str(error)) from None
     click.echo(f"{writer.count} frames written to {target}", err=True)
-    if (skipped := writer.skipped_text()) is not None:
-        click.echo(skipped, err=True)
     for line in writer.lost_lines():
         click.echo(line, err=True)
     if unread is not None:

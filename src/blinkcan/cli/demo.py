@@ -264,8 +264,12 @@ def _high(states: dict[int, str]) -> list[int]:
 
 
 def _until_interrupted() -> None:
+    """Until Ctrl-C. The wait wakes every half second, as emulate's does: one endless wait
+    could miss a signal that came right after start-up."""
+    never = threading.Event()
     with contextlib.suppress(KeyboardInterrupt):
-        threading.Event().wait()
+        while not never.wait(0.5):
+            pass
 
 
 @click.command("demo")

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, BinaryIO, TextIO
 
 from blinkcan.formats.candump import read_candump_columns
 from blinkcan.formats.columns import FrameColumns
+from blinkcan.formats.log_source import DecompressedText
 from blinkcan.formats.logs import LogError, frame_kind, read_messages
 from blinkcan.formats.unreadable import UnreadableLine
 
@@ -83,7 +84,7 @@ class _ZstdReader(io.RawIOBase):
 
 def _zstd_text(path: Path) -> TextIO:
     reader = io.BufferedReader(_ZstdReader(path.open("rb")))
-    return io.TextIOWrapper(reader, encoding="utf-8", errors=_BYTES_KEPT)
+    return DecompressedText(reader, "utf-8", _BYTES_KEPT)
 
 
 #: a byte that is not UTF-8 read as a surrogate escape: its line is unreadable, the others
@@ -92,8 +93,8 @@ _BYTES_KEPT = "surrogateescape"
 
 
 def _open_text(path: Path, compression: str) -> TextIO:
-    if compression == ".gz":
-        return gzip.open(path, "rt", encoding="utf-8", errors=_BYTES_KEPT)
+    if compression == ".gz":  # cut short: every line before the cut (formats/log_source.py)
+        return DecompressedText(gzip.open(path, "rb"), "utf-8", _BYTES_KEPT)
     if compression == ".zst":
         return _zstd_text(path)
     return path.open(encoding="utf-8", errors=_BYTES_KEPT)

@@ -52,9 +52,12 @@ def _python_can(line: str) -> can.Message | None:
     return restore_error_details(message, line) if message is not None else None
 
 
-def _checked(fields: list[str], line: str) -> None:
+def _checked(fields: list[str], line: str, suspect: bool = False) -> None:
     """Refuse a line python-can would misread (``fields``: its words): not whole (a capture
-    cut off mid-line), an identifier over 8 digits, data of an odd number of hex digits."""
+    cut off mid-line), an identifier over 8 digits, data of an odd number of hex digits; and
+    where it may hold one (``suspect``: not ASCII), a byte that is not UTF-8."""
+    if suspect and _escaped(line):
+        raise ValueError(f"{shown(line)} is not UTF-8 text")
     if 0 < len(fields) < 3 or (len(fields) >= 3 and "#" not in fields[2]):
         # e.g. the last line of a capture cut off by a killed candump
         raise ValueError(_not_whole(line))
@@ -121,15 +124,16 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message | UnreadableLine]:
         for block in bounded_line_blocks(stream, "candump"):
             suspect = type(block) is not list  # not ASCII, or the file's last line
             cut[0] = type(block) is UnterminatedLine
+            if isinstance(block, UnterminatedLine) and block.cut_short:
+                passed.append(_cut_short(block[0], number[0] + 1))
+                continue
             for line in block:
                 number[0] += 1
                 fields = line.split()
                 if not fields or fields[0][0] == "#":
                     continue
                 try:
-                    if suspect and _escaped(line):
-                        raise ValueError(f"{shown(line)} is not UTF-8 text")
-                    _checked(fields, line)
+                    _checked(fields, line, suspect)
                 except ValueError as error:
                     passed.append(_unreadable(line, number[0], error, cut[0]))
                     continue
@@ -220,6 +224,8 @@ def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
         columns = FrameColumns()
         if type(lines) is list:
             _read_lines(lines, columns, idents, read, False)
+        elif isinstance(lines, UnterminatedLine) and lines.cut_short:
+            columns.add_unreadable(_cut_short(lines[0], read + 1))
         else:  # not ASCII (a byte that is not UTF-8 is a surrogate escape), or the last line
             cut_off = type(lines) is UnterminatedLine
             start = 0
@@ -297,11 +303,9 @@ def _read_lines(lines: list[str], columns: FrameColumns,
 
 
 def _escaped(line: str) -> bool:
-    """The line holds a byte that is not UTF-8 (a surrogate escape)."""
-    return _SURROGATE.search(line) is not None
-
-
-_SURROGATE = re.compile("[\udc80-\udcff]")
+    """The line holds a byte that is not UTF-8 (a surrogate escape; ``re`` compiles the
+    pattern at its first use and keeps it)."""
+    return re.search("[\udc80-\udcff]", line) is not None
 
 
 def _unreadable(line: str, number: int, error: Exception, cut_off: bool) -> UnreadableLine:
@@ -310,14 +314,25 @@ def _unreadable(line: str, number: int, error: Exception, cut_off: bool) -> Unre
     if shown(line) not in reason:  # python-can's words ("not enough values to unpack")
         reason = (_not_whole(line) if len(line.split()) < 3
                   else f"{shown(line)} is not a candump line ({reason})")
+    return UnreadableLine(number, printable(line), reason, _line_time(line), cut_off)
+
+
+def _line_time(line: str) -> float | None:
+    """The time a line that is no frame starts with, where it reads as one."""
     stamp = line.split(maxsplit=1)[0] if line.strip() else ""
     time = None
     if stamp[:1] == "(" and stamp[-1:] == ")":
         with contextlib.suppress(ValueError):
             time = float(stamp[1:-1])
-    if time is not None and not math.isfinite(time):
-        time = None
-    return UnreadableLine(number, printable(line), reason, time, cut_off)
+    return time if time is not None and math.isfinite(time) else None
+
+
+def _cut_short(line: str, number: int) -> UnreadableLine:
+    """The last line of a compressed log whose compressed stream was cut short: it may have
+    been cut, whole or not, so it is no frame (or, empty, the cut is at a line's end)."""
+    where = f"{shown(line)} is where" if line.strip() else "there"
+    reason = f"{where} the compressed file ends, before its compressed stream does: cut short"
+    return UnreadableLine(number, printable(line), reason, _line_time(line), True)
 
 
 def _no_frame(first: UnreadableLine) -> str:

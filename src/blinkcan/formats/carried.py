@@ -44,7 +44,9 @@ CARRIES: dict[str, Carries] = {
     ".asc": Carries(error_details=False, times="from_first"),  # "1  ErrorFrame", no class
     ".blf": Carries(times="from_first"),
     ".mf4": Carries(),  # frames grouped by kind, read back merged by time
-    ".trc": Carries(dropped=frozenset({"remote", "error", "fd"})),  # python-can's TRCWriter
+    # TRC 2.1 as formats/log_writers.py writes it: no error frames (python-can reads no ER
+    # line), no ESI (python-can and PEAK read FE and BI differently)
+    ".trc": Carries(dropped=frozenset({"error"}), error_state=False),
     ".csv": Carries(fd_flag=False, bit_rate_switch=False, error_state=False, channel="none"),
     ".db": Carries(fd_flag=False, bit_rate_switch=False, error_state=False, channel="none"),
 }

@@ -14,10 +14,10 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from blinkcan.formats.unreadable import UnreadableLine
-
 if TYPE_CHECKING:  # python-can loads where a log needs it: a candump log reads without it
     import can
+
+    from blinkcan.formats.unreadable import UnreadableLine
 
 
 @dataclass

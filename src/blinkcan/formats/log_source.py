@@ -50,7 +50,54 @@ class LineTooLongError(BlinkcanError, ValueError):
 class UnterminatedLine(list[str]):
     """The block :func:`bounded_line_blocks` ends with when the file's last line has no
     newline after it: a line a reader cannot read there was cut off (a logger killed
-    mid-write)."""
+    mid-write). ``cut_short``: a compressed file ended before its compressed stream did (a
+    copy interrupted), so this line, whole or not, may have been cut; its text may be ""."""
+
+    cut_short = False
+
+
+class _EndsWhereCut(io.RawIOBase):
+    """A decompressing stream's bytes up to where its compressed file ends: the decompressor's
+    EOFError there (a file cut short) becomes the end of the data, and :attr:`cut_short` says
+    so. Read a chunk at a time (``read1``), so every byte decompressed before the cut is
+    delivered (a text reader's larger read would lose them with the error)."""
+
+    def __init__(self, source: io.BufferedIOBase) -> None:
+        super().__init__()
+        self._source = source
+        self.cut_short = False
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
+        if self.cut_short:
+            return 0
+        try:
+            data = self._source.read1(len(buffer))
+        except EOFError:
+            self.cut_short = True
+            return 0
+        size = len(data)
+        buffer[:size] = data
+        return size
+
+    def close(self) -> None:
+        self._source.close()
+        super().close()
+
+
+class DecompressedText(io.TextIOWrapper):
+    """The text of a compressed log; :attr:`cut_short` once its end is read: the compressed
+    file ended inside its compressed stream (:class:`_EndsWhereCut`)."""
+
+    def __init__(self, source: io.BufferedIOBase, encoding: str, errors: str) -> None:
+        self._ends = _EndsWhereCut(source)
+        super().__init__(io.BufferedReader(self._ends), encoding=encoding, errors=errors)
+
+    @property
+    def cut_short(self) -> bool:
+        return self._ends.cut_short
 
 
 class NonAsciiLines(list[str]):
@@ -179,5 +226,8 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
                                    f"not a {kind} log")
         number += len(lines)
         yield lines
-    if rest:
-        yield UnterminatedLine([rest])
+    cut_short = isinstance(stream, DecompressedText) and stream.cut_short
+    if rest or cut_short:
+        last = UnterminatedLine([rest])
+        last.cut_short = cut_short
+        yield last

@@ -11,6 +11,15 @@
 - ``.blf``: the header holds no date before 1990, yet python-can counts the times from the
   first frame: a log whose times start near 0 reads back shifted by its first time. Such a log
   counts from 0 here.
+- ``.trc``: python-can's TRCWriter drops remote and CAN FD frames (a warning in its log, and
+  nothing in the file), though TRC 2.1, the version it writes, has them: ``RR`` (remote, its
+  DLC in the ``L`` column), ``FD`` and ``FB`` (CAN FD, FB with the bit rate switch, ``L`` the
+  DLC code), all of which python-can's TRCReader reads. :class:`TrcWriter` writes them. The
+  error state indicator is not written (formats/carried.py counts it): python-can's reader
+  takes ``FE`` for BRS and ESI and ``BI`` for ESI alone, where PEAK's format has ``FE`` for
+  ESI and ``BI`` for both, so either way one side would misread it. Error frames (TRC's
+  ``ER``) are not written at all: python-can's reader skips ``ER`` lines, so a frame written
+  so would be lost on reading; ``convert`` refuses them (cli/convert.py).
 - ``.db``: python-can's SqliteWriter hands frames to a thread that, once stopped, ends after
   the batch it is writing and drops what is still queued (a 2,885-frame conversion kept 501).
   :class:`SqliteLogWriter` writes the same table (python-can's SqliteReader reads it)
@@ -31,6 +40,8 @@ from can.io.blf import BLFWriter
 from can.io.canutils import CanutilsLogWriter
 from can.io.generic import MessageWriter
 from can.io.logger import MESSAGE_WRITERS
+from can.io.trc import TRCWriter
+from can.util import channel2int, len2dlc
 
 from blinkcan.formats.carried import BLF_DATED_FROM, channel_key, start_millisecond
 from blinkcan.formats.pcap import CAN_EFF_MASK, CAN_ERR_FLAG, CANFD_BRS, CANFD_ESI
@@ -84,6 +95,33 @@ class BlfWriter(BLFWriter):
         super().on_message_received(msg)
 
 
+class TrcWriter(TRCWriter):
+    """TRC 2.1 with remote and CAN FD frames (see the module docstring)."""
+
+    LINE = "{number:>7} {time:13.3f} {kind} {channel:>2} {ident:>8} {direction:>2} -  {dlc:<4} "
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if msg.is_error_frame or not (msg.is_remote_frame or msg.is_fd):
+            super().on_message_received(msg)  # data frames as python-can writes them
+            return
+        if self.first_timestamp is None:
+            self.first_timestamp = msg.timestamp
+        channel = channel2int(msg.channel)  # as python-can's writer numbers them, from 1
+        channel = self.channel if channel is None else channel + 1
+        if msg.is_remote_frame:
+            kind, dlc, data = "RR", msg.dlc, ""
+        else:
+            kind = "FB" if msg.bitrate_switch else "FD"
+            dlc, data = len2dlc(len(msg.data)), " ".join(f"{b:02X}" for b in msg.data)
+        ident = f"{msg.arbitration_id:07X}" if msg.is_extended_id else \
+            f"{msg.arbitration_id:04X}"
+        line = self.LINE.format(number=self.msgnr, time=(msg.timestamp - self.first_timestamp)
+                                * 1000, kind=kind, channel=channel, ident=ident,
+                                direction="Rx" if msg.is_rx else "Tx", dlc=dlc)
+        self.msgnr += 1
+        self.log_event(line + data, msg.timestamp)
+
+
 class SqliteLogWriter(MessageWriter):
     """python-can's SQLite table (``messages``: ts, arbitration_id, extended, remote, error,
     dlc, data), written in the caller's thread (see the module docstring)."""
@@ -127,4 +165,4 @@ class SqliteLogWriter(MessageWriter):
 
 #: the writer of each suffix: python-can's, mended as above
 WRITERS: dict[str, Any] = {**MESSAGE_WRITERS, ".log": CandumpWriter, ".asc": AscWriter,
-                           ".blf": BlfWriter, ".db": SqliteLogWriter}
+                           ".blf": BlfWriter, ".trc": TrcWriter, ".db": SqliteLogWriter}

@@ -9,9 +9,10 @@ and reading goes on (formats/candump.py).
 Lossless: remote (RTR), error and CAN FD frames are read and written like data frames, each
 whole (formats/log_writers.py mends python-can's writers where they change one; reading mends
 what its readers misread: :func:`_as_written`). Where a target format cannot carry a kind of
-frame (python-can's TRC writer drops remote, error and CAN FD frames) or a part of one (.csv:
-the channel, the CAN FD flags), :class:`FrameWriter` counts and names what it did not write
-(formats/carried.py) instead of losing it silently. A conversion goes to a temporary file
+frame (.trc: error frames) or a part of one (.csv: the channel, the CAN FD flags),
+:class:`FrameWriter` counts and names what it did not write (formats/carried.py) instead of
+losing it silently; a conversion with frames the target cannot hold is refused
+(:meth:`FrameWriter.refusal`: nothing written). A conversion goes to a temporary file
 beside the target, created exclusively under an unpredictable name, renamed over the target
 when complete; a recording is written under its own name as it goes, valid up to its last
 flush (:class:`FrameWriter`).
@@ -37,6 +38,7 @@ from typing import TYPE_CHECKING, Literal, TextIO, overload
 from blinkcan.formats.candump import candump_messages, read_candump
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
 from blinkcan.formats.log_source import (
+    DecompressedText,
     LineTooLongError,
     LogError,
     LogSource,
@@ -165,7 +167,9 @@ def _open_text(source: LogSource, encoding: str | None, errors: str | None = Non
         with open_text(source, encoding, errors) as stream:
             yield stream
         return
-    with gzip.open(source.path, "rt", encoding=encoding, errors=errors) as compressed:
+    # a file cut short keeps every line before the cut (formats/log_source.py)
+    with DecompressedText(gzip.open(source.path, "rb"), encoding or "utf-8",
+                          errors or "strict") as compressed:
         yield compressed
 
 
@@ -427,6 +431,21 @@ class FrameWriter:
         return (f"{total} frame{'s' if total != 1 else ''} {self.path.suffix} cannot carry "
                 f"{'were' if total != 1 else 'was'} not written: {kinds} "
                 f"({', '.join(self.skipped_names)}{more})")
+
+    def refusal(self, source: object) -> LogError:
+        """A conversion that met frames the target cannot carry (:attr:`skipped`): the error
+        that refuses it, naming how many of which kind and the formats that hold them."""
+        from blinkcan.formats.carried import CARRIES  # noqa: PLC0415
+
+        total = sum(self.skipped.values())
+        kinds = ", ".join(f"{n} {kind}" for kind, n in sorted(self.skipped.items()))
+        more = ", ..." if total > len(self.skipped_names) else ""
+        holding = " ".join(sorted(suffix for suffix, carries in CARRIES.items()
+                                  if not carries.dropped & self.skipped.keys()))
+        return LogError(f"{source} holds {total} frame{'s' if total != 1 else ''} "
+                        f"{self.path.suffix} cannot carry ({kinds}: "
+                        f"{', '.join(self.skipped_names)}{more}): nothing written to "
+                        f"{self.path}; these formats hold them: {holding}")
 
     def lost_lines(self) -> list[str]:
         """What the written frames lost, one line each ("3 frames lost their channel (can0,

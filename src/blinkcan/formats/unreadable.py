@@ -12,7 +12,7 @@ format: the reader raises once it has read it all.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from typing import NamedTuple
 
 #: characters of a line an error message shows
 SHOWN = 40
@@ -33,12 +33,12 @@ def shown(line: str) -> str:
     return "'" + (text if len(text) <= SHOWN else text[:SHOWN] + "...") + "'"
 
 
-@dataclass(frozen=True)
-class UnreadableLine:
+class UnreadableLine(NamedTuple):
     """Line ``number`` (from 1) of a log, which is not a frame: ``text`` as the file holds it
     (:func:`printable`), ``reason`` why it cannot be read (it quotes the line, clipped),
     ``time`` the time it starts with where that reads as one, ``cut_off`` when it is the
-    file's last line and no newline follows it (a logger killed mid-write)."""
+    file's last line and no newline follows it (a logger killed mid-write). A named tuple:
+    it costs the start-up nothing (a dataclass compiles its methods on import)."""
 
     number: int
     text: str
@@ -48,7 +48,8 @@ class UnreadableLine:
 
     def __str__(self) -> str:
         """"line 7: 'garbage' is not a candump line ((TIME) CHANNEL ID#DATA)"."""
-        ending = ": the capture ends there, cut off" if self.cut_off else ""
+        ending = ": the capture ends there, cut off" if self.cut_off and \
+            "cut short" not in self.reason else ""
         return f"line {self.number}: {self.reason}{ending}"
 
     def to_json(self) -> dict[str, object]:
@@ -57,16 +58,16 @@ class UnreadableLine:
                 "text": self.text, "error": str(self)}
 
 
-@dataclass
 class UnreadableCount:
     """The unreadable lines of one log: how many, the first :attr:`NAMED` of them, and the
     one a capture was cut off at."""
 
     NAMED = 5
 
-    count: int = 0
-    named: list[UnreadableLine] = field(default_factory=list)
-    cut_off: UnreadableLine | None = None
+    def __init__(self) -> None:
+        self.count = 0
+        self.named: list[UnreadableLine] = []
+        self.cut_off: UnreadableLine | None = None
 
     def add(self, line: UnreadableLine) -> None:
         self.count += 1

@@ -90,5 +90,12 @@ class WireLog(Sequence[TimedFrame]):
 
     __hash__ = None  # type: ignore[assignment]  # mutable, as a list
 
+    def __add__(self, other: Sequence[TimedFrame]) -> list[TimedFrame]:
+        """``rig.frames + more`` is a list, as it was when the record was one."""
+        return [*self, *other]
+
+    def __radd__(self, other: Sequence[TimedFrame]) -> list[TimedFrame]:
+        return [*other, *self]
+
     def __repr__(self) -> str:
         return f"WireLog({list(self)!r})"
