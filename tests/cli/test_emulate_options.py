@@ -8,9 +8,13 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from blinkcan.cli.emulate import build_twins
+from blinkcan.cli.emulate import build_twins, decoder_devices
 from blinkcan.cli.main import cli
+from blinkcan.cli.typed_commands import TypedCommands
+from blinkcan.decode import Decoder
 from blinkcan.devices.registry import models
+from blinkcan.testing import Rig
+from blinkcan.twin import KeypadTwin
 
 # an interface python-can does not know: reaching the bus would be another error
 NO_BUS = ["-i", "no-such-interface"]
@@ -68,3 +72,87 @@ def test_a_j1939_keypad_claims_the_address_its_device_names() -> None:
     finally:
         for twin in twins:
             twin.close()
+
+
+# -- the attack pass of session 5 -------------------------------------------------------------
+
+J1939_MODELS = [m.name for m in models() if "j1939" in m.description().features]
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+def test_two_j1939_keypads_at_one_address_are_refused(model: str) -> None:
+    # a J1939 keypad with no ADDR claims 21h (§5): `keypad keypad:0x21 --protocol j1939` was
+    # two keypads on one address, both emulated (their node ids differed)
+    result = CliRunner().invoke(cli, ["emulate", model, f"{model}:0x21", "--protocol", "j1939",
+                                      *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert "both on J1939 address 21h" in result.output
+    assert "no-such-interface" not in result.output
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+@pytest.mark.parametrize("address", [0x80, 0xEE, 0xFD])
+def test_a_j1939_keypad_claims_any_node_address(model: str, address: int) -> None:
+    # J1939 node addresses are 01h..FDh (spec §16, as `keypad --address` takes them); DEVICE:ADDR
+    # refused 80h and over as "node id outside 0x01..0x7f"
+    [twin] = build_twins((f"{model}:{address:#x}",), None, None, "firmware", (), "j1939")
+    try:
+        twin.power_on(0.0)
+        twin.advance(1.0)
+        assert twin.snapshot()["j1939"]["source_address"] == address
+    finally:
+        twin.close()
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+@pytest.mark.parametrize("address", ["0xFE", "0xFF", "0", "0x100"])
+def test_a_j1939_address_outside_the_range_is_a_usage_error(model: str, address: str) -> None:
+    result = CliRunner().invoke(cli, ["emulate", f"{model}:{address}", "--protocol", "j1939",
+                                      *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert "J1939 address" in result.output
+    assert "outside" in result.output
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1:99999", "abc", "127.0.0.1:-1"])
+def test_a_bad_web_address_is_a_usage_error_before_the_bus(address: str) -> None:
+    # it was checked after the bus opened and the devices had booted
+    result = CliRunner().invoke(cli, ["emulate", "keypad", "--web", address, *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert "--web" in result.output
+    assert "no-such-interface" not in result.output
+    assert "emulating" not in result.output
+
+
+@pytest.mark.parametrize("model", J1939_MODELS)
+@pytest.mark.parametrize("address", [0x30, 0x90])
+def test_the_frames_of_a_j1939_keypad_are_printed_with_their_meaning(model: str,
+                                                                      address: int) -> None:
+    # emulate's printer knew only 21h: a keypad at 30h printed its key messages as "keypad FFh:
+    # malformed command (the keypad ignores it)"
+    twins = build_twins((f"{model}:{address:#x}",), None, None, "firmware", (), "j1939")
+    try:
+        decoder = Decoder(decoder_devices(twins))
+        [twin] = twins
+        assert isinstance(twin, KeypadTwin)
+        twin.power_on(0.0)
+        [*frames] = twin.press(3, 0.5)
+        assert frames
+        assert str(decoder.decode(frames[-1], 0.5)).endswith(f"keypad {address:02X}h: key 3 "
+                                                              "pressed")
+    finally:
+        for twin in twins:
+            twin.close()
+
+
+def test_an_address_two_j1939_keypads_share_as_node_id_names_them_both() -> None:
+    # both keep the CANopen node id 15h (their J1939 addresses are 80h and 90h): '15h' is
+    # ambiguous, and the error listed every device instead of the two it names
+    twins = build_twins(("keypad:0x80", "keypad:0x90", "keybox"), None, None, "firmware", (),
+                        "j1939")
+    with Rig() as rig:
+        for twin in twins:
+            rig.add(twin)
+        [answer] = TypedCommands(rig.emulator).execute("15h press 3")
+    assert answer.startswith("Error: '15h' names 2 devices (PKP-2600-SI keypad 80h (J1939), "
+                             "PKP-2600-SI keypad 90h (J1939)); start with the address")

@@ -40,3 +40,13 @@ def test_monitor_refuses_a_non_finite_speed_or_duration(tmp_path: Path, option: 
     result = CliRunner().invoke(cli, ["monitor", "--file", str(log), option, value])
     assert result.exit_code == 2, result.output
     assert f"finite number of {unit}" in result.output.splitlines()[-1]
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-1"])
+def test_demo_refuses_a_pause_that_is_not_seconds(value: str) -> None:
+    # `demo --pause nan` ran the demo until its first pause: "unexpected ValueError: Invalid
+    # value NaN" (found by the attack pass of session 5)
+    result = CliRunner().invoke(cli, ["demo", "--pause", value])
+    assert result.exit_code == 2, result.output
+    [error] = result.output.splitlines()
+    assert "--pause" in error

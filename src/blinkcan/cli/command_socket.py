@@ -6,7 +6,9 @@ Each emulator listens on ``emulate-PID.sock`` in a directory only its user can e
 refused if it belongs to someone else or others may write to it); the socket itself is 0600.
 A client sends one command line and reads the lines the emulator answers until it closes.
 Several clients are served at once (one's ``wait 10`` holds no other up), up to
-:data:`MAX_CLIENTS`; one more is answered at once that the emulator is busy.
+:data:`MAX_CLIENTS`; one more waits up to :data:`PLACE_WAIT_S` for a place (a place is also
+taken for an instant by a client's check that the emulator listens), then is answered that the
+emulator is busy.
 A socket left by an emulator that died (nobody accepts on it, and no process has its id) is
 stale and is removed by the next client that meets it; an emulator removes its own when it
 stops (Ctrl-C, SIGTERM: ``blinkcan emulate`` turns it into the same stop), and a new one takes
@@ -35,6 +37,8 @@ LINE_TIMEOUT_S = 5.0
 ANSWER_TIMEOUT_S = 600.0
 #: clients served at once; one more is told the emulator is busy
 MAX_CLIENTS = 16
+#: seconds a client beyond them waits for a place before it is told so (as many may wait)
+PLACE_WAIT_S = 0.5
 _ACCEPT_POLL_S = 0.25
 _SOCKET_NAME = re.compile(r"emulate-(\d+)\.sock")
 
@@ -111,8 +115,16 @@ def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.E
     """Accepts clients until stopped, each answered in a thread of its own: up to
     :data:`MAX_CLIENTS` at once are served, one more is answered that the emulator is busy."""
     slots = threading.BoundedSemaphore(MAX_CLIENTS)
+    waiting = threading.BoundedSemaphore(MAX_CLIENTS)  # clients waiting for a place
     busy = [f"Error: the emulator is busy with {MAX_CLIENTS} other commands; try again when "
             "one has ended"]
+
+    def wait_for_place() -> bool:
+        try:
+            return slots.acquire(timeout=PLACE_WAIT_S)
+        finally:
+            waiting.release()
+
     while not stopping.is_set():
         try:
             connection, _ = server.accept()
@@ -120,10 +132,25 @@ def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.E
             continue
         except OSError:
             return
-        served = slots.acquire(blocking=False)
-        threading.Thread(target=_answer, name="blinkcan-command-client", daemon=True,
-                         args=(connection, commands.execute if served else lambda _: busy,
-                               slots.release if served else lambda: None)).start()
+        if slots.acquire(blocking=False):
+            place: Callable[[], bool] = lambda: True  # noqa: E731
+        elif waiting.acquire(blocking=False):
+            place = wait_for_place
+        else:
+            place = lambda: False  # noqa: E731
+        threading.Thread(target=_answer_in_place, name="blinkcan-command-client", daemon=True,
+                         args=(connection, place, commands.execute, slots.release,
+                               busy)).start()
+
+
+def _answer_in_place(connection: socket.socket, place: Callable[[], bool],
+                     reply: Callable[[str], list[str]], done: Callable[[], None],
+                     busy: list[str]) -> None:
+    """A client answered once it has a place (``place()``), else told the emulator is busy."""
+    if place():
+        _answer(connection, reply, done)
+    else:
+        _answer(connection, lambda _: busy, lambda: None)
 
 
 def _answer(connection: socket.socket, reply: Callable[[str], list[str]],

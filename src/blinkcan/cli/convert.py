@@ -98,7 +98,8 @@ def record(target: str, duration: float | None, force: bool) -> None:
         previous = {number: signal.signal(number, _raise_stop)
                     for number in (signal.SIGINT, signal.SIGTERM)}
     try:
-        with writing(target), FrameWriter(target, replace=force, live=True) as writer:
+        with writing(target, "what was recorded up to its last flush is in it"), \
+                FrameWriter(target, replace=force, live=True) as writer:
             click.echo(f"recording {describe_bus(bus_settings())} to {target}; Ctrl-C stops",
                        err=True)
             try:

@@ -29,8 +29,9 @@ from rich.panel import Panel
 from rich.text import Text
 
 from blinkcan.cli.clock import Clock
-from blinkcan.cli.emulate import panel
+from blinkcan.cli.emulate import panel, panel_address
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
+from blinkcan.cli.seconds import Seconds
 from blinkcan.decode import Decoder
 from blinkcan.decode.eventlog import EventLog, Row
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
@@ -211,13 +212,14 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
              wait: Callable[[], None] | None = None) -> int:
     """The scripted demo; with ``web`` the panel is served and the controller keeps running
     until ``wait`` returns (default: until Ctrl-C)."""
+    address = None if web is None else panel_address(web)
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     device_bus, host_bus = (can.Bus(interface="virtual", channel=channel) for _ in range(2))
     keypad_twin, keybox_twin = KeypadTwin(node_id=0x15), KeyboxTwin(node_id=0x0C)
     emulator = Emulator(device_bus, [keypad_twin, keybox_twin])
     show = _Show(console, emulator, keypad_twin, keybox_twin)
     try:
-        with emulator, panel(emulator, web, console), HostBus(host_bus) as host, \
+        with emulator, panel(emulator, address, console), HostBus(host_bus) as host, \
                 Live(console=console, auto_refresh=False, transient=show.lines) as live:
             show.live = live
             keypad = Keypad(host)
@@ -273,7 +275,7 @@ def _until_interrupted() -> None:
 
 
 @click.command("demo")
-@click.option("--pause", type=float, default=0.6, show_default=True,
+@click.option("--pause", type=Seconds(), default=0.6, show_default=True,
               help="Seconds between the scripted steps.")
 @click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
               metavar="[HOST:PORT]", help="Serve the front panel too, and keep running.")

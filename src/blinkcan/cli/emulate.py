@@ -198,6 +198,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     blinkcan emulate keypad --protocol j1939
     """
     console = output_console()
+    web_address = None if web is None else panel_address(web)
     try:
         pins = tuple(parse_int(p) for p in low_side.split(",") if p.strip())
         twins = build_twins(devices, node_id, nvm, quirks, pins, protocol)
@@ -222,7 +223,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     console.print(f"[bold]blinkcan[/] emulating {names} on {describe_bus(bus_settings())}. "
                   "Ctrl-C stops.")
     try:
-        with _stopped_as_by_ctrl_c(), emulator, panel(emulator, web, console), \
+        with _stopped_as_by_ctrl_c(), emulator, panel(emulator, web_address, console), \
                 typed_commands(emulator, console) as commands, command_socket(commands, console):
             never = threading.Event()
             while not never.wait(_SIGNALS_SEEN_WITHIN_S):
@@ -272,21 +273,31 @@ def _name(twin: CanopenTwin) -> str:
     return f"{description.title} {where}, {description.edition}"
 
 
-@contextlib.contextmanager
-def panel(emulator: Emulator, address: str | None, console: Console) -> Iterator[None]:
-    """Serve the front panel beside ``emulator`` when an address is given."""
-    if address is None:
-        yield
-        return
+def panel_address(text: str) -> tuple[str, int]:
+    """--web's HOST:PORT, checked before the bus opens (and the web extra with it)."""
     try:
-        from blinkcan.web.server import PanelServer, parse_address  # noqa: PLC0415 optional extra
+        from blinkcan.web.server import parse_address  # noqa: PLC0415 optional extra
     except ImportError:
         raise click.ClickException("the front panel needs the web extra: "
                                    f"{install_command('web')}") from None
     try:
-        host, port = parse_address(address)
-        server = PanelServer(emulator, host, port).start()
-    except (ValueError, OSError) as error:
+        return parse_address(text)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="'--web'") from None
+
+
+@contextlib.contextmanager
+def panel(emulator: Emulator, address: tuple[str, int] | None,
+          console: Console) -> Iterator[None]:
+    """Serve the front panel beside ``emulator`` when an address is given."""
+    if address is None:
+        yield
+        return
+    from blinkcan.web.server import PanelServer  # noqa: PLC0415 optional extra (checked)
+
+    try:
+        server = PanelServer(emulator, *address).start()
+    except OSError as error:
         raise click.ClickException(f"front panel: {error}") from None
     console.print(f"front panel: {server.url}")
     try:

@@ -6,12 +6,14 @@ from __future__ import annotations
 import csv
 import datetime
 import json
+import math
 import sys
 from typing import Any
 
 import click
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from blinkcan import fleet
 from blinkcan.cli.extras import install_command
@@ -21,14 +23,42 @@ TABLE_ROWS = 1000
 
 
 def _json_value(value: Any) -> Any:
+    """A value DuckDB returned as JSON: bytes as hex, times in ISO 8601, intervals in seconds,
+    NaN and the infinities as the strings "NaN", "Infinity", "-Infinity" (JSON has no such
+    numbers; protobuf's JSON mapping writes them so), inside lists, structs and maps too."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
     if isinstance(value, (bytes, bytearray, memoryview)):
         return bytes(value).hex()
     if isinstance(value, (datetime.datetime, datetime.date, datetime.time)):
         return value.isoformat()
     if isinstance(value, datetime.timedelta):
         return value.total_seconds()
-    return value if isinstance(value, (int, float, str, bool, type(None), list, dict)) \
-        else str(value)
+    if isinstance(value, dict):
+        return {_json_key(key): _json_value(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_value(item) for item in value]
+    return value if isinstance(value, (int, float, str, bool, type(None))) else str(value)
+
+
+def _json_key(key: Any) -> str:
+    """A map's key as a JSON object's (a string)."""
+    converted = _json_value(key)
+    return converted if isinstance(converted, str) else json.dumps(converted)
+
+
+def _unique(names: list[str]) -> list[str]:
+    """The column names with repeats numbered as DuckDB numbers them in a table (a, a_1)."""
+    seen: set[str] = set()
+    unique = []
+    for name in names:
+        candidate, number = name, 0
+        while candidate in seen:
+            number += 1
+            candidate = f"{name}_{number}"
+        seen.add(candidate)
+        unique.append(candidate)
+    return unique
 
 
 def _check_reads_only(connection: Any, sql: str) -> None:
@@ -36,7 +66,10 @@ def _check_reads_only(connection: Any, sql: str) -> None:
     VALUES are SELECTs to DuckDB): a query never writes, copies, attaches or deletes a file."""
     import duckdb  # noqa: PLC0415 (the [fleet] extra, checked by the caller)
 
-    for statement in connection.extract_statements(sql):
+    statements = connection.extract_statements(sql)
+    if not statements:
+        raise click.UsageError("no SQL statement: write a SELECT on the table events")
+    for statement in statements:
         if statement.type != duckdb.StatementType.SELECT:
             raise click.ClickException(
                 f"query only reads: {statement.type.name} is not a SELECT (DESCRIBE, SHOW, "
@@ -80,12 +113,16 @@ def command(dataset: str, sql: str, as_csv: bool, as_json: bool) -> None:
         writer.writerow(names)
         writer.writerows([[_json_value(v) for v in row] for row in rows])
     elif as_json:
+        names = _unique(names)  # a JSON object holds a name once: a second 'a' is 'a_1'
         for row in rows:
-            out.write(json.dumps(dict(zip(names, map(_json_value, row), strict=True))) + "\n")
+            out.write(json.dumps(dict(zip(names, map(_json_value, row), strict=True)),
+                                 allow_nan=False) + "\n")
     else:
-        table = Table(*names, show_lines=False)
+        table = Table(show_lines=False)
+        for name in names:  # names and values are shown as they are, never read as markup
+            table.add_column(Text(name))
         for row in rows[:TABLE_ROWS]:
-            table.add_row(*("" if v is None else str(_json_value(v)) for v in row))
+            table.add_row(*(Text("" if v is None else str(_json_value(v))) for v in row))
         Console().print(table)
         if len(rows) > TABLE_ROWS:
             click.echo(f"{len(rows):,} rows; the first {TABLE_ROWS:,} shown (--csv or --json "

@@ -28,9 +28,12 @@ def check_target(path: str, force: bool) -> Path:
 
 
 @contextmanager
-def writing(path: str) -> Iterator[None]:
-    """Turn a failure to write ``path`` into one line naming it (not the temporary file)."""
+def writing(path: str, kept: str | None = None) -> Iterator[None]:
+    """Turn a failure to write ``path`` into one line naming it (not the temporary file), and
+    saying what of it is ``kept`` (a recording keeps what it flushed)."""
     try:
         yield
     except OSError as error:
-        raise click.ClickException(f"cannot write {path}: {error.strerror or error}") from None
+        detail = "" if kept is None else f"; {kept}"
+        raise click.ClickException(f"cannot write {path}: {error.strerror or error}{detail}"
+                                   ) from None

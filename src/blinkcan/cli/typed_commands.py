@@ -227,8 +227,9 @@ class TypedCommands:
             return found[0]
         listed = ", ".join(d.label for d in devices)
         if found:
-            raise CommandError(f"{text!r} names {len(found)} devices ({listed}); write the "
-                               "address as 15h or 0x15")
+            named = ", ".join(d.label for d in found)
+            raise CommandError(f"{text!r} names {len(found)} devices ({named}); start with the "
+                               "address one answers at, as listed (15h or 0x15)")
         raise CommandError(f"unknown command or device {text!r}; commands: "
                            f"{', '.join(self.words)}; devices: {listed}")
 

@@ -56,14 +56,23 @@ class WholeRecords(io.RawIOBase):
         return len(chunk)
 
     def flush(self) -> None:
+        """Hand the writes since the last flush to the file; when they cannot all be written
+        (a full disk: the system may take part of them first), the file is cut back to where
+        they began, so it still ends with a whole record."""
         if self.closed or not self._pending:
             return
         view = memoryview(b"".join(self._pending))
         self._pending.clear()
         self._pending_size = 0
-        while view:
-            written = os.write(self._fd, view)
-            view = view[written:]
+        start = os.lseek(self._fd, 0, os.SEEK_CUR)
+        try:
+            while view:
+                written = os.write(self._fd, view)
+                view = view[written:]
+        except OSError:
+            os.ftruncate(self._fd, start)
+            os.lseek(self._fd, start, os.SEEK_SET)
+            raise
 
     def tell(self) -> int:
         return os.lseek(self._fd, 0, os.SEEK_CUR) + self._pending_size

@@ -24,13 +24,16 @@
   the batch it is writing and drops what is still queued (a 2,885-frame conversion kept 501).
   :class:`SqliteLogWriter` writes the same table (python-can's SqliteReader reads it)
   synchronously, in the caller's thread: nothing queued, every row committed by ``stop()``,
-  and a recording's rows committed at each ``flush()``.
+  and a recording's rows committed at each ``flush()``. SQLite's own errors (a full disk is
+  ``disk I/O error``) are raised as ``OSError``, as every other writer's are.
 """
 
 from __future__ import annotations
 
 import os
 import sqlite3
+from collections.abc import Iterator
+from contextlib import contextmanager
 from datetime import datetime
 from typing import Any
 
@@ -131,11 +134,12 @@ class SqliteLogWriter(MessageWriter):
     BATCH = 500
 
     def __init__(self, file: str | os.PathLike[str]) -> None:  # by name, as python-can's
-        self._connection = sqlite3.connect(file)
-        self._connection.execute(  # python-can's SqliteWriter._create_db
-            f"CREATE TABLE IF NOT EXISTS {self.TABLE} (ts REAL, arbitration_id INTEGER, "
-            "extended INTEGER, remote INTEGER, error INTEGER, dlc INTEGER, data BLOB)")
-        self._connection.commit()
+        with _as_os_error():
+            self._connection = sqlite3.connect(file)
+            self._connection.execute(  # python-can's SqliteWriter._create_db
+                f"CREATE TABLE IF NOT EXISTS {self.TABLE} (ts REAL, arbitration_id INTEGER, "
+                "extended INTEGER, remote INTEGER, error INTEGER, dlc INTEGER, data BLOB)")
+            self._connection.commit()
         self._pending: list[tuple[float, int, bool, bool, bool, int, bytes]] = []
         self.num_frames = 0
 
@@ -148,19 +152,33 @@ class SqliteLogWriter(MessageWriter):
 
     def _insert(self) -> None:
         if self._pending:
-            self._connection.executemany(f"INSERT INTO {self.TABLE} VALUES (?, ?, ?, ?, ?, ?, ?)",
-                                         self._pending)
+            with _as_os_error():
+                self._connection.executemany(
+                    f"INSERT INTO {self.TABLE} VALUES (?, ?, ?, ?, ?, ?, ?)", self._pending)
             self.num_frames += len(self._pending)
             self._pending.clear()
 
     def commit(self) -> None:
         """Every row received so far into the file."""
         self._insert()
-        self._connection.commit()
+        with _as_os_error():
+            self._connection.commit()
 
     def stop(self) -> None:
-        self.commit()
-        self._connection.close()
+        try:
+            self.commit()
+        finally:
+            self._connection.close()
+
+
+@contextmanager
+def _as_os_error() -> Iterator[None]:
+    """An SQLite failure (``disk I/O error``, ``database or disk is full``) as the OSError
+    every other writer raises, so the caller names the file it could not write."""
+    try:
+        yield
+    except sqlite3.Error as error:
+        raise OSError(str(error)) from error
 
 
 #: the writer of each suffix: python-can's, mended as above

@@ -53,7 +53,7 @@ from blinkcan.errors import BlinkcanError
 from blinkcan.host.bus import Handler, HostBus, Timer
 from blinkcan.host.events import EventSource
 from blinkcan.host.sdo import SdoClient
-from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range
+from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame, parse_nmt
 from blinkcan.protocol.sdo_client import SdoAbortError, SdoProtocolError, SdoTimeoutError
@@ -74,6 +74,12 @@ def unreversed(version: str) -> str:
     if version.endswith("V") and not version.startswith("V"):
         return version[::-1]
     return version
+
+
+def milliseconds(what: str, period: float) -> int:
+    """``period`` seconds as whole milliseconds, once checked as a number of seconds (finite,
+    not a bool: ``what`` names it in the TypeError/ValueError)."""
+    return round(check_time(what, period) * 1000)
 
 
 @dataclass(frozen=True)
@@ -313,7 +319,7 @@ class Device:
     def monitor_heartbeat(self, period: float, timeout: float | None = None) -> None:
         """Make the device send a heartbeat every ``period`` s (1017h) and raise "lost" when
         none comes for ``timeout`` (default 1.5 periods + 50 ms), "back" when it returns."""
-        self.write("producer_heartbeat_time", round(period * 1000))
+        self.write("producer_heartbeat_time", milliseconds("heartbeat period", period))
         self._watch_heartbeat(period, timeout)
 
     def _watch_heartbeat(self, period: float, timeout: float | None = None) -> None:
@@ -489,7 +495,7 @@ class Device:
 
     def set_heartbeat(self, period: float) -> None:
         """Producer heartbeat every ``period`` seconds; 0 switches it off."""
-        self.write("producer_heartbeat_time", round(period * 1000))
+        self.write("producer_heartbeat_time", milliseconds("heartbeat period", period))
 
     # -- the device watching the controller (KBX §28, PKP rev 1.5 §26) ----------------------------
 
@@ -497,6 +503,7 @@ class Device:
         """Watch ``node_id``'s heartbeat; missing it for ``period`` s switches the device off
         (Keybox: outputs; keypad generation 2: LEDs). ``period`` 0 stops watching."""
         check_node_id(node_id)
+        check_time("consumer heartbeat period", period)
         if "consumer_heartbeat_time" not in self.description.table:
             raise ValueError(f"this {self.description.kind} (manual {self.description.generation}"
                              ") has no consumer heartbeat (1016h)")
@@ -525,7 +532,8 @@ class Device:
         misses two (KBX §28 note 1: consumer time about twice the producer's). The device's
         own heartbeat is turned on (every ``period`` s) if it was off, so that a trip is seen:
         a "watchdog" health event."""
-        check_range("watchdog period in ms", round(period * 1000), 10, 0xFEFF // 2)
+        check_range("watchdog period in ms", milliseconds("watchdog period", period), 10,
+                    0xFEFF // 2)
         self.set_consumer_heartbeat(self.host_node_id, 2 * period)
         if self._heartbeat_timeout is None:
             own_ms = int(self.read("producer_heartbeat_time"))

@@ -38,9 +38,9 @@ from blinkcan.devices.keybox import (
     pwm_register,
 )
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device, confirm_or_close
+from blinkcan.host.device import Device, confirm_or_close, milliseconds
 from blinkcan.host.events import EventSource
-from blinkcan.protocol.cob import check_node_id, check_range
+from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_mask, item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState
@@ -90,6 +90,10 @@ class Keybox(Device):
                  watchdog: float | None = None, host_node_id: int = 0x7F,
                  fault_poll: float | None = None, restore_outputs: bool = False,
                  sdo_timeout: float = 0.5, verify: bool = True) -> None:
+        if watchdog is not None:  # checked before anything is sent (the identity reads)
+            milliseconds("watchdog period", watchdog)
+        if fault_poll is not None:
+            check_time("fault poll period", fault_poll)
         super().__init__(bus, node_id, describe_keybox("cia301", node_id),
                          sdo_timeout=sdo_timeout)
         self.faults = EventSource[FaultEvent](self.host.scheduler)

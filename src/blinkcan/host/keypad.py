@@ -56,6 +56,7 @@ from blinkcan.host.device import (
     NoDeviceError,
     WrongDeviceError,
     confirm_or_close,
+    milliseconds,
 )
 from blinkcan.host.events import EventSource
 from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
@@ -155,6 +156,8 @@ class Keypad(Device):
         #: the registered model this driver runs (the PKP-2600-SI unless ``model`` names one)
         self._model = registry_model(model or MODEL)
         self._model_given = model is not None
+        if watchdog is not None:  # checked before anything is sent (the identity reads)
+            milliseconds("watchdog period", watchdog)
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
@@ -513,7 +516,7 @@ class Keypad(Device):
 
     def set_periodic_key_state(self, period: float) -> None:
         """Send the key state every ``period`` s as well as on change; 0 = only on change."""
-        self.write("tpdo1_event_timer", round(period * 1000))
+        self.write("tpdo1_event_timer", milliseconds("key state period", period))
 
     def read(self, name: str) -> Value:
         """An object by its CANopen name (SDO); refused in J1939 mode, which has no SDO."""

@@ -18,7 +18,7 @@ from blinkcan.devices.keypad import LEVEL_MAX
 from blinkcan.devices.pkp3500 import GENERATION, MODEL
 from blinkcan.host.aio import AsyncDriver
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import Device
+from blinkcan.host.device import Device, milliseconds
 from blinkcan.host.events import EventSource
 from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.protocol.cob import check_range
@@ -119,7 +119,7 @@ class Pkp3500Keypad(Keypad):
     def set_encoder_period(self, encoder: int, period: float) -> None:
         """Also send the encoder's state every ``period`` s (0: only when turned; 0.05..65.279,
         MT §51/§52, M72)."""
-        ms = round(period * 1000)
+        ms = milliseconds("encoder period", period)
         self.write(f"tpdo{self._check_encoder(encoder) + 1}_event_timer", ms)
 
     # -- ring LEDs (MT §17, §20c, §21c) ----------------------------------------------------------

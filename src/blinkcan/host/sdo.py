@@ -38,12 +38,16 @@ from blinkcan.protocol.sdo import SdoFrameError, multiplexer, parse_sdo
 from blinkcan.protocol.sdo_client import (
     DownloadTransfer,
     SdoError,
+    SdoProtocolError,
     SdoTimeoutError,
     UploadTransfer,
 )
 from blinkcan.runtime.scheduler import Signal
 
 log = logging.getLogger(__name__)
+
+#: the command byte of an SDO abort (CiA 301 §7.2.4.3.17: ccs/scs 4)
+ABORT_COMMAND = 0x80
 
 # the object every CANopen device has (CiA 301 §7.5.2.1): read to get back in step
 _RESYNC_MUX = multiplexer(0x1000, 0)
@@ -200,14 +204,24 @@ class SdoChannel:
 
     def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
         request: bytes | None = transfer.start()
+        accept = _initiate_reply_of(transfer.mux)  # then segments, which name no object
         while request is not None:
-            reply = self._exchange(request, timeout)
+            reply = self._exchange(request, timeout, accept)
             if reply is None:
                 self._out_of_step = True
                 self.host.send(Frame(self._request_id,
                                      transfer.abort_request(AbortCode.SDO_PROTOCOL_TIMED_OUT)))
                 raise self._timeout(transfer, timeout)
-            request = transfer.on_reply(reply)
+            accept = _whole_frame
+            try:
+                request = transfer.on_reply(reply)
+            except SdoProtocolError:
+                # CiA 301 §7.2.4.3.17: a reply that does not fit aborts the transfer; the
+                # server's own reply may still come, so get back in step before the next request
+                self._out_of_step = True
+                self.host.send(Frame(self._request_id, transfer.abort_request(
+                    AbortCode.COMMAND_SPECIFIER_INVALID)))
+                raise
 
     def _resync(self, timeout: float, transfer: UploadTransfer | DownloadTransfer) -> None:
         """Read 1000h/00, discarding every reply until its own (see the module docstring)."""
@@ -233,6 +247,22 @@ class SdoChannel:
             return error
         return SdoTimeoutError(f"no reply within {timeout} s", self.node_id, transfer.index,
                                transfer.subindex)
+
+
+def _initiate_reply_of(mux: bytes) -> Callable[[bytes], bool]:
+    """Whether a frame may answer the first request of a transfer of ``mux``: a whole SDO
+    frame naming that object, or an abort (one naming another object fails the transfer).
+    Anything else (a malformed frame, a reply for another object: another device's, or a
+    stale one) is not this request's answer: discarded and counted, the request waits on."""
+    def accept(data: bytes) -> bool:
+        return len(data) >= 8 and (data[0] == ABORT_COMMAND or data[1:4] == mux)
+
+    return accept
+
+
+def _whole_frame(data: bytes) -> bool:
+    """A segment's reply names no object: any whole SDO frame may be it."""
+    return len(data) >= 8
 
 
 def _answers_upload_of(data: bytes, mux: bytes) -> bool:

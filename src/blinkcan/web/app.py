@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import math
 import time
 from collections.abc import AsyncIterator, Collection
 from dataclasses import asdict
@@ -29,7 +30,7 @@ from blinkcan.decode import Decoder
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
-from blinkcan.twin import KeyboxTwin
+from blinkcan.twin import KeyboxTwin, KeypadTwin
 from blinkcan.twin.actions import ACTIONS, actions_of
 from blinkcan.twin.base import CanopenTwin
 from blinkcan.web.guard import REQUEST_TIMEOUT_S, BodyError, Guard, json_body
@@ -43,6 +44,10 @@ class Panel:
     def __init__(self, emulator: Emulator) -> None:
         self.emulator = emulator
         self.decoder = Decoder({t.node_id: t.description for t in emulator.twins})
+        # a J1939 keypad's frames name its address, not its node id (spec J-1)
+        self.decoder.j1939.addresses.update(
+            t.j1939.address for t in emulator.twins
+            if isinstance(t, KeypadTwin) and t.protocol == "j1939")
         #: the last frames with their meaning, repeated heartbeats and periodic frames folded
         #: (decode/eventlog.py)
         self.log = EventLog(FRAMES_KEPT, self.decoder)
@@ -99,11 +104,32 @@ class Panel:
         self.emulator.run(lambda now: action.perform(twin, arguments, now))
 
 
+class SharedState:
+    """The panel's state as JSON text, gathered at most :data:`MAX_UPDATES_PER_S` times a
+    second however many pages are open: every /api/events client reads the same text (one
+    gathering per client made fifty open pages cost the emulator's thread 1,500 snapshots a
+    second and delayed actions)."""
+
+    def __init__(self, panel: Panel) -> None:
+        self.panel = panel
+        self._lock = asyncio.Lock()
+        self._text = ""
+        self._gathered = -math.inf
+
+    async def text(self) -> str:
+        async with self._lock:
+            if time.monotonic() - self._gathered >= 1 / MAX_UPDATES_PER_S:
+                self._text = json.dumps(await asyncio.to_thread(self.panel.state))
+                self._gathered = time.monotonic()
+            return self._text
+
+
 def create_app(emulator: Emulator, hosts: Collection[str] | None = ("127.0.0.1",),
                request_timeout: float = REQUEST_TIMEOUT_S) -> Starlette:
     """The panel's web app. ``hosts``: the Host names it answers to (None: any, for a wildcard
     address; see web/guard.py); ``request_timeout``: seconds a request body may take."""
     panel = Panel(emulator)
+    shared = SharedState(panel)
     static = resources.files("blinkcan.web") / "static"
 
     async def index(request: Request) -> Response:
@@ -117,7 +143,7 @@ def create_app(emulator: Emulator, hosts: Collection[str] | None = ("127.0.0.1",
             last = ""
             while not await request.is_disconnected():
                 started = time.monotonic()
-                text = json.dumps(await asyncio.to_thread(panel.state))
+                text = await shared.text()
                 if text != last:
                     last = text
                     yield f"data: {text}\n\n"
