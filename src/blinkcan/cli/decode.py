@@ -205,23 +205,25 @@ def _text_lines(decoder: Decoder, file: str, output: _Output, unreadable: Unread
     if progress is not None:
         progress.start()
     start: float | None = None
+    idents = _IdentColumns()
+    text_of = decoder.text
     for timestamp, item in read_log(file):
         if isinstance(item, Frame):
-            frame, event = item, decoder.decode(item, timestamp)
+            frame, event = item, text_of(item, timestamp)
         elif isinstance(item, UnreadableLine):
             unreadable.add(item)
             add(_unreadable_text(item, start, absolute))
             continue
         else:
-            event = other_event(decoder, item)
-            frame = event.frame
-        ident = f"{frame.can_id:08X}" if frame.extended else f"{frame.can_id:03X}"
+            other = other_event(decoder, item)
+            frame, event = other.frame, str(other)
+        ident = idents[frame.can_id, frame.extended]
         if absolute:
             shown = iso_utc(timestamp)
         else:
             start = timestamp if start is None else start
             shown = f"{timestamp - start:12.6f}"
-        add(f"{shown}  {ident:>8}  {frame.data.hex(' ').upper():<23}  {event}")
+        add(f"{shown}  {ident}  {frame.data.hex(' ').upper():<23}  {event}")
         if len(lines) >= _BATCH:
             output.write()
             if progress is not None and task is not None:
@@ -242,6 +244,22 @@ def _unreadable_text(line: UnreadableLine, start: float | None, absolute: bool) 
 
 #: lines written at once
 _BATCH = 500
+#: identifier columns kept (then they start over): a bus has a few hundred identifiers
+_IDENTS_KEPT = 4096
+
+
+class _IdentColumns(dict[tuple[int, bool], str]):
+    """The text output's identifier column per (id, extended): 8 hex digits (29-bit) or 3
+    (11-bit), right-aligned; kept, as a log has few identifiers (formatting one each line cost
+    a tenth of the line)."""
+
+    def __missing__(self, key: tuple[int, bool]) -> str:
+        if len(self) >= _IDENTS_KEPT:
+            self.clear()
+        can_id, extended = key
+        ident = f"{can_id:08X}" if extended else f"{can_id:03X}"
+        column = self[key] = f"{ident:>8}"
+        return column
 
 
 def _write(lines: list[str]) -> None:

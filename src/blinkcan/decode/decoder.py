@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any, NamedTuple
 
@@ -53,6 +52,8 @@ from blinkcan.protocol.sdo import (
 from blinkcan.protocol.sdo_client import QUIRK_ACKNOWLEDGES, SdoError, UploadTransfer
 
 _UPLOAD_SIZES = {command: size for size, command in EXPEDITED_UPLOAD_COMMAND.items()}
+#: the SDO functions of an 11-bit identifier (CiA 301 §7.2.4): server to client, client to server
+_SDO_FUNCTIONS = frozenset({SDO_TX, SDO_RX})
 #: requests that name an object (CiA 301 §7.2.4.3): initiate download, upload, abort
 _INITIATE_REQUESTS = frozenset({CCS_INITIATE_DOWNLOAD, CCS_INITIATE_UPLOAD, CCS_ABORT})
 _NMT_TEXT = {
@@ -76,7 +77,15 @@ _IDENTITY = frozenset({0x1000, 0x100B})
 _J1939_KEPT = 4096
 #: routes kept: every 11-bit identifier, and 29-bit ones the J1939 keypad may use up to this
 _ROUTES_KEPT = 2048 + 256
+_dumps = orjson.dumps
 _standard_encode = json.JSONEncoder(separators=(",", ":")).encode
+
+
+def _stamp(time: float) -> str:
+    """``repr(time)`` (json.dumps' number) in a third of its cost: repr's shortest round-trip
+    digits are the ones orjson writes (Ryu) wherever neither writes an exponent, 1e-4 <= time
+    < 1e16 (a float's repr took a fifth of a line's cost)."""
+    return _dumps(time).decode() if 1e-4 <= time < 1e16 else repr(time)
 
 
 def _encode_text(text: str) -> str:
@@ -111,9 +120,9 @@ class Kind(str, Enum):
 
 
 _NO_FIELDS: dict[str, Any] = {}  # shared, never written
-#: what a frame that means nothing costs: its event's (text, node, device) and its JSON line
-#: before and after the data (Decoder._keep_raw)
-_Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str]
+#: what a frame that means nothing costs: its event's (text, node, device), its JSON line
+#: before and after the data, and its event as text (Decoder._keep_raw)
+_Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str, str]
 _new_tuple = tuple.__new__
 
 
@@ -156,23 +165,27 @@ TRANSFER_IDLE_S = 2.0
 TRANSFER_MAX_BYTES = 4096
 
 
-@dataclass
 class _Transfer:
     """A node's SDO transfer as the bus shows it. A read is followed by the client's own
-    state machine (protocol/sdo_client.py UploadTransfer) fed the replies the client gets; a
-    write by the count of bytes its segments carried."""
+    state machine (protocol/sdo_client.py UploadTransfer) fed the replies the client gets,
+    made when the first reply that is not a kept one comes (most reads are answered by a
+    reply seen before: Decoder._sdo_seen); a write by the count of bytes its segments
+    carried."""
 
-    index: int
-    subindex: int
-    entry: ObjectEntry | None
-    writing: bool
-    last: float = 0.0
-    written: int = 0
-    upload: UploadTransfer | None = field(default=None, init=False)
+    __slots__ = ("_upload", "entry", "index", "last", "subindex", "writing", "written")
 
-    def __post_init__(self) -> None:
-        if not self.writing:
-            self.upload = UploadTransfer(self.index, self.subindex)
+    def __init__(self, index: int, subindex: int, entry: ObjectEntry | None, writing: bool,
+                 last: float = 0.0) -> None:
+        self.index, self.subindex, self.entry = index, subindex, entry
+        self.writing, self.last, self.written = writing, last, 0
+        self._upload: UploadTransfer | None = None
+
+    @property
+    def upload(self) -> UploadTransfer | None:
+        """The read's state machine (None for a write)."""
+        if self._upload is None and not self.writing:
+            self._upload = UploadTransfer(self.index, self.subindex)
+        return self._upload
 
 
 class Decoder:
@@ -242,6 +255,30 @@ class Decoder:
                 self._routes[frame.can_id, True] = route  # the keypad PGNs' ids, up to a bound
         return route(frame, time)
 
+    def undecoded(self, can_id: int, extended: bool) -> tuple[str, int | None, str | None] | None:
+        """(text, node, device) of the event every frame of this identifier makes, where it
+        means nothing here (another ECU's: kind FRAME, no fields) and was seen before; None
+        otherwise (then :meth:`decode` it). For a batch reader (the fleet's columns): such a
+        frame, most of a fleet's log, costs a lookup, no Frame and no Event; the decoder's
+        state does not depend on these frames."""
+        if extended:
+            text = self._foreign.get(can_id)
+            return None if text is None else (text, None, None)
+        raw = self._raw_standard.get(can_id)
+        return None if raw is None else (raw[3], raw[0][1], raw[0][2])
+
+    def text(self, frame: Frame, time: float = 0.0) -> str:
+        """``str(decode(frame, time))``: another ECU's frame is a lookup."""
+        if frame[2]:
+            text = self._foreign.get(frame[0])
+            if text is not None:
+                return text
+        else:
+            raw = self._raw_standard.get(frame[0])
+            if raw is not None:
+                return raw[3]
+        return str(self.decode(frame, time))
+
     def json_line(self, frame: Frame, time: float = 0.0) -> str:
         """``json.dumps(decode(frame, time).to_json())``, fast for frames seen before.
 
@@ -253,14 +290,28 @@ class Decoder:
         if extended:  # another ECU's frame: a lookup, and to_json's line written directly
             text = self._foreign.get(can_id)
             if text is not None:  # the text has no character JSON escapes
-                return (f'{{"time":{time!r},"id":{can_id},"extended":true,"data":"{data.hex()}",'
-                        f'"kind":"frame","node":null,"device":null,"text":"{text}"}}')
+                return (f'{{"time":{_stamp(time)},"id":{can_id},"extended":true,"data":'
+                        f'"{data.hex()}","kind":"frame","node":null,"device":null,"text":'
+                        f'"{text}"}}')
+            known = self._j1939_known.get(frame)  # a J1939 keypad frame seen before
+            if known is not None and known[1] is not None and \
+                    known[2] == len(self.j1939.addresses):  # (Decoder._extended)
+                return f'{{"time":{_stamp(time)},{known[1]}'
             self._served = None
             return self._line_of(self.decode(frame, time), time)
-        else:
-            raw = self._raw_standard.get(can_id)
-            if raw is not None:  # a frame no device sends: its line around time and data
-                return f'{{"time":{time!r}{raw[1]}{data.hex()}{raw[2]}'
+        raw = self._raw_standard.get(can_id)
+        if raw is not None:  # a frame no device sends: its line around time and data
+            return f'{{"time":{_stamp(time)}{raw[1]}{data.hex()}{raw[2]}'
+        if can_id & 0x780 in _SDO_FUNCTIONS and can_id & 0x7F:  # Decoder._route: SDO
+            seen = self._sdo_seen(frame, time)
+            if seen is None:
+                self._served = None
+                return self._line_of(self._sdo_new(frame, time), time)
+            kind, kept = seen
+            if kept[1] is not None:  # its JSON after the time, written before
+                return f'{{"time":{_stamp(time)},{kept[1]}'
+            self._served = kept
+            return self._line_of(_new_tuple(Event, (time, frame, kind, *kept[0])), time)
         key = (can_id, extended)
         keyed = self._keyed.get(key)
         cache_key: object = frame
@@ -273,12 +324,12 @@ class Decoder:
                 if body is not None:
                     self._keys[node] = (int.from_bytes(frame.data, "little") >> shift) & mask
                     self._cache_stats[key][0] += 1
-                    return f'{{"time":{time!r},{body}'
+                    return f'{{"time":{_stamp(time)},{body}'
             else:
                 body = self._json_bodies.get(frame)
                 if body is not None:
                     self._cache_stats[key][0] += 1
-                    return f'{{"time":{time!r},{body}'
+                    return f'{{"time":{_stamp(time)},{body}'
         fast = self._json_routes.get(key)
         line = fast(frame, time) if fast is not None else None
         kind = Kind.PDO
@@ -299,16 +350,16 @@ class Decoder:
             return _encode(event.to_json())
         body = served[1]
         if body is not None:
-            return f'{{"time":{time!r},{body}'
+            return f'{{"time":{_stamp(time)},{body}'
         line = _encode(event.to_json())
-        prefix = f'{{"time":{time!r},'
+        prefix = f'{{"time":{_stamp(time)},'
         if line.startswith(prefix):
             served[1] = line[len(prefix):]
         return line
 
     def _remember(self, key: tuple[int, bool], cache_key: object, time: float, line: str
                   ) -> None:
-        prefix = f'{{"time":{time!r},'
+        prefix = f'{{"time":{_stamp(time)},'
         if not line.startswith(prefix):
             return
         stats = self._cache_stats.setdefault(key, [0, 0])
@@ -386,7 +437,7 @@ class Decoder:
         head, _, tail = line.partition(',"data":""')
         self._raw_standard[event.frame.can_id] = (
             (event.text, event.node_id, event.device, _NO_FIELDS),
-            head[len('{"time":0'):] + ',"data":"', '"' + tail)
+            head[len('{"time":0'):] + ',"data":"', '"' + tail, str(event))
 
     def _forget_routes(self, node: int) -> None:
         """A node's model became known: its routes and their cached JSON change."""
@@ -488,40 +539,52 @@ class Decoder:
             return Event(time, frame, Kind.PDO, text, node, device, {"pdo": name, **fields})
 
         head = f',"id":{layout.cob_id(node)},"extended":false,"data":"'
-        middle = f'","kind":"pdo","node":{node},"device":{_encode_text(device)},"text":'
+        middle = f'","kind":"pdo","node":{node},"device":{_encode_text(device)},'
         who = f"{device} {node:02X}h: "
-        pdo = f',"pdo":{_encode_text(name)}'
 
         def json_route(frame: Frame, time: float) -> str | None:
             data = frame.data
             if len(data) < min_length:
                 return None
             text, fields = describe(data)
-            rest = _encode(fields)
-            return (f'{{"time":{time!r}{head}{data.hex()}{middle}{_encode_text(who + text)}'
-                    f'{pdo}{"," + rest[1:] if len(rest) > 2 else "}"}')
+            rest = _encode({"text": who + text, "pdo": name, **fields})  # to_json's order
+            return f'{{"time":{_stamp(time)}{head}{data.hex()}{middle}{rest[1:]}'
 
         return route, json_route
 
     # -- SDO --------------------------------------------------------------------------------------
 
-    def _sdo(self, frame: Frame, time: float) -> Event:
-        node = frame.can_id & 0x7F
-        if frame.can_id & 0x780 == SDO_RX:  # an upload request seen before: the same object
+    def _sdo_seen(self, frame: Frame, time: float) -> tuple[Kind, list[Any]] | None:
+        """An SDO frame that makes a kept event again (Decoder._keep): the transfer state it
+        moves is moved, and its kind and kept entry returned; None for any other frame."""
+        can_id = frame[0]
+        node = can_id & 0x7F
+        if can_id & 0x780 == SDO_RX:  # an upload request seen before: the same object
             kept = self._kept.get(frame)
             if kept is not None:
                 index, sub, entry = kept[2]
                 self._transfers[node] = _Transfer(index, sub, entry, False, time)
-                self._served = kept
-                return _new_tuple(Event, (time, frame, Kind.SDO_READ, *kept[0]))
+                return Kind.SDO_READ, kept
         else:  # an expedited upload response seen before to a read of the same object
             transfer = self._transfers.get(node)
             if transfer is not None and not transfer.writing:
                 kept = self._kept.get((frame, transfer.index, transfer.subindex))
                 if kept is not None and 0 <= time - transfer.last <= TRANSFER_IDLE_S:
                     del self._transfers[node]
-                    self._served = kept
-                    return _new_tuple(Event, (time, frame, Kind.SDO_VALUE, *kept[0]))
+                    return Kind.SDO_VALUE, kept
+        return None
+
+    def _sdo(self, frame: Frame, time: float) -> Event:
+        seen = self._sdo_seen(frame, time)
+        if seen is not None:
+            kind, kept = seen
+            self._served = kept
+            return _new_tuple(Event, (time, frame, kind, *kept[0]))
+        return self._sdo_new(frame, time)
+
+    def _sdo_new(self, frame: Frame, time: float) -> Event:
+        """An SDO frame that is not a kept event's (Decoder._sdo_seen)."""
+        node = frame.can_id & 0x7F
         data = frame.data
         device = self.devices.get(node)
         kind = device.kind if device is not None else None
