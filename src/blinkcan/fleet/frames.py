@@ -197,9 +197,11 @@ class FrameDecoder:
         segment.extended += extended
         return start + count
 
-    def _decode_data(self, times: list[float], ids: list[int], data: list[bytes],
-                     extended: list[bool], segment: Segment, limit: int) -> int:
-        """The classic data frames of a block: returns how many were decoded."""
+    def _decode_data(  # noqa: PLR0915 (one loop per frame, inlined: a call a frame costs)
+            self, times: list[float], ids: list[int], data: list[bytes], extended: list[bool],
+            segment: Segment, limit: int) -> int:
+        """The classic data frames of a block: returns how many were decoded. Another ECU's
+        frame seen before is a lookup (:meth:`Decoder.undecoded`): no Frame, no Event."""
         decode, rows = self._decoder.decode, self._rows.rows
         devices = self._decoder.devices
         add_node, add_model = segment.nodes.append, segment.models.append
@@ -210,11 +212,24 @@ class FrameDecoder:
         texts = self._texts
         if len(texts) > _TEXTS_KEPT:
             texts.clear()
+        undecoded, frame_code = self._decoder.undecoded, simple[Kind.FRAME]
         total = segment.rows
         count = 0
         for timestamp, can_id, payload, flag in zip(times, ids, data, extended, strict=True):
-            event = decode(new(frame_type, (can_id, payload, flag)), timestamp)
             count += 1
+            known_frame = undecoded(can_id, flag)
+            if known_frame is not None:  # most of a fleet's log: another ECU's, seen before
+                text, node, _ = known_frame
+                device = devices.get(node)  # type: ignore[arg-type]  # None: no device
+                add_node(node)
+                add_model(None if device is None else device.model)
+                add_code(frame_code)
+                add_text(text)
+                total += 1
+                if total >= limit:
+                    break
+                continue
+            event = decode(new(frame_type, (can_id, payload, flag)), timestamp)
             code = simple.get(event.kind)
             if code is not None:  # most of a fleet's log: other ECUs' frames
                 node = event.node_id
