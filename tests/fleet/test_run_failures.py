@@ -77,3 +77,11 @@ def test_a_file_that_kills_its_worker_every_time_fails_alone(
     assert results["kill.log"].status == "failed"
     assert "BrokenProcessPool" in (results["kill.log"].error or "")
     assert {results[n].status for n in ("a.log", "b.log", "d.log")} <= {"decoded", "skipped"}
+
+
+def test_the_run_counts_one_file_in_the_singular(tmp_path: Path) -> None:
+    (tmp_path / "a.log").write_text(LOG)
+    result = CliRunner().invoke(cli, ["decode", str(tmp_path / "a.log"), "--parquet",
+                                      str(tmp_path / "lake")])
+    assert result.exit_code == 0, result.output
+    assert "1 file decoded to" in result.output

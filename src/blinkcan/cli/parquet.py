@@ -106,8 +106,9 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
     elapsed = time.monotonic() - start
     skipped = f", {counts['skipped']} already decoded (--force decodes again)" \
         if counts["skipped"] else ""
-    click.echo(f"{counts['decoded']} files decoded to {out} ({frames:,} frames in "
-               f"{elapsed:.1f} s){skipped}", err=True)
+    decoded = counts["decoded"]
+    click.echo(f"{decoded} file{'' if decoded == 1 else 's'} decoded to {out} ({frames:,} "
+               f"frames in {elapsed:.1f} s){skipped}", err=True)
     if counts["failed"]:
         raise click.ClickException(f"{counts['failed']} of {total} files could not be decoded "
                                    "(named above); the others are in the dataset")
