@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import signal
 import subprocess
 import sys
 import venv
@@ -44,6 +45,23 @@ def _ensure_venv() -> Path:
     return python
 
 
+def _run(arguments: list[str]) -> int:
+    """Run a tool to its end. Ctrl-C reaches the tool too (the terminal signals both): wait
+    for it to stop on its own, passing the signal on only if it did not get one (a
+    KeyboardInterrupt traceback here, or a killed demo, would hide the tool's own answer)."""
+    child = subprocess.Popen(arguments, cwd=ROOT)
+    while True:
+        try:
+            return child.wait()
+        except KeyboardInterrupt:
+            try:
+                return child.wait(timeout=2.0)
+            except subprocess.TimeoutExpired:
+                child.send_signal(signal.SIGINT)
+            except KeyboardInterrupt:
+                child.send_signal(signal.SIGINT)
+
+
 def main(argv: list[str]) -> int:
     if not argv or argv[0] not in {"demo", "test", "lint", "bench"}:
         print(__doc__, file=sys.stderr)
@@ -51,14 +69,14 @@ def main(argv: list[str]) -> int:
     job, rest = argv[0], argv[1:]
     python = str(_ensure_venv())
     if job == "demo":
-        return subprocess.call([python, "-m", "blinkcan", "demo", *rest], cwd=ROOT)
+        return _run([python, "-m", "blinkcan", "demo", *rest])
     if job == "test":
-        return subprocess.call([python, "-m", "pytest", *rest], cwd=ROOT)
+        return _run([python, "-m", "pytest", *rest])
     if job == "lint":
-        ruff = subprocess.call([python, "-m", "ruff", "check", "."], cwd=ROOT)
-        mypy = subprocess.call([python, "-m", "mypy"], cwd=ROOT)
+        ruff = _run([python, "-m", "ruff", "check", "."])
+        mypy = _run([python, "-m", "mypy"])
         return ruff or mypy
-    return subprocess.call([python, "-m", "benchmarks", *rest], cwd=ROOT)
+    return _run([python, "-m", "benchmarks", *rest])
 
 
 if __name__ == "__main__":
