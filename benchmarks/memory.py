@@ -11,10 +11,10 @@ beside ``python -c "import can"``'s (the floor any python-can tool starts from).
 Twins: 127 twins, each at its own node id, driven by an Emulator on a virtual bus for two
 seconds of real time with 10 ms heartbeats, as ``blinkcan emulate`` runs them: the registry's
 CANopen models in turn (mixed), then 127 of each model (the Keybox is the emulator's stress
-figure; keypads hold more: their LED pictures and key state). The figure is the Python heap they hold while they run
-(tracemalloc, less before they were built; the models' classes and descriptions loaded
-beforehand), and the process's resident set grown meanwhile (tracemalloc's own records
-included, so an upper bound). Target (DESIGN.md): under 10 MB.
+figure; keypads hold more: their LED pictures and key state). The figure is the Python heap
+they hold while they run (tracemalloc, less before they were built; the models' classes and
+descriptions loaded beforehand), and the process's resident set grown meanwhile
+(tracemalloc's own records included, so an upper bound). Target (DESIGN.md): under 10 MB.
 """
 
 from __future__ import annotations
