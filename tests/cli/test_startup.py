@@ -4,6 +4,7 @@ needs them, so ``blinkcan --help`` and decoding a candump log start light."""
 from __future__ import annotations
 
 import json
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -12,7 +13,6 @@ import click
 import pytest
 
 from blinkcan.cli.main import SUBCOMMANDS, cli, load_subcommand
-from blinkcan.formats.log_source import MAX_LINE
 
 HEAVY = ("can", "cantools", "canopen", "rich.console", "blinkcan.runtime", "blinkcan.host",
          "blinkcan.twin")
@@ -58,13 +58,19 @@ def test_the_listing_says_what_each_subcommand_says_of_itself(name: str) -> None
 @pytest.mark.parametrize("as_json", [False, True])
 def test_lines_decoded_before_a_broken_line_are_written(tmp_path: Path, as_json: bool) -> None:
     """Lines are written in batches (issue 22): those decoded before an error still come out,
-    before the error's one line (a line over MAX_LINE ends the reading: not a candump log;
-    a line that is no frame does not, issue 23)."""
+    before the error's one line (a pcap packet whose length is no frame's ends the reading:
+    the packets after it cannot be found; a line that is no frame does not, issue 23)."""
     from click.testing import CliRunner
 
-    log = tmp_path / "broken.log"
-    log.write_text("(1700000000.000000) can0 715#05\n(1700000000.000100) can0 70C#7F\n"
-                   "(1700000000.000200) can0 123#" + "0" * MAX_LINE + "\n")
+    from blinkcan.formats.logs import FrameWriter
+    from blinkcan.protocol import Frame
+
+    log = tmp_path / "broken.pcap"
+    with FrameWriter(log) as writer:
+        writer.write(1700000000.0, Frame(0x715, b"\x05"))
+        writer.write(1700000000.0001, Frame(0x70C, b"\x7f"))
+    with log.open("ab") as stream:  # a packet header claiming 1 MB
+        stream.write(struct.pack("<IIII", 1700000000, 200, 1 << 20, 1 << 20))
     result = CliRunner().invoke(cli, ["decode", *(["--json"] if as_json else []), str(log)])
     assert result.exit_code == 1
     assert result.stderr.splitlines()[-1].startswith("Error: ")
