@@ -3,8 +3,8 @@ needs them, so ``blinkcan --help`` and decoding a candump log start light."""
 
 from __future__ import annotations
 
+import gzip
 import json
-import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -58,23 +58,19 @@ def test_the_listing_says_what_each_subcommand_says_of_itself(name: str) -> None
 @pytest.mark.parametrize("as_json", [False, True])
 def test_lines_decoded_before_a_broken_line_are_written(tmp_path: Path, as_json: bool) -> None:
     """Lines are written in batches (issue 22): those decoded before an error still come out,
-    before the error's one line (a pcap packet whose length is no frame's ends the reading:
-    the packets after it cannot be found; a line that is no frame does not, issue 23)."""
+    before the error's one line (a .gz whose checksum is wrong ends the reading: its data is
+    not what was compressed; a line that is no frame does not, issue 23)."""
     from click.testing import CliRunner
 
-    from blinkcan.formats.logs import FrameWriter
-    from blinkcan.protocol import Frame
-
-    log = tmp_path / "broken.pcap"
-    with FrameWriter(log) as writer:
-        writer.write(1700000000.0, Frame(0x715, b"\x05"))
-        writer.write(1700000000.0001, Frame(0x70C, b"\x7f"))
-    with log.open("ab") as stream:  # a packet header claiming 1 MB
-        stream.write(struct.pack("<IIII", 1700000000, 200, 1 << 20, 1 << 20))
+    log = tmp_path / "broken.log.gz"
+    lines = "".join(f"(1700000000.{n:06d}) can0 715#05\n(1700000000.{n:06d}) can0 70C#7F\n"
+                    for n in range(2000))
+    log.write_bytes(gzip.compress(lines.encode())[:-8] + bytes(8))  # checksum and size 0
     result = CliRunner().invoke(cli, ["decode", *(["--json"] if as_json else []), str(log)])
     assert result.exit_code == 1
     assert result.stderr.splitlines()[-1].startswith("Error: ")
+    assert "CRC check failed" in result.stderr.splitlines()[-1]
     decoded = result.stdout.splitlines()
-    assert len(decoded) == 2
-    assert ("715" in decoded[0] and "70C" in decoded[1]) if not as_json else \
-        [json.loads(line)["id"] for line in decoded] == [0x715, 0x70C]
+    assert 1000 < len(decoded) < 4000  # the 64 KiB chunk the error came in is not text
+    assert all("715" in line for line in decoded[::2]) if not as_json else \
+        [json.loads(line)["id"] for line in decoded[:4]] == [0x715, 0x70C] * 2

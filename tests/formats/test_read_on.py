@@ -6,6 +6,7 @@ number, and every frame after it is read; convert writes them and exits 1 saying
 from __future__ import annotations
 
 import gzip
+import struct
 import tracemalloc
 from collections.abc import Sequence
 from pathlib import Path
@@ -183,3 +184,56 @@ def test_a_text_log_none_of_whose_lines_is_a_frame_is_refused(tmp_path: Path,
     path.write_text("garbage, not a frame\n" * 10)
     with pytest.raises(LogError):
         list(read_messages(path, unreadable=True))
+
+
+def _pcap(tmp_path: Path, count: int = 20) -> tuple[Path, bytes]:
+    path = tmp_path / "capture.pcap"
+    with FrameWriter(path) as writer:
+        for n in range(count):
+            writer.write(1_700_000_000 + n / 100, Frame(0x195, bytes([n, 0, 7])))
+    return path, path.read_bytes()
+
+
+_PCAP_HEADER, _PACKET = 24, 16 + 16  # a classic frame's packet: its header and 16 bytes
+
+
+def test_a_pcap_packet_that_is_no_frame_is_named_in_its_place_and_reading_goes_on(
+        tmp_path: Path) -> None:
+    path, data = _pcap(tmp_path)
+    at = _PCAP_HEADER + 5 * _PACKET + 16  # packet 6's CAN id: a standard one over 7FFh
+    path.write_bytes(data[:at] + struct.pack(">I", 0x7FF + 1) + data[at + 4:])
+    for reader, items in _read_everywhere(path).items():
+        assert _payloads(items) == [n for n in range(20) if n != 5], reader
+        unreadable = items[5]
+        assert isinstance(unreadable, UnreadableLine), reader
+        assert str(unreadable) == "packet 6: standard identifier 800h is over 7FFh", reader
+        assert unreadable.text == data[_PCAP_HEADER + 5 * _PACKET:][:16].hex() + \
+            "00000800" + data[at + 4:][:12].hex()
+
+
+@pytest.mark.parametrize(("cut", "reason"), [
+    (3, "packet 20: truncated CAN frame: the capture ends there, cut off"),
+    (_PACKET - 8, "packet 20: truncated header: the capture ends there, cut off"),
+])
+def test_a_pcap_cut_off_keeps_every_frame_before_the_cut(tmp_path: Path, cut: int,
+                                                         reason: str) -> None:
+    path, data = _pcap(tmp_path)
+    path.write_bytes(data[:-cut])
+    for reader, items in _read_everywhere(path).items():
+        assert _payloads(items) == list(range(19)), reader
+        assert str(items[-1]) == reason, reader
+
+
+def test_a_pcap_packet_whose_length_is_no_frames_ends_the_reading_keeping_the_frames(
+        tmp_path: Path) -> None:
+    path, data = _pcap(tmp_path)
+    at = _PCAP_HEADER + 10 * _PACKET + 8  # packet 11's included length
+    path.write_bytes(data[:at] + struct.pack("<I", 1 << 20) + data[at + 4:])
+    for reader, items in _read_everywhere(path).items():
+        assert _payloads(items) == list(range(10)), reader
+        assert str(items[-1]) == ("packet 11: 1048576 bytes, not a SocketCAN frame (16..72): "
+                                  "the packets after it cannot be found"), reader
+    result = CliRunner().invoke(cli, ["convert", str(path), str(tmp_path / "out.log")])
+    assert result.exit_code == 1, result.output
+    assert "10 frames written" in result.output
+    assert f"Error: {path}: 1 packet could not be read (packet 11)" in result.output

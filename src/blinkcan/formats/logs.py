@@ -132,12 +132,12 @@ def _text_suffix(source: LogSource) -> str | None:
 def _messages(source: LogSource) -> Iterator[can.Message | UnreadableLine]:
     import can  # noqa: PLC0415
 
-    from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
+    from blinkcan.formats.pcap import PcapError, pcap_items  # noqa: PLC0415
 
     if is_pcap(source.path):
         with open_binary(source) as stream:
             try:
-                yield from read_pcap_messages(stream)
+                yield from pcap_items(stream)
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
