@@ -237,3 +237,37 @@ def test_a_pcap_packet_whose_length_is_no_frames_ends_the_reading_keeping_the_fr
     assert result.exit_code == 1, result.output
     assert "10 frames written" in result.output
     assert f"Error: {path}: 1 packet could not be read (packet 11)" in result.output
+
+
+def _compressed(text: bytes, suffix: str) -> bytes:
+    if suffix == ".gz":
+        return gzip.compress(text)
+    import zstandard
+
+    return zstandard.ZstdCompressor().compress(text)
+
+
+@pytest.mark.parametrize("suffix", [".gz", ".zst"])
+def test_a_compressed_candump_cut_inside_its_first_128_kib_says_what_it_kept(
+        tmp_path: Path, suffix: str) -> None:
+    # gzip gives every byte before the cut; zstd a block (up to 128 KiB of text) only whole,
+    # so a .zst cut inside its first block has no line to give: the file is named, cut short
+    lines = [f"({1700000000 + n / 1000:.6f}) can0 195#{n % 256:02X}{n * 7 % 65536:04X}\n"
+             for n in range(20_000)]
+    text = "".join(lines).encode()
+    first_block = _compressed(text[: 128 << 10], ".zst")
+    cut = tmp_path / f"cut.log{suffix}"
+    cut.write_bytes(_compressed(text, suffix)[: len(first_block) // 2])
+    if suffix == ".zst":
+        with pytest.raises(ValueError, match=r"no line is a candump frame \(line 1: the "
+                           "compressed file ends before any line of it could be "
+                           r"decompressed: cut short \(a \.zst block"):
+            list(read_columns(cut))
+        return
+    blocks = list(read_columns(cut))
+    times = [time for block in blocks for time in block.times]
+    [last] = [item for block in blocks for item in block.others.values()]
+    assert isinstance(last, UnreadableLine)
+    assert times[:-1] == [float(line[1:18]) for line in lines[: len(times) - 1]]
+    assert len(times) > 100
+    assert str(last).endswith("cut short")

@@ -357,6 +357,10 @@ def _cut_short(line: str, number: int) -> UnreadableLine:
     been cut, whole or not, so it is no frame (or, empty, the cut is at a line's end)."""
     where = f"{shown(line)} is where" if line.strip() else "there"
     reason = f"{where} the compressed file ends, before its compressed stream does: cut short"
+    if number == 1 and not line:  # nothing came out: zstd's format decodes a block only
+        # whole (RFC 8878 §3.1.1.3: its sequences are read from the block's end)
+        reason = ("the compressed file ends before any line of it could be decompressed: cut "
+                  "short (a .zst block, up to 128 KiB of text, is decompressed only whole)")
     return UnreadableLine(number, printable(line), reason, _line_time(line), True)
 
 
