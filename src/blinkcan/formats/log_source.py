@@ -206,12 +206,14 @@ def bounded_lines(stream: TextIO, kind: str) -> Iterator[str]:
         yield from lines
 
 
-def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
-    """:func:`bounded_lines` a chunk at a time: for loops that want no call per line."""
+def bounded_line_blocks(stream: TextIO, kind: str, chunk_size: int = _CHUNK
+                        ) -> Iterator[list[str]]:
+    """:func:`bounded_lines` a chunk (``chunk_size`` characters) at a time: for loops that
+    want no call per line."""
     read = stream.read
     rest = ""
     number = 0  # lines yielded so far
-    while chunk := read(_CHUNK):
+    while chunk := read(chunk_size):
         text = rest + chunk if rest else chunk
         lines = text.split("\n")
         if not text.isascii():  # O(1): a str knows whether it is ASCII
