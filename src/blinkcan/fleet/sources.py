@@ -101,10 +101,11 @@ def _open_text(path: Path, compression: str) -> TextIO:
     return path.open(encoding="utf-8", errors=_BYTES_KEPT)
 
 
-def _candump(path: Path, compression: str, arrow: bool) -> Iterator[FrameColumns]:
+def _candump(path: Path, compression: str, arrow: bool, block_chars: int
+             ) -> Iterator[FrameColumns]:
     with _open_text(path, compression) as stream:
         if arrow:  # a block of plain frames read whole (formats/candump_columns.py)
-            yield from read_candump_columns(stream, read_plain_block, BLOCK_CHARS)
+            yield from read_candump_columns(stream, read_plain_block, block_chars)
         else:
             yield from read_candump_columns(stream)
 
@@ -148,18 +149,19 @@ def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameCo
         os.unlink(name)
 
 
-def read_columns(path: str | os.PathLike[str], arrow: bool = True) -> Iterator[FrameColumns]:
+def read_columns(path: str | os.PathLike[str], arrow: bool = True,
+                 block_chars: int = BLOCK_CHARS) -> Iterator[FrameColumns]:
     """Every frame of a log file, in order, with its channel (None where the format has
     none), a block at a time. Raises :class:`LogError` (or the decompressor's error) for a
-    file it cannot read. ``arrow``: a candump log's blocks of plain frames are read whole
-    (:class:`~blinkcan.formats.columns.ArrowColumns`); False reads every line on its own
-    (the same frames: the tests compare both)."""
+    file it cannot read. ``arrow``: a candump log's blocks (``block_chars`` characters) of
+    plain frames are read whole (:class:`~blinkcan.formats.columns.ArrowColumns`); False
+    reads every line on its own (the same frames: the tests compare both)."""
     source = Path(path)
     if not source.is_file():
         raise LogError(f"no such file: {source}")
     suffix, compression = _suffixes(source)
     if suffix == _CANDUMP:
-        return _candump(source, compression, arrow)
+        return _candump(source, compression, arrow, block_chars)
     if compression:
         return _decompressed(source, suffix, compression)
     return message_columns(read_messages(source, unreadable=True))
