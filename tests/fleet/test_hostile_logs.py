@@ -1,8 +1,10 @@
 """A candump log without newlines refused at its first line in bounded memory by the fleet's
-reader too (issue 18 item 6: every reader of a user's log bounds its lines)."""
+reader too (issue 18 item 6: every reader of a user's log bounds its lines), compressed or not
+(issue 23: bounded memory whatever the file)."""
 
 from __future__ import annotations
 
+import gzip
 import tracemalloc
 from pathlib import Path
 
@@ -24,6 +26,40 @@ def test_a_candump_log_without_newlines_is_refused_in_bounded_memory(tmp_path: P
     finally:
         tracemalloc.stop()
     assert peak < 2 << 20, f"{peak:,} bytes to refuse a 24 MB line"
+
+
+def _zeros(path: Path, size: int) -> Path:
+    """``size`` zero bytes compressed as ``path`` names: a few kilobytes (a zip bomb)."""
+    chunk = bytes(1 << 20)
+    if path.suffix == ".gz":
+        with gzip.open(path, "wb") as stream:
+            for _ in range(size >> 20):
+                stream.write(chunk)
+        return path
+    import zstandard
+
+    compressor = zstandard.ZstdCompressor().compressobj()
+    with path.open("wb") as stream:
+        for _ in range(size >> 20):
+            stream.write(compressor.compress(chunk))
+        stream.write(compressor.flush())
+    return path
+
+
+@pytest.mark.parametrize("suffix", [".gz", ".zst"])
+def test_a_compressed_log_of_zeros_is_refused_in_bounded_memory(tmp_path: Path,
+                                                                suffix: str) -> None:
+    path = _zeros(tmp_path / f"bomb.log{suffix}", 64 << 20)
+    assert path.stat().st_size < 1 << 20
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match=f"^line 1 is over {MAX_LINE} bytes: "
+                                             "not a candump log$"):
+            list(read_columns(path))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 4 << 20, f"{peak:,} bytes to refuse 64 MiB of zeros in {suffix}"
 
 
 def test_each_frame_keeps_its_channel(tmp_path: Path) -> None:

@@ -44,47 +44,81 @@ def _suffixes(path: Path) -> tuple[str, str]:
     return (suffixes[-1] if suffixes else ""), ""
 
 
-class _ZstdReader(io.RawIOBase):
-    """A .zst file's bytes, frame after frame, that raises :class:`EOFError` where the file
-    ends inside a frame: zstandard's ``stream_reader`` ends there as if the file were whole,
-    so a log cut short would lose its tail silently."""
+#: a skippable frame's 16 magic numbers (RFC 8878 §3.1.2)
+_SKIPPABLE = range(0x184D2A50, 0x184D2A60)
+#: the longest frame header: magic, descriptor, window, dictionary id, content size (§3.1.1.1)
+_HEADER_MAX = 18
+#: compressed bytes read at a time, and decompressed bytes given at most per read: a file
+#: holding gigabytes of zeros in a few kilobytes is read a buffer at a time
+_READ_SIZE = 1 << 16
 
-    def __init__(self, raw: BinaryIO) -> None:
+
+def _ends_with_a_frame(raw: BinaryIO) -> bool:
+    """Whether the .zst file ``raw`` ends where a frame does: its frames' headers and block
+    headers walked, the blocks skipped (RFC 8878 §3.1.1: a block header gives the block's
+    size and whether it is the frame's last; a checksum of 4 bytes may follow)."""
+    import zstandard  # noqa: PLC0415 (the [fleet] extra)
+
+    size = raw.seek(0, os.SEEK_END)
+    position = 0
+    while position < size:
+        raw.seek(position)
+        header = raw.read(_HEADER_MAX)
+        magic = int.from_bytes(header[:4], "little")
+        if magic in _SKIPPABLE:  # §3.1.2: magic, 4 bytes of size, the skipped bytes
+            position += 8 + int.from_bytes(header[4:8], "little")
+            continue
+        try:
+            position += zstandard.frame_header_size(header)
+            checksum = zstandard.get_frame_parameters(header).has_checksum
+        except zstandard.ZstdError:
+            return False
+        last = False
+        while not last and position < size:  # §3.1.1.2: 3 bytes, little-endian
+            raw.seek(position)
+            block = int.from_bytes(raw.read(3), "little")
+            last, kind, length = bool(block & 1), block >> 1 & 3, block >> 3
+            position += 3 + (1 if kind == 1 else length)  # an RLE block holds one byte
+        if not last:
+            return False
+        position += 4 if checksum else 0
+    return position == size
+
+
+class _ZstdReader(io.RawIOBase):
+    """A .zst file's bytes, frame after frame, a bounded buffer at a time (zstandard's
+    ``stream_reader``), that raises :class:`EOFError` where the file ends inside a frame: the
+    stream reader ends there as if the file were whole, so a log cut short would lose its
+    tail silently."""
+
+    def __init__(self, path: Path) -> None:
         import zstandard  # noqa: PLC0415 (the [fleet] extra)
 
-        self._raw, self._new = raw, zstandard.ZstdDecompressor().decompressobj
-        self._frame, self._pending, self._started = self._new(), b"", False
+        self._raw = path.open("rb")
+        self._stream = zstandard.ZstdDecompressor().stream_reader(
+            self._raw, read_size=_READ_SIZE, read_across_frames=True, closefd=False)
+        self._checked = False
 
     def readable(self) -> bool:
         return True
 
     def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
-        while not self._pending:
-            if self._frame.eof:  # the next frame starts with what the last one left
-                rest, self._frame, self._started = self._frame.unused_data, self._new(), False
-                if rest:
-                    self._started = True
-                    self._pending = self._frame.decompress(rest)
-                    continue
-            chunk = self._raw.read(1 << 16)
-            if not chunk:
-                if self._started and not self._frame.eof:
-                    raise EOFError("Compressed file ended before the end of its zstd frame")
-                return 0
-            self._started = True
-            self._pending = self._frame.decompress(chunk)
-        size = min(len(buffer), len(self._pending))
-        buffer[:size] = self._pending[:size]
-        self._pending = self._pending[size:]
+        view = memoryview(buffer)[:_READ_SIZE]
+        size = self._stream.readinto(view)
+        if not size and view.nbytes and not self._checked:
+            self._checked = True  # once: the file's end is read again after an error
+            if not _ends_with_a_frame(self._raw):
+                raise EOFError("Compressed file ended before the end of its zstd frame")
         return size
 
     def close(self) -> None:
+        self._stream.close()  # type: ignore[no-untyped-call]  # zstandard types it so
         self._raw.close()
         super().close()
 
 
 def _zstd_text(path: Path) -> TextIO:
-    reader = io.BufferedReader(_ZstdReader(path.open("rb")))
+    reader = io.BufferedReader(_ZstdReader(path))
     return DecompressedText(reader, "utf-8", _BYTES_KEPT)
 
 
@@ -142,7 +176,7 @@ def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameCo
                 with gzip.open(path, "rb") as source:
                     shutil.copyfileobj(source, target)
             else:
-                with _ZstdReader(path.open("rb")) as source:
+                with _ZstdReader(path) as source:
                     shutil.copyfileobj(source, target)
         yield from message_columns(read_messages(Path(name), unreadable=True))
     finally:
