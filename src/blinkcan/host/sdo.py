@@ -15,12 +15,25 @@ reply may still come and would complete the next request to the same object. Wha
 2. Before the next request to that node, the channel gets back in step: it reads 1000h/00 and
    discards every reply until the answer to that read (an upload reply or abort for 1000h/00).
    An SDO server answers in order and never reorders (a busy one drops), so once that answer
-   is in, nothing older can arrive. Replies discarded are counted in ``late_replies``.
+   is in, nothing older can arrive. Replies discarded are counted in ``late_replies``. The
+   read names an object no lost request named (1001h/00, 1018h/00 or /01 when 1000h/00 was
+   lost: every CANopen device has them, CiA 301 §7.5.2), else the lost request's late reply
+   would be taken for it.
 3. A reply that comes while no request is outstanding is discarded and counted too.
 
 Two devices at one node id (a wiring mistake) answer every request twice, and the second reply
 completes the next request: "reply for another object". :meth:`SdoChannel.answers` tells: it
 sends one read and gathers every reply to it for a while (host/device.py decides what it means).
+A second device may also answer later than the whole exchange (a slow one, a loaded emulator):
+its replies then come when no request waits. A reply that answers a request already answered
+while in step (an initiate response or abort naming its object, CiA 301 §7.2.4.3) is a duplicate
+answer: a server answers each request once and in order, so a second server sent it, or another
+client asked the same (a tool on the bus; CiA 301 §7.2.4 gives an SDO channel one client). The
+next request to that node tells which first: it gathers the replies to one read of 1000h for as
+long as the duplicate trailed its answer (at least the timeout; :meth:`SdoChannel.answers`) and
+raises :class:`SharedNodeIdError` when more than one device answers; with one, the request goes
+on. Out of step (after a timeout or a reply that did not fit) the channel forgets what was
+answered: a late reply is no duplicate.
 """
 
 from __future__ import annotations
@@ -31,10 +44,19 @@ import threading
 from collections.abc import Callable, Iterator
 from typing import Protocol
 
+from blinkcan.host.identity_errors import SharedNodeIdError, several_answer
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import SDO_RX, SDO_TX
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.sdo import SdoFrameError, multiplexer, parse_sdo
+from blinkcan.protocol.sdo import (
+    SCS_ABORT,
+    SCS_INITIATE_DOWNLOAD,
+    SCS_INITIATE_UPLOAD,
+    SdoFrameError,
+    multiplexer,
+    parse_sdo,
+    split_multiplexer,
+)
 from blinkcan.protocol.sdo_client import (
     DownloadTransfer,
     SdoError,
@@ -49,8 +71,12 @@ log = logging.getLogger(__name__)
 #: the command byte of an SDO abort (CiA 301 §7.2.4.3.17: ccs/scs 4)
 ABORT_COMMAND = 0x80
 
-# the object every CANopen device has (CiA 301 §7.5.2.1): read to get back in step
-_RESYNC_MUX = multiplexer(0x1000, 0)
+# objects every CANopen device has (CiA 301 §7.5.2: 1000h, 1001h, 1018h/00-01): one that no
+# lost request named is read to get back in step (module docstring)
+#: the longest a request waits to tell a second device from another client (module docstring)
+_MAX_DUPLICATE_WAIT = 5.0
+_RESYNC_MUXES = tuple(multiplexer(index, subindex) for index, subindex in
+                      ((0x1000, 0), (0x1001, 0), (0x1018, 1), (0x1018, 0)))
 
 
 class SdoHost(Protocol):
@@ -91,8 +117,14 @@ class SdoChannel:
         self._awaiting = False
         self._accept: Callable[[bytes], bool] | None = None
         self._out_of_step = False
+        self._lost: set[bytes] = set()  # objects of requests whose replies may still come
         self._request_id = SDO_RX + node_id
         self._gathered: list[bytes] | None = None  # replies :meth:`answers` gathers
+        #: objects of the initiate requests answered while in step -> when (the last time)
+        self._answered: dict[bytes, float] = {}
+        self._answers: bytes | None = None  # the object the awaited initiate request names
+        #: the longest a duplicate answer trailed its answer, not yet looked into (None: none)
+        self._duplicate_lag: float | None = None
         host.subscribe_fast(SDO_TX + node_id, self._on_reply)
 
     def wake(self) -> None:
@@ -107,11 +139,16 @@ class SdoChannel:
                 return
             if not self._awaiting or (self._accept is not None and not self._accept(data)):
                 self.late_replies += 1
+                answered = self._answered.get(data[1:4])
+                if answered is not None and _answers_initiate(data):  # module docstring
+                    self._duplicate_lag = max(self._duplicate_lag or 0.0, now - answered)
                 log.debug("node %02Xh: SDO reply %s discarded (no request awaits it)",
                           self.node_id, data.hex(" "))
                 return
             self._awaiting = False
             self._reply = data
+            if self._answers is not None:  # an initiate request answered
+                self._answered[self._answers] = now
             self._signal.set()
 
     @contextlib.contextmanager
@@ -130,16 +167,21 @@ class SdoChannel:
         answers once. Other replies heard meanwhile (late ones) are dropped."""
         if self.host.in_handler:
             raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
-        mux = multiplexer(index, subindex)
         with self._lock:
+            return self._gather(multiplexer(index, subindex), window)
+
+    def _gather(self, mux: bytes, window: float) -> list[bytes]:
+        """:meth:`answers`, holding the request lock."""
+        with self._state_lock:
+            self._gathered = []
+            self._answered.clear()  # every reply is gathered and counted here
+            self._duplicate_lag = None
+        try:
+            self.host.send(Frame(self._request_id, b"\x40" + mux + b"\x00\x00\x00\x00"))
+            self.host.sleep(window)
+        finally:
             with self._state_lock:
-                self._gathered = []
-            try:
-                self.host.send(Frame(self._request_id, b"\x40" + mux + b"\x00\x00\x00\x00"))
-                self.host.sleep(window)
-            finally:
-                with self._state_lock:
-                    gathered, self._gathered = self._gathered, None
+                gathered, self._gathered = self._gathered, None
         return [data for data in gathered if _answers_upload_of(data, mux)]
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
@@ -160,6 +202,8 @@ class SdoChannel:
         timeout = self.timeout if timeout is None else timeout
         retries = self.retries if retries is None else retries
         with self._lock:
+            if self._duplicate_lag is not None:
+                self._check_shared(timeout)
             first: SdoTimeoutError | None = None
             uncertain: SdoTimeoutError | None = None  # an attempt that may have taken effect
             for attempt in range(retries + 1):
@@ -182,12 +226,25 @@ class SdoChannel:
                     raise
             raise AssertionError("unreachable")
 
+    def _check_shared(self, timeout: float) -> None:
+        """After a duplicate answer: :class:`SharedNodeIdError` when more than one device
+        answers a read of 1000h within the time the duplicate trailed (at least ``timeout``, at
+        most ``_MAX_DUPLICATE_WAIT``; module docstring). The request is not sent then."""
+        lag = self._duplicate_lag or 0.0
+        window = min(max(timeout, 1.5 * lag), max(timeout, _MAX_DUPLICATE_WAIT))
+        replies = self._gather(_RESYNC_MUXES[0], window)
+        if len(replies) > 1:
+            raise SharedNodeIdError(several_answer(len(replies), self.node_id), len(replies))
+
     def _exchange(self, request: bytes, timeout: float,
-                  accept: Callable[[bytes], bool] | None = None) -> bytes | None:
-        """Send ``request`` and wait for the reply it gets; None on a timeout."""
+                  accept: Callable[[bytes], bool] | None = None, answers: bytes | None = None
+                  ) -> bytes | None:
+        """Send ``request`` and wait for the reply it gets; None on a timeout. ``answers``: the
+        object an initiate request names (its answer is remembered: module docstring)."""
         with self._state_lock:
             self._signal.clear()
             self._accept = accept
+            self._answers = answers
             self._awaiting = True
         try:
             self.host.send(Frame(self._request_id, request))
@@ -197,6 +254,8 @@ class SdoChannel:
                 self._awaiting = False
                 self._accept = None
                 arrived, reply = self._signal.is_set(), self._reply
+                if not arrived:  # out of step: a late reply is no duplicate (module docstring)
+                    self._answered.clear()
         if self.host.closed:
             raise SdoError("the bus was shut down", self.node_id,
                            int.from_bytes(request[1:3], "little"), request[3])
@@ -205,37 +264,47 @@ class SdoChannel:
     def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
         request: bytes | None = transfer.start()
         accept = _initiate_reply_of(transfer.mux)  # then segments, which name no object
+        answers: bytes | None = transfer.mux  # the initiate request names the object
         while request is not None:
-            reply = self._exchange(request, timeout, accept)
+            reply = self._exchange(request, timeout, accept, answers)
             if reply is None:
                 self._out_of_step = True
+                self._lost.add(transfer.mux)
                 self.host.send(Frame(self._request_id,
                                      transfer.abort_request(AbortCode.SDO_PROTOCOL_TIMED_OUT)))
                 raise self._timeout(transfer, timeout)
-            accept = _whole_frame
+            accept, answers = _whole_frame, None
             try:
                 request = transfer.on_reply(reply)
             except SdoProtocolError:
                 # CiA 301 §7.2.4.3.17: a reply that does not fit aborts the transfer; the
                 # server's own reply may still come, so get back in step before the next request
                 self._out_of_step = True
+                with self._state_lock:
+                    self._answered.clear()
+                    self._lost.add(transfer.mux)
                 self.host.send(Frame(self._request_id, transfer.abort_request(
                     AbortCode.COMMAND_SPECIFIER_INVALID)))
                 raise
 
     def _resync(self, timeout: float, transfer: UploadTransfer | DownloadTransfer) -> None:
-        """Read 1000h/00, discarding every reply until its own (see the module docstring)."""
-        request = b"\x40" + _RESYNC_MUX + b"\x00\x00\x00\x00"
+        """Read 1000h/00 (or another object every device has, that no lost request named),
+        discarding every reply until its own (see the module docstring)."""
+        mux = next((mux for mux in _RESYNC_MUXES if mux not in self._lost), _RESYNC_MUXES[0])
+        request = b"\x40" + mux + b"\x00\x00\x00\x00"
 
         def answers_resync(data: bytes) -> bool:
-            return _answers_upload_of(data, _RESYNC_MUX)
+            return _answers_upload_of(data, mux)
 
         if self._exchange(request, timeout, answers_resync) is None:
+            self._lost.add(mux)
+            index, subindex = split_multiplexer(mux)
             raise SdoTimeoutError(
                 f"no reply within {timeout} s (node {self.node_id:02X}h did not answer a read "
-                "of 1000h after an earlier timeout; nothing was sent for this request)",
-                self.node_id, transfer.index, transfer.subindex)
+                f"of {index:04X}h/{subindex:02X} after an earlier timeout; nothing was sent "
+                "for this request)", self.node_id, transfer.index, transfer.subindex)
         self._out_of_step = False
+        self._lost.clear()
 
     def _timeout(self, transfer: UploadTransfer | DownloadTransfer, timeout: float
                  ) -> SdoTimeoutError:
@@ -258,6 +327,13 @@ def _initiate_reply_of(mux: bytes) -> Callable[[bytes], bool]:
         return len(data) >= 8 and (data[0] == ABORT_COMMAND or data[1:4] == mux)
 
     return accept
+
+
+def _answers_initiate(data: bytes) -> bool:
+    """Whether ``data`` can answer an initiate request (for the object it names): an upload or
+    download initiate response, or an abort (CiA 301 §7.2.4.3.3, .6, .17)."""
+    return len(data) >= 8 and data[0] >> 5 in (SCS_INITIATE_UPLOAD, SCS_INITIATE_DOWNLOAD,
+                                               SCS_ABORT)
 
 
 def _whole_frame(data: bytes) -> bool:
