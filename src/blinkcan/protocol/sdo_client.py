@@ -14,6 +14,7 @@ from __future__ import annotations
 from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.sdo import (
+    EXPEDITED,
     EXPEDITED_DOWNLOAD_COMMAND,
     SCS_DOWNLOAD_SEGMENT,
     SCS_INITIATE_UPLOAD,
@@ -21,11 +22,16 @@ from blinkcan.protocol.sdo import (
     TOGGLE,
     ZEROS,
     SdoFrame,
+    expedited_payload,
     multiplexer,
     parse_sdo,
 )
 
 QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowledges with 43h
+#: byte 0 of an expedited initiate upload response, masked to scs (bits 7-5) and e (bit 1)
+#: (CiA 301 §7.2.4.3.6): the common reply, taken without parsing the frame
+_EXPEDITED_UPLOAD_MASK = 0xE0 | EXPEDITED
+_EXPEDITED_UPLOAD = (SCS_INITIATE_UPLOAD << 5) | EXPEDITED
 
 
 class SdoError(BlinkcanError):
@@ -108,11 +114,21 @@ class UploadTransfer(_Transfer):
         """How many bytes the segments brought so far."""
         return len(self._buffer)
 
+    def again(self) -> UploadTransfer:
+        """The same transfer, from its start (a retry)."""
+        return UploadTransfer(self.index, self.subindex)
+
     def start(self) -> bytes:
         return b"\x40" + self.mux + b"\x00\x00\x00\x00"
 
     def on_reply(self, data: bytes) -> bytes | None:
         """The next request, or None when the value is complete (then ``done``)."""
+        if (len(data) == 8 and data[0] & _EXPEDITED_UPLOAD_MASK == _EXPEDITED_UPLOAD
+                and self._size is None and not self._buffer and data[1:4] == self.mux):
+            # CiA 301 §7.2.4.3.6: the value in the reply (size stated or all four bytes)
+            self.value = expedited_payload(data[0], data)
+            self.done = True
+            return None
         reply = self._check_common(data)
         command = reply.command
         if self._size is None and not self._buffer and reply.specifier == SCS_INITIATE_UPLOAD:
@@ -149,6 +165,10 @@ class DownloadTransfer(_Transfer):
         self._position = 0
         self._toggle = 0
         self._segmented = len(self.data) > 4 or not self.data
+
+    def again(self) -> DownloadTransfer:
+        """The same transfer, from its start (a retry)."""
+        return DownloadTransfer(self.index, self.subindex, self.data)
 
     def start(self) -> bytes:
         data = self.data
