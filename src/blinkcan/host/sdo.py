@@ -122,7 +122,7 @@ class SdoChannel:
         self._lock = threading.Lock()
         self._state_lock = threading.Lock()
         self._signal = host.signal()
-        self._reply = b""
+        self._reply: bytes | None = None  # the awaited reply, once it came
         self._awaiting = False
         #: what the awaited reply must be: a whole SDO frame naming ``_wanted`` (an initiate
         #: request's object) or an abort; any whole frame (None: a segment's); or what
@@ -259,6 +259,7 @@ class SdoChannel:
         signal = self._signal
         with self._state_lock:
             signal.clear()
+            self._reply = None
             self._wanted = wanted
             self._accept = accept
             self._awaiting = True
@@ -270,13 +271,13 @@ class SdoChannel:
             with self._state_lock:  # no reply is taken after this
                 self._awaiting = False
                 self._accept = None
-                arrived, reply = signal.is_set(), self._reply
-                if not arrived:  # out of step: a late reply is no duplicate (module docstring)
+                reply = self._reply
+                if reply is None:  # out of step: a late reply is no duplicate (module docstring)
                     self._answered.clear()
-        if self.host.closed:
+        if reply is None and self.host.closed:  # woken by :meth:`wake`, or timed out
             raise SdoError("the bus was shut down", self.node_id,
                            int.from_bytes(request[1:3], "little"), request[3])
-        return reply if arrived else None
+        return reply
 
     def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
         request: bytes | None = transfer.start()

@@ -19,10 +19,10 @@ from blinkcan.protocol.sdo import (
     SCS_DOWNLOAD_SEGMENT,
     SCS_INITIATE_UPLOAD,
     SCS_UPLOAD_SEGMENT,
+    SIZE_INDICATED,
     TOGGLE,
     ZEROS,
     SdoFrame,
-    expedited_payload,
     multiplexer,
     parse_sdo,
 )
@@ -95,14 +95,15 @@ class _Transfer:
 
 
 class UploadTransfer(_Transfer):
-    """Read one object: :meth:`start`, then feed replies to :meth:`on_reply` until ``done``."""
+    """Read one object: :meth:`start`, then feed replies to :meth:`on_reply` until ``done``.
 
-    def __init__(self, index: int, subindex: int) -> None:
-        super().__init__(index, subindex)
-        self.value = b""
-        self._size: int | None = None
-        self._toggle = 0
-        self._buffer = bytearray()
+    Its own state starts as these class defaults (no ``__init__`` of its own: most reads are
+    one expedited reply); a segmented upload gets its buffer when the server announces it."""
+
+    value: bytes = b""
+    _size: int | None = None
+    _toggle = 0
+    _buffer: bytes | bytearray = b""
 
     @property
     def size(self) -> int | None:
@@ -125,8 +126,11 @@ class UploadTransfer(_Transfer):
         """The next request, or None when the value is complete (then ``done``)."""
         if (len(data) == 8 and data[0] & _EXPEDITED_UPLOAD_MASK == _EXPEDITED_UPLOAD
                 and self._size is None and not self._buffer and data[1:4] == self.mux):
-            # CiA 301 §7.2.4.3.6: the value in the reply (size stated or all four bytes)
-            self.value = expedited_payload(data[0], data)
+            # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is stated,
+            # else all four (protocol.sdo.expedited_payload, inlined)
+            command = data[0]
+            self.value = (data[4 : 8 - ((command >> 2) & 0x03)] if command & SIZE_INDICATED
+                          else data[4:8])
             self.done = True
             return None
         reply = self._check_common(data)
@@ -140,6 +144,7 @@ class UploadTransfer(_Transfer):
                 return None
             size = reply.size
             self._size = -1 if size is None else size
+            self._buffer = bytearray()
             return b"\x60" + ZEROS[:7]
         if reply.specifier != SCS_UPLOAD_SEGMENT:
             raise self._fail(f"unexpected reply {command:02X}h")
