@@ -16,6 +16,7 @@ from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.sdo import (
     EXPEDITED,
     EXPEDITED_DOWNLOAD_COMMAND,
+    LAST_SEGMENT,
     SCS_DOWNLOAD_SEGMENT,
     SCS_INITIATE_UPLOAD,
     SCS_UPLOAD_SEGMENT,
@@ -124,15 +125,21 @@ class UploadTransfer(_Transfer):
 
     def on_reply(self, data: bytes) -> bytes | None:
         """The next request, or None when the value is complete (then ``done``)."""
-        if (len(data) == 8 and data[0] & _EXPEDITED_UPLOAD_MASK == _EXPEDITED_UPLOAD
-                and self._size is None and not self._buffer and data[1:4] == self.mux):
-            # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is stated,
-            # else all four (protocol.sdo.expedited_payload, inlined)
+        if len(data) == 8:  # the common replies, taken without parsing the frame
             command = data[0]
-            self.value = (data[4 : 8 - ((command >> 2) & 0x03)] if command & SIZE_INDICATED
-                          else data[4:8])
-            self.done = True
-            return None
+            started = self._size is not None or bool(self._buffer)
+            if (command & _EXPEDITED_UPLOAD_MASK == _EXPEDITED_UPLOAD and not started
+                    and data[1:4] == self.mux):
+                # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is
+                # stated, else all four (protocol.sdo.expedited_payload, inlined)
+                self.value = (data[4 : 8 - ((command >> 2) & 0x03)] if command & SIZE_INDICATED
+                              else data[4:8])
+                self.done = True
+                return None
+            if command >> 5 == SCS_UPLOAD_SEGMENT and started:
+                # CiA 301 §7.2.4.3.4: bytes 1-7 less the n unused ones (bits 3-1)
+                # (protocol.sdo.segment_payload, inlined)
+                return self._segment(command, data[1 : 8 - ((command >> 1) & 0x07)])
         reply = self._check_common(data)
         command = reply.command
         if self._size is None and not self._buffer and reply.specifier == SCS_INITIATE_UPLOAD:
@@ -148,10 +155,14 @@ class UploadTransfer(_Transfer):
             return b"\x60" + ZEROS[:7]
         if reply.specifier != SCS_UPLOAD_SEGMENT:
             raise self._fail(f"unexpected reply {command:02X}h")
-        if reply.toggle != self._toggle:  # CiA 301 §7.2.4.3.7
+        return self._segment(command, reply.segment_data)
+
+    def _segment(self, command: int, chunk: bytes) -> bytes | None:
+        """An upload segment response (``command``, its data ``chunk``): the next request."""
+        if command & TOGGLE != self._toggle:  # CiA 301 §7.2.4.3.7
             raise self._fail("toggle bit not alternated")
-        self._buffer += reply.segment_data
-        if reply.last:  # last segment (errata B6: strings of any length)
+        self._buffer += chunk
+        if command & LAST_SEGMENT:  # last segment (errata B6: strings of any length)
             if self._size not in (None, -1) and len(self._buffer) != self._size:
                 raise self._fail(f"{len(self._buffer)} bytes, {self._size} announced")
             self.value = bytes(self._buffer)
