@@ -5,12 +5,14 @@ reader too (issue 18 item 6: every reader of a user's log bounds its lines), com
 from __future__ import annotations
 
 import gzip
+import os
 import tracemalloc
 from pathlib import Path
 
 import pytest
 
 from blinkcan.fleet.sources import read_columns
+from blinkcan.fleet.task import decode_file
 from blinkcan.formats.log_source import MAX_LINE
 from tests.formats.test_log_sources import CANDUMP, _no_newline
 
@@ -66,3 +68,16 @@ def test_each_frame_keeps_its_channel(tmp_path: Path) -> None:
     path = tmp_path / "two.log"
     path.write_text(CANDUMP.replace("can0", "can1", 1))
     assert [c for block in read_columns(path) for c in block.channels] == ["can1", "can0"]
+
+
+def test_a_fifo_is_named_as_one_not_as_missing(tmp_path: Path) -> None:
+    """`decode ff --parquet lake` said "no such file: .../ff" for a FIFO that is there."""
+    fifo = tmp_path / "ff"
+    os.mkfifo(fifo)
+    with pytest.raises(ValueError, match=f"^{fifo} is a FIFO: --parquet reads regular files "
+                                         r"only \(decode without --parquet reads a stream\)$"):
+        list(read_columns(fifo))
+    result = decode_file(fifo, str(tmp_path / "lake"))
+    assert (result.status, result.error) == ("failed", f"{fifo} is a FIFO: --parquet reads "
+                                             "regular files only (decode without --parquet "
+                                             "reads a stream)")

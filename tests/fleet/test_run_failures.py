@@ -85,3 +85,25 @@ def test_the_run_counts_one_file_in_the_singular(tmp_path: Path) -> None:
                                       str(tmp_path / "lake")])
     assert result.exit_code == 0, result.output
     assert "1 file decoded to" in result.output
+
+
+@pytest.mark.parametrize("document", ["manifest", "journal"])
+def test_a_corrupt_manifest_is_said_once_and_the_file_decoded_again(
+        tmp_path: Path, document: str, caplog: pytest.LogCaptureFixture) -> None:
+    """A manifest (or .pending.json) nested 100,000 deep stopped the whole run: 'unexpected
+    RecursionError', exit 1 (issue 23: a file that cannot be read never stops the run)."""
+    log = tmp_path / "a.log"
+    log.write_text(LOG)
+    out = str(tmp_path / "lake")
+    first = decode_file(log, out)
+    [manifest] = (tmp_path / "lake" / "_blinkcan").glob("*.json")
+    corrupt = manifest.with_suffix(".pending.json") if document == "journal" else manifest
+    corrupt.write_text("[" * 100_000 + "]" * 100_000)
+    with caplog.at_level("WARNING", logger="blinkcan.fleet.task"):
+        again = decode_file(log, out)
+    assert (again.status, again.frames, again.rows) == ("decoded", first.frames, first.rows)
+    assert again.outputs == first.outputs
+    said = [r.getMessage() for r in caplog.records if "corrupt" in r.getMessage()]
+    assert said == [f"{corrupt} is corrupt (RecursionError): read as if absent"]
+    result = CliRunner().invoke(cli, ["decode", str(log), "--parquet", out])
+    assert result.exit_code == 0, result.output

@@ -16,6 +16,7 @@ import gzip
 import io
 import os
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -183,6 +184,27 @@ def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameCo
         os.unlink(name)
 
 
+#: what a file that is not a regular one is
+_NOT_REGULAR = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"),
+                (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                (stat.S_ISSOCK, "a socket"))
+
+
+def _check_regular(source: Path) -> None:
+    """:class:`LogError` unless ``source`` is a regular file: a dataset's file is read whole
+    and read again when it changes, which a stream cannot be."""
+    try:
+        mode = source.stat().st_mode
+    except FileNotFoundError:
+        raise LogError(f"no such file: {source}") from None
+    except OSError as error:
+        raise LogError(f"cannot read {source}: {error.strerror}") from None
+    if not stat.S_ISREG(mode):
+        what = next((name for test, name in _NOT_REGULAR if test(mode)), "not a regular file")
+        raise LogError(f"{source} is {what}: --parquet reads regular files only "
+                       "(decode without --parquet reads a stream)")
+
+
 def read_columns(path: str | os.PathLike[str], arrow: bool = True,
                  block_chars: int = BLOCK_CHARS) -> Iterator[FrameColumns]:
     """Every frame of a log file, in order, with its channel (None where the format has
@@ -191,8 +213,7 @@ def read_columns(path: str | os.PathLike[str], arrow: bool = True,
     plain frames are read whole (:class:`~blinkcan.formats.columns.ArrowColumns`); False
     reads every line on its own (the same frames: the tests compare both)."""
     source = Path(path)
-    if not source.is_file():
-        raise LogError(f"no such file: {source}")
+    _check_regular(source)
     suffix, compression = _suffixes(source)
     if suffix == _CANDUMP:
         return _candump(source, compression, arrow, block_chars)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import uuid
 from collections.abc import Callable
@@ -41,6 +42,8 @@ from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 
 if TYPE_CHECKING:  # fsspec loads for a URL only (start-up: fleet/local_files.py)
     from fsspec import AbstractFileSystem
+
+log = logging.getLogger(__name__)
 
 META = "_blinkcan"
 #: how often (in frames) a local task reports its progress
@@ -98,14 +101,28 @@ class _Store:
         self.journal = f"{self.meta}/{key}.pending.json"
         self.temporary = f"{self.meta}/tmp"
         self.key = key
+        #: the documents found corrupt, said once each
+        self.corrupt: set[str] = set()
 
     def read_json(self, path: str) -> dict[str, Any] | None:
+        """The document at ``path``; None where there is none, or where it is corrupt (not
+        JSON, not an object, nested past Python's recursion limit): that is said once, and
+        the file is decoded again as if never decoded."""
         try:
             with self.fs.open(path, "rb") as stream:
                 document = json.loads(stream.read())
-        except (FileNotFoundError, ValueError):
+        except FileNotFoundError:
             return None
-        return document if isinstance(document, dict) else None
+        except (ValueError, RecursionError) as error:
+            document = error
+        if isinstance(document, dict):
+            return document
+        if path not in self.corrupt:
+            self.corrupt.add(path)
+            reason = f"{type(document).__name__}" if isinstance(document, Exception) else \
+                f"a JSON {type(document).__name__}, not an object"
+            log.warning("%s is corrupt (%s): read as if absent", path, reason)
+        return None
 
     def write_json(self, path: str, document: dict[str, object]) -> None:
         """Written aside, then renamed: never half a manifest."""
@@ -122,9 +139,9 @@ class _Store:
     def recover(self) -> None:
         """Undo what a dead predecessor left: a journal's files, its temporary folders."""
         journal = self.read_json(self.journal)
-        if journal is not None:
-            self.remove(self.manifest)
-            for relative in journal.get("outputs", []):
+        if journal is not None or self.fs.exists(self.journal):  # corrupt: outputs unknown,
+            self.remove(self.manifest)  # the file is decoded again over its own
+            for relative in (journal or {}).get("outputs", []):
                 self.remove(f"{self.root}/{relative}")
             self.remove(self.journal)
         if self.fs.exists(self.temporary):
