@@ -7,13 +7,16 @@ from __future__ import annotations
 import gzip
 import os
 import tracemalloc
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.task import decode_file
+from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.log_source import MAX_LINE
+from tests.fleet.logs import fleet_traffic, write_log
 from tests.formats.test_log_sources import CANDUMP, _no_newline
 
 
@@ -81,3 +84,36 @@ def test_a_fifo_is_named_as_one_not_as_missing(tmp_path: Path) -> None:
     assert (result.status, result.error) == ("failed", f"{fifo} is a FIFO: --parquet reads "
                                              "regular files only (decode without --parquet "
                                              "reads a stream)")
+
+
+def test_a_compressed_log_is_decompressed_at_most_so_far(tmp_path: Path) -> None:
+    """A .asc.gz was decompressed whole into /tmp, however large it came out."""
+    path = write_log(tmp_path / "unit.asc.gz", fleet_traffic(taps=1))
+    scratch = tmp_path / "scratch"
+    with pytest.raises(ValueError, match=f"^{path} decompresses to over 1,000 bytes, the most "
+                                         "a compressed log other than candump is decompressed "
+                                         r"to \(on disk, to be read\): refused$"):
+        list(read_columns(path, scratch=str(scratch), max_decompressed=1000))
+    assert list(scratch.iterdir()) == []
+    assert sum(len(block) for block in read_columns(path)) == len(fleet_traffic(taps=1))
+
+
+def test_a_compressed_log_is_decompressed_in_the_attempt_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Decompressed into /tmp, the file was left there when the run was killed: in the
+    run's attempt folder, the next run's recovery removes it."""
+    path = write_log(tmp_path / "unit.asc.gz", fleet_traffic(taps=1))
+    out = tmp_path / "lake"
+    seen: list[list[Path]] = []
+
+    def spying(source: str, scratch: str) -> Iterator[FrameColumns]:
+        for block in read_columns(source, scratch=scratch):
+            seen.append(list(Path(scratch).glob(".blinkcan-*.asc")))
+            yield block
+
+    monkeypatch.setattr("blinkcan.fleet.task.read_columns", spying)
+    result = decode_file(path, str(out))
+    assert (result.status, result.frames) == ("decoded", len(fleet_traffic(taps=1)))
+    [[decompressed], *_] = seen
+    assert decompressed.parent.parent == out / "_blinkcan" / "tmp"
+    assert not decompressed.exists()

@@ -6,8 +6,9 @@ python-can's formats and pcap come through blinkcan's reader,
 ASC times stay absolute), their messages put in columns here; candump ``.log`` (plain, ``.gz``
 or ``.zst``) is read straight into columns by ``formats/candump.py``. Any other
 ``.gz`` or ``.zst`` log is decompressed to a temporary file first (BLF and MF4 readers need to
-seek; python-can's own ``.gz`` reading would bypass blinkcan's reader); memory stays bounded
-either way.
+seek; python-can's own ``.gz`` reading would bypass blinkcan's reader), up to
+:data:`MAX_DECOMPRESSED` bytes, in the run's attempt folder (recovery removes it where a run
+was killed); memory stays bounded either way.
 """
 
 from __future__ import annotations
@@ -15,10 +16,9 @@ from __future__ import annotations
 import gzip
 import io
 import os
-import shutil
 import stat
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO, TextIO
 
@@ -169,16 +169,37 @@ def message_columns(messages: Iterable[can.Message | UnreadableLine], block: int
         yield columns
 
 
-def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameColumns]:
-    handle, name = tempfile.mkstemp(suffix=suffix, prefix=".blinkcan-")
+#: the most bytes a non-candump compressed log is decompressed to (on disk, to be read)
+MAX_DECOMPRESSED = 64 << 30
+
+
+def _copy_bounded(read: Callable[[int], bytes | None], target: BinaryIO, path: Path,
+                  limit: int) -> None:
+    copied = 0
+    while chunk := read(_READ_SIZE):
+        copied += len(chunk)
+        if copied > limit:
+            raise LogError(f"{path} decompresses to over {limit:,} bytes, the most a "
+                           "compressed log other than candump is decompressed to (on disk, "
+                           "to be read): refused")
+        target.write(chunk)
+
+
+def _decompressed(path: Path, suffix: str, compression: str, scratch: str | None,
+                  limit: int) -> Iterator[FrameColumns]:
+    """``path`` decompressed into a file in ``scratch`` (the run's attempt folder, which
+    recovery removes where the run is killed; else the system's temporary folder)."""
+    if scratch is not None:
+        os.makedirs(scratch, exist_ok=True)
+    handle, name = tempfile.mkstemp(suffix=suffix, prefix=".blinkcan-", dir=scratch)
     try:
         with os.fdopen(handle, "wb") as target:
             if compression == ".gz":
                 with gzip.open(path, "rb") as source:
-                    shutil.copyfileobj(source, target)
+                    _copy_bounded(source.read, target, path, limit)
             else:
                 with _ZstdReader(path) as source:
-                    shutil.copyfileobj(source, target)
+                    _copy_bounded(source.read, target, path, limit)
         yield from message_columns(read_messages(Path(name), unreadable=True))
     finally:
         os.unlink(name)
@@ -206,17 +227,20 @@ def _check_regular(source: Path) -> None:
 
 
 def read_columns(path: str | os.PathLike[str], arrow: bool = True,
-                 block_chars: int = BLOCK_CHARS) -> Iterator[FrameColumns]:
+                 block_chars: int = BLOCK_CHARS, scratch: str | None = None,
+                 max_decompressed: int = MAX_DECOMPRESSED) -> Iterator[FrameColumns]:
     """Every frame of a log file, in order, with its channel (None where the format has
     none), a block at a time. Raises :class:`LogError` (or the decompressor's error) for a
     file it cannot read. ``arrow``: a candump log's blocks (``block_chars`` characters) of
     plain frames are read whole (:class:`~blinkcan.formats.columns.ArrowColumns`); False
-    reads every line on its own (the same frames: the tests compare both)."""
+    reads every line on its own (the same frames: the tests compare both). A compressed log
+    other than candump is decompressed into a file in ``scratch`` (None: the system's
+    temporary folder), up to ``max_decompressed`` bytes (past that: :class:`LogError`)."""
     source = Path(path)
     _check_regular(source)
     suffix, compression = _suffixes(source)
     if suffix == _CANDUMP:
         return _candump(source, compression, arrow, block_chars)
     if compression:
-        return _decompressed(source, suffix, compression)
+        return _decompressed(source, suffix, compression, scratch, max_decompressed)
     return message_columns(read_messages(source, unreadable=True))

@@ -193,7 +193,8 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
     attempt = f"{store.temporary}/{store.key}-{uuid.uuid4().hex}"
     writer = PartitionWriter(store.fs, attempt, f"{store.key}.parquet", path, rows_per_group)
     try:
-        frames, unreadable = _decode_into(writer, path, devices, progress)
+        scratch = attempt if isinstance(store.fs, LocalFiles) else None
+        frames, unreadable = _decode_into(writer, path, devices, progress, scratch)
         outputs = writer.close()
     except Exception as error:  # a file that cannot be read (or decoded): named and skipped
         writer.abandon()
@@ -213,15 +214,17 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
 
 
 def _decode_into(writer: PartitionWriter, path: str, devices: ModelsByNode | None,
-                 progress: Callable[[int], None] | None) -> tuple[int, UnreadableCount]:
+                 progress: Callable[[int], None] | None, scratch: str | None
+                 ) -> tuple[int, UnreadableCount]:
     """The frames decoded, and the lines that are no frame (each an ``unreadable`` row; a
-    capture whose logger was killed ends in one, cut off)."""
+    capture whose logger was killed ends in one, cut off). A compressed log is decompressed
+    in ``scratch`` (a local attempt folder) where it must be."""
     frames = FrameDecoder(make_decoder(devices))
     segment = Segment()
     limit = writer.rows_per_group
     count = reported = 0
     unreadable = UnreadableCount()
-    for block in read_columns(path):
+    for block in read_columns(path, scratch=scratch):
         position, size = 0, len(block)
         if block.others:
             for item in block.others.values():
