@@ -12,7 +12,7 @@ from blinkcan.host import scan, scan_j1939
 
 
 @click.command("scan")
-@click.option("--listen", type=Seconds(), default=0.5, show_default=True,
+@click.option("--listen", type=Seconds(maximum=3600.0), default=0.5, show_default=True,
               help="Seconds to listen for boot-ups and heartbeats first.")
 @bus_options
 def command(listen: float) -> None:
