@@ -16,6 +16,7 @@ from benchmarks import (
     emulator_capacity,
     fleet_parquet,
     j1939_decode,
+    memory,
     panel_latency,
     sdo_roundtrip,
     sdo_twin,
@@ -31,6 +32,7 @@ BENCHMARKS: tuple[ModuleType, ...] = (
     j1939_decode,
     canopen_time,
     fleet_parquet,
+    memory,
     panel_latency,
 )
 
