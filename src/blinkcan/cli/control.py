@@ -204,8 +204,9 @@ def _device(target: Target, start: bool = False, check: Check | None = None
     bus = cli_bus()
     try:
         try:
-            if address is not None:  # J1939 mode answers no SDO: the kind's first model
-                device = driver_class(kind)(bus, node_id, protocol="j1939", address=address)
+            if address is not None:  # J1939 mode answers no SDO: --model, else the kind's first
+                device = driver_class(kind)(bus, node_id, protocol="j1939", address=address,
+                                            model=_chosen_model())
             else:
                 chosen = _chosen_model()
                 found = model(chosen) if chosen else _model_at(bus, node_id, kind)
