@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from functools import cache
 from typing import Literal, get_args
 
 from blinkcan.devices.common import ConsumerHeartbeat
@@ -126,6 +127,19 @@ class DeviceDescription:
     def tx_pdos(self) -> tuple[PdoLayout, ...]:
         return tuple(p for p in self.pdos if p.direction is Direction.TX)
 
+    def sharing(self, other: DeviceDescription) -> DeviceDescription:
+        """``other`` holding this description's parts wherever they are equal: the same model
+        described at another factory node id (which is one entry's default) is then a few
+        objects, not a second copy of the table, layouts and face."""
+        parts: dict[str, object] = {}
+        for part in fields(self):
+            ours, theirs = getattr(self, part.name), getattr(other, part.name)
+            if part.name == "table":
+                parts[part.name] = self.table.sharing(theirs)
+            else:
+                parts[part.name] = ours if ours == theirs else theirs
+        return DeviceDescription(**parts)  # type: ignore[arg-type]
+
     def bitrate_code(self, bitrate: int) -> int:
         """The baud-rate object code for a bit rate (the lowest code where several match)."""
         for code, rate in sorted(self.bitrates.items()):
@@ -166,5 +180,16 @@ class Model:
         if generation not in self.generations:
             raise ValueError(f"{self.name} generations are {', '.join(self.generations)}, "
                              f"not {generation!r}")
-        node = self.default_node_id if factory_node_id is None else factory_node_id
-        return self.describe(generation, check_quirks(quirks), node)
+        profile = check_quirks(quirks)
+        described = _described(self, generation, profile)
+        if factory_node_id is None or factory_node_id == self.default_node_id:
+            return described
+        # another factory node id: its own description, sharing every equal part
+        return described.sharing(self.describe(generation, profile, factory_node_id))
+
+
+@cache
+def _described(model: Model, generation: str, quirks: Quirks) -> DeviceDescription:
+    """A model's description at its default node id, built once (descriptions are immutable:
+    every twin, driver and decoder of the model holds this one)."""
+    return model.describe(generation, quirks, model.default_node_id)

@@ -7,9 +7,10 @@ Tables compose: a firmware generation is ``base.with_objects(...)``, a small del
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from enum import Enum, IntEnum
+from functools import cache
 
 from blinkcan.protocol.sdo import multiplexer
 
@@ -197,40 +198,71 @@ class ObjectDef:
 
 
 @dataclass(frozen=True)
+class TableLayout:
+    """Where each entry of a table is: its position in the table's order by name, by (index,
+    sub-index) and by its SDO multiplexer bytes. A layout depends only on the entries' places
+    and names, not on their values, so every table of one structure (a model at any factory
+    node id) shares one: :func:`table_layout` computes it once."""
+
+    by_name: Mapping[str, int]
+    by_key: Mapping[tuple[int, int], int]
+    by_mux: Mapping[bytes, int]
+    #: the 2-byte (little-endian) indices the table has: an SDO abort says sub-index or object
+    index_bytes: frozenset[bytes]
+
+
+@cache
+def table_layout(places: tuple[tuple[int, int, str], ...]) -> TableLayout:
+    """The layout of entries at ``places`` ((index, sub-index, name) in the table's order);
+    ValueError if a name is used twice. Cached: a pure function of an immutable argument."""
+    by_name: dict[str, int] = {}
+    for position, (_, _, name) in enumerate(places):
+        if name in by_name:
+            raise ValueError(f"entry name {name!r} used twice")
+        by_name[name] = position
+    return TableLayout(
+        by_name=by_name,
+        by_key={(index, subindex): position
+                for position, (index, subindex, _) in enumerate(places)},
+        by_mux={multiplexer(index, subindex): position
+                for position, (index, subindex, _) in enumerate(places)},
+        index_bytes=frozenset(index.to_bytes(2, "little") for index, _, _ in places),
+    )
+
+
+@dataclass(frozen=True)
 class ObjectTable:
-    """An ordered object dictionary description. Immutable; compose with :meth:`with_objects`."""
+    """An ordered object dictionary description. Immutable; compose with :meth:`with_objects`.
+
+    Its look-ups are the shared :class:`TableLayout` of its structure over its own entries, so
+    a table costs little more than its entries (127 twins of a model hold one layout)."""
 
     objects: tuple[ObjectDef, ...]
-    _by_name: dict[str, ObjectEntry] = field(init=False, repr=False, compare=False)
-    _by_key: dict[tuple[int, int], ObjectEntry] = field(init=False, repr=False, compare=False)
+    #: every entry, in order (what the layout's positions index)
+    entries: tuple[ObjectEntry, ...] = field(init=False, repr=False, compare=False)
+    layout: TableLayout = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        by_name: dict[str, ObjectEntry] = {}
-        by_key: dict[tuple[int, int], ObjectEntry] = {}
-        for obj in self.objects:
-            for entry in obj.entries:
-                if entry.name in by_name:
-                    raise ValueError(f"entry name {entry.name!r} used twice")
-                by_name[entry.name] = entry
-                by_key[entry.index, entry.subindex] = entry
-        object.__setattr__(self, "_by_name", by_name)
-        object.__setattr__(self, "_by_key", by_key)
+        entries = tuple(entry for obj in self.objects for entry in obj.entries)
+        object.__setattr__(self, "entries", entries)
+        object.__setattr__(self, "layout", table_layout(
+            tuple((entry.index, entry.subindex, entry.name) for entry in entries)))
 
     def __iter__(self) -> Iterator[ObjectEntry]:
-        for obj in self.objects:
-            yield from obj.entries
+        return iter(self.entries)
 
     def __getitem__(self, name: str) -> ObjectEntry:
         try:
-            return self._by_name[name]
+            return self.entries[self.layout.by_name[name]]
         except KeyError:
             raise KeyError(f"no object entry named {name!r}") from None
 
     def __contains__(self, name: object) -> bool:
-        return name in self._by_name
+        return name in self.layout.by_name
 
     def get(self, index: int, subindex: int) -> ObjectEntry | None:
-        return self._by_key.get((index, subindex))
+        position = self.layout.by_key.get((index, subindex))
+        return None if position is None else self.entries[position]
 
     def has_index(self, index: int) -> bool:
         return any(obj.index == index for obj in self.objects)
@@ -250,17 +282,28 @@ class ObjectTable:
 
     def with_entries(self, **changes: dict[str, object]) -> ObjectTable:
         """A table where the named entries have some fields replaced (e.g. a quirk default)."""
-        objects = []
-        for obj in self.objects:
-            entries = tuple(
-                replace(entry, **changes[entry.name]) if entry.name in changes else entry  # type: ignore[arg-type]
-                for entry in obj.entries
-            )
-            objects.append(replace(obj, entries=entries))
-        unknown = set(changes) - set(self._by_name)
+        unknown = set(changes) - set(self.layout.by_name)
         if unknown:
             raise KeyError(f"no object entries named {sorted(unknown)}")
-        return ObjectTable(tuple(objects))
+        objects = tuple(
+            replace(obj, entries=tuple(
+                replace(entry, **changes[entry.name])  # type: ignore[arg-type]
+                if entry.name in changes else entry
+                for entry in obj.entries))
+            if any(entry.name in changes for entry in obj.entries) else obj
+            for obj in self.objects)
+        return ObjectTable(objects)
+
+    def sharing(self, other: ObjectTable) -> ObjectTable:
+        """``other`` holding this table's objects wherever they are equal (the same model
+        described at another factory node id differs in one entry): equal, and cheap to keep."""
+        mine = {obj.index: obj for obj in self.objects}
+        objects = tuple(mine[obj.index] if mine.get(obj.index) == obj else obj
+                        for obj in other.objects)
+        if len(objects) == len(self.objects) and all(
+                ours is theirs for ours, theirs in zip(objects, self.objects, strict=True)):
+            return self
+        return ObjectTable(objects)
 
 
 # -- builders: the tables in devices/ read like the manuals' object lists -------------------

@@ -17,11 +17,11 @@ from blinkcan.devices.keybox import (
     DEFAULT_NODE_ID,
     FACE,
     FAULT_PERIOD_UNIT_S,
+    KEYBOX,
     MODEL,
     PIN_STATE_NAMES,
     PWM_LEVEL_MAX,
     PWM_MASK,
-    describe_keybox,
     split_pwm_register,
 )
 from blinkcan.devices.model import Quirks
@@ -61,7 +61,7 @@ class KeyboxTwin(CanopenTwin):
         if not low <= set(capable):
             raise ValueError(f"only pins {capable} can be built low-side, not "
                              f"{sorted(low - set(capable))}")
-        description = describe_keybox(quirks, node_id)
+        description = KEYBOX.description(quirks=quirks, factory_node_id=node_id)
         super().__init__(description, node_id, nvm, settings)
         self.outputs = Outputs(low)
         self._shown_states: list[PinState | None] = [None] * FACE.pins

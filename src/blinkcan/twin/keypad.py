@@ -12,6 +12,8 @@ and, from the base, the consumer heartbeat and restore defaults. In J1939 mode
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
+from functools import cache
+from types import MappingProxyType
 from typing import Any
 
 from blinkcan.devices.colours import BacklightColour
@@ -23,7 +25,7 @@ from blinkcan.devices.keypad import (
     TICK_PERIOD_S,
 )
 from blinkcan.devices.keypad_j1939 import DEFAULT_NAME, NVM_PREFIX, STORED_SETTINGS
-from blinkcan.devices.model import Quirks
+from blinkcan.devices.model import LedField, Quirks
 from blinkcan.devices.objects import Value
 from blinkcan.devices.registry import load_class
 from blinkcan.devices.registry import model as registered_model
@@ -68,6 +70,15 @@ def _split_settings(settings: Mapping[str, Value]) -> tuple[dict[str, Value], di
             raise ValueError(f"{name} takes {setting.valid}, not {value!r}")
         j1939[name[len(NVM_PREFIX):]] = value
     return canopen, j1939
+
+
+@cache
+def _led_views(prefixes: tuple[str, ...], fields: tuple[LedField, ...]
+               ) -> Mapping[str, tuple[str, int, int]]:
+    """2001h/2002h sub-indices as views of the LED words: name -> (word, shift, mask); once
+    per model (a pure function of the description's fields)."""
+    return MappingProxyType({f"{prefix}_{f.suffix}": (prefix, f.shift, (1 << f.width) - 1)
+                             for prefix in prefixes for f in fields})
 
 
 class KeypadTwin(CanopenTwin):
@@ -151,8 +162,7 @@ class KeypadTwin(CanopenTwin):
         self._words = {"led_on": 0, "led_blink": 0}
         self._held: dict[str, int] = {}  # RPDO words waiting for the next SYNC (errata G3)
         self._syncs = 0
-        self._led_views = {f"{prefix}_{f.suffix}": (prefix, f.shift, (1 << f.width) - 1)
-                           for prefix in self._words for f in description.led_fields}
+        self._led_views = _led_views(tuple(self._words), description.led_fields)
         #: bits per colour of the LED word, and the bits that are LEDs (MT M27: not the holes)
         self._led_width = description.pdo("led_on").signal("red").length
         self._led_mask = fill(sum(1 << (k - 1) for k in self._face.led_keys), 7, self._led_width)

@@ -14,7 +14,10 @@ Durations the manuals do not give (blink period, show steps) are blinkcan decisi
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cache
+from types import MappingProxyType
 
 from blinkcan.devices.colours import (
     BACKLIGHT_CHANNELS,
@@ -95,9 +98,18 @@ def _fast_flash(keys: tuple[int, ...], width: int) -> tuple[ShowStep, ...]:
     return (ShowStep(_FLASH, white), ShowStep(_FLASH, 0)) * 3
 
 
-def startup_shows(keys: tuple[int, ...], width: int) -> dict[int, tuple[ShowStep, ...]]:
-    """2014h's shows (PKP §23) on the keys that have an LED, in an LED word of ``width``."""
-    return {SHOW_COMPLETE: _complete_show(keys, width), SHOW_FAST_FLASH: _fast_flash(keys, width)}
+@cache
+def startup_shows(keys: tuple[int, ...], width: int) -> Mapping[int, tuple[ShowStep, ...]]:
+    """2014h's shows (PKP §23) on the keys that have an LED, in an LED word of ``width``;
+    computed once per face (every twin of a model plays the same shows)."""
+    return MappingProxyType({SHOW_COMPLETE: _complete_show(keys, width),
+                             SHOW_FAST_FLASH: _fast_flash(keys, width)})
+
+
+@cache
+def _step_ends(steps: tuple[ShowStep, ...]) -> tuple[int, ...]:
+    """When each step ends, in ticks from the start of a round (once per show)."""
+    return tuple(itertools.accumulate(step.ticks for step in steps))
 
 
 STARTUP_SHOWS = startup_shows(FACE.led_keys, _KEYS)
@@ -115,7 +127,7 @@ class ShowPlayer:
         self.steps = steps
         self.start = start
         self.loop = loop
-        self._ends = tuple(itertools.accumulate(step.ticks for step in steps))
+        self._ends = _step_ends(steps)
         self._length = self._ends[-1]
 
     def _locate(self, now: float) -> tuple[int, float] | None:
