@@ -3,6 +3,7 @@ needs them, so ``blinkcan --help`` and decoding a candump log start light."""
 
 from __future__ import annotations
 
+import gzip
 import json
 import subprocess
 import sys
@@ -12,7 +13,6 @@ import click
 import pytest
 
 from blinkcan.cli.main import SUBCOMMANDS, cli, load_subcommand
-from blinkcan.formats.log_source import MAX_LINE
 
 HEAVY = ("can", "cantools", "canopen", "rich.console", "blinkcan.runtime", "blinkcan.host",
          "blinkcan.twin")
@@ -58,17 +58,19 @@ def test_the_listing_says_what_each_subcommand_says_of_itself(name: str) -> None
 @pytest.mark.parametrize("as_json", [False, True])
 def test_lines_decoded_before_a_broken_line_are_written(tmp_path: Path, as_json: bool) -> None:
     """Lines are written in batches (issue 22): those decoded before an error still come out,
-    before the error's one line (a line over MAX_LINE ends the reading: not a candump log;
-    a line that is no frame does not, issue 23)."""
+    before the error's one line (a .gz whose checksum is wrong ends the reading: its data is
+    not what was compressed; a line that is no frame does not, issue 23)."""
     from click.testing import CliRunner
 
-    log = tmp_path / "broken.log"
-    log.write_text("(1700000000.000000) can0 715#05\n(1700000000.000100) can0 70C#7F\n"
-                   "(1700000000.000200) can0 123#" + "0" * MAX_LINE + "\n")
+    log = tmp_path / "broken.log.gz"
+    lines = "".join(f"(1700000000.{n:06d}) can0 715#05\n(1700000000.{n:06d}) can0 70C#7F\n"
+                    for n in range(2000))
+    log.write_bytes(gzip.compress(lines.encode())[:-8] + bytes(8))  # checksum and size 0
     result = CliRunner().invoke(cli, ["decode", *(["--json"] if as_json else []), str(log)])
     assert result.exit_code == 1
     assert result.stderr.splitlines()[-1].startswith("Error: ")
+    assert "CRC check failed" in result.stderr.splitlines()[-1]
     decoded = result.stdout.splitlines()
-    assert len(decoded) == 2
-    assert ("715" in decoded[0] and "70C" in decoded[1]) if not as_json else \
-        [json.loads(line)["id"] for line in decoded] == [0x715, 0x70C]
+    assert 1000 < len(decoded) < 4000  # the 64 KiB chunk the error came in is not text
+    assert all("715" in line for line in decoded[::2]) if not as_json else \
+        [json.loads(line)["id"] for line in decoded[:4]] == [0x715, 0x70C] * 2

@@ -9,7 +9,7 @@ import tracemalloc
 from collections.abc import Callable
 
 from blinkcan.decode import Decoder, Kind
-from blinkcan.decode.decoder import TRANSFER_IDLE_S, TRANSFER_MAX_BYTES
+from blinkcan.decode.decoder import TRANSFER_IDLE_S, TRANSFER_MAX_BYTES, json_time
 from blinkcan.devices.registry import describe_device
 from blinkcan.protocol import Frame
 from tests.conftest import frame
@@ -180,11 +180,11 @@ def _encode_event(event: object) -> str:
     return _encode(event.to_json())
 
 
-def test_every_fast_line_writes_its_time_as_json_dumps_does() -> None:
-    """The fast lines write the time as the standard json module does (repr), byte for byte,
-    at every magnitude a log's time takes (relative from 0, epoch seconds, nanoseconds).
-    (Between 1e-5 and 1e-4 s orjson, which writes the lines of events, says 0.00002 where
-    repr says 2e-05: the same number.)"""
+def test_every_fast_line_writes_its_time_as_the_events_json_does() -> None:
+    """The fast lines write the time as an event's JSON does (a plain decimal: 0.00002, never
+    2e-05; tests/decode/test_json_time.py), byte for byte, the rest as the standard json
+    module does, at every magnitude a log's time takes (relative from 0, epoch seconds,
+    nanoseconds)."""
     chance = random.Random(11)
     times = [0.0, 1e-4, 0.5, 1.0, 1_700_000_000.0, 1_700_000_000.000_4, 9_999_999_999_999_998.0,
              1e16, 1.7e18, -2.5] + [10 ** chance.uniform(-4, 16) for _ in range(400)]
@@ -196,5 +196,9 @@ def test_every_fast_line_writes_its_time_as_json_dumps_does() -> None:
     for time in times:
         for item in others:  # each seen before from the second time on: the cached lines
             event = plain.decode(item, time)
-            assert fast.json_line(item, time) == json.dumps(
-                event.to_json(), separators=(",", ":"), ensure_ascii=False), (time, item)
+            document = event.to_json()
+            standard = json.dumps({**document, "time": 0}, separators=(",", ":"),
+                                  ensure_ascii=False)
+            zero = '{"time":0'
+            assert fast.json_line(item, time) == \
+                '{"time":' + json_time(time) + standard[len(zero):], (time, item)

@@ -157,16 +157,17 @@ def test_an_unreadable_file_is_named_and_skipped_and_leaves_nothing(tmp_path: Pa
     good = write_log(tmp_path / "good.log", traffic)
     garbage = tmp_path / "garbage.blf"
     garbage.write_bytes(b"LOGG" + bytes(300))
-    # a log that turns into something else (a line over MAX_LINE: not a candump log) after
-    # its first row groups are written (a compressed log cut short keeps its frames before
-    # the cut: tests/fleet/test_compressed_cut.py)
+    # a log that fails after its first row groups are written (a .gz whose checksum is
+    # wrong: its data is not what was compressed; a compressed log cut short keeps its frames
+    # before the cut: tests/fleet/test_compressed_cut.py; a line over MAX_LINE is one
+    # unreadable line: tests/formats/test_read_on.py)
     cut = tmp_path / "cut.log.gz"
-    cut.write_bytes(gzip.compress(("".join(candump_lines(traffic)) + "0" * 5000).encode()))
+    cut.write_bytes(gzip.compress("".join(candump_lines(traffic)).encode())[:-8] + bytes(8))
     results = decode_files([garbage, cut, good], str(tmp_path / "lake"), rows_per_group=100)
     assert [r.status for r in results] == ["failed", "failed", "decoded"]
     assert results[0].source == str(garbage)
     assert "not a readable log" in (results[0].error or "")
-    assert "is over 4096 bytes: not a candump log" in (results[1].error or "")
+    assert "CRC check failed" in (results[1].error or "")
     assert {t.column("source")[0].as_py() for t in dataset_files(tmp_path / "lake").values()} \
         == {str(good)}
     meta = tmp_path / "lake" / "_blinkcan"

@@ -18,6 +18,7 @@ import pytest
 
 from blinkcan.formats.log_source import MAX_LINE
 from blinkcan.formats.logs import FrameWriter, LogError, read_log, read_messages
+from blinkcan.formats.unreadable import UnreadableLine
 from blinkcan.protocol import Frame
 
 CANDUMP = "(1700000000.000100) can0 715#05\n(1700000000.000200) can0 18FF2115#0102 R\n"
@@ -56,10 +57,16 @@ def test_a_text_log_without_newlines_is_refused_at_line_one_in_bounded_memory(
 def test_the_long_line_is_named_where_it_is(tmp_path: Path) -> None:
     path = tmp_path / "late.log"
     path.write_text(CANDUMP * 40_000 + "(1.0) can0 715#" + "00" * MAX_LINE + "\n" + CANDUMP)
-    with pytest.raises(LogError, match=f"line 80001 is over {MAX_LINE} bytes"):
-        list(read_log(path))
-    with pytest.raises(LogError, match=f"line 80001 is over {MAX_LINE} bytes"):
-        list(read_messages(path))
+    for items in ([item for _, item in read_log(path)],
+                  list(read_messages(path, unreadable=True))):
+        assert len(items) == 80_003  # the frames after it are read (issue 23)
+        long = items[80_000]
+        assert isinstance(long, UnreadableLine)
+        assert long.number == 80_001
+        assert str(long).startswith("line 80001: '(1.0) can0 715#0000")
+        assert f"is {15 + 2 * MAX_LINE:,} characters long, over the {MAX_LINE}" in str(long)
+    with pytest.raises(LogError, match="line 80001: '"):
+        list(read_messages(path))  # the strict reader names it
 
 
 @pytest.mark.parametrize("reader", sorted(_READERS))

@@ -46,8 +46,8 @@ def convert(source: str, target: str, force: bool) -> None:
             except LogError as error:
                 if not writer.count:
                     raise  # nothing read: no file at all
-                # the frames before what ended the reading are kept (a line over 4096 bytes:
-                # not a candump log from there on): nothing recorded is lost
+                # the frames before what ended the reading are kept (a pcap packet whose
+                # length is no frame's: the packets after it cannot be found)
                 unread = error
             if writer.skipped:  # frames TARGET cannot hold: refused, TARGET left as it was
                 raise writer.refusal(source)

@@ -6,7 +6,6 @@ untouched, for programs."""
 
 from __future__ import annotations
 
-import json
 import sys
 from typing import TYPE_CHECKING
 
@@ -16,6 +15,7 @@ from blinkcan.cli.bus_options import parse_int
 from blinkcan.cli.clock import ABSOLUTE, iso_utc
 from blinkcan.cli.whole import Whole
 from blinkcan.decode import Decoder, Event
+from blinkcan.decode.decoder import encode_json
 from blinkcan.decode.j1939 import is_j1939_node, j1939_node, parse_j1939_node
 from blinkcan.decode.nodes import NodeKey, split_devices
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
@@ -191,9 +191,9 @@ def _json_lines(decoder: Decoder, file: str, output: _Output,
             add(json_line(frame, timestamp))
         elif isinstance(frame, UnreadableLine):
             unreadable.add(frame)
-            add(json.dumps(frame.to_json()))
+            add(encode_json(frame.to_json()))
         else:
-            add(json.dumps(other_event(decoder, frame).to_json()))
+            add(encode_json(other_event(decoder, frame).to_json()))
         if len(lines) >= _BATCH:
             output.write()
 

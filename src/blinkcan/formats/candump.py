@@ -12,7 +12,8 @@ python-can's by construction, with one correction where python-can loses what th
 path against python-can's reader (plus that correction) on generated logs.
 
 Lines are read with a bounded length (:func:`~blinkcan.formats.log_source.bounded_lines`): a
-file without newlines is refused at its first line, never read whole. A line that is no frame
+file without newlines is refused at its first line, never read whole; a later line over the
+bound is an unreadable line like any other, its prefix kept. A line that is no frame
 (bad digits, a byte that is not UTF-8, the half line of a capture cut off) is an
 :class:`~blinkcan.formats.unreadable.UnreadableLine` in its place and reading goes on (issue
 23); comments (``#``) and blank lines are skipped, as candump-style tools do.
@@ -28,7 +29,12 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, TextIO
 
 from blinkcan.formats.columns import FrameColumns
-from blinkcan.formats.log_source import LineTooLongError, UnterminatedLine, bounded_line_blocks
+from blinkcan.formats.log_source import (
+    LineTooLongError,
+    OverlongLine,
+    UnterminatedLine,
+    bounded_line_blocks,
+)
 from blinkcan.formats.unreadable import UnreadableLine, printable, shown
 from blinkcan.protocol.frame import Frame
 
@@ -122,10 +128,11 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message | UnreadableLine]:
 
     def lines() -> Iterator[str]:
         for block in bounded_line_blocks(stream, "candump"):
-            suspect = type(block) is not list  # not ASCII, or the file's last line
             cut[0] = type(block) is UnterminatedLine
-            if isinstance(block, UnterminatedLine) and block.cut_short:
-                passed.append(_cut_short(block[0], number[0] + 1))
+            if type(block) is OverlongLine or (
+                    isinstance(block, UnterminatedLine) and block.cut_short):
+                number[0] += 1
+                passed.append(_not_handed(block, number[0]))
                 continue
             for line in block:
                 number[0] += 1
@@ -133,7 +140,8 @@ def candump_messages(stream: TextIO) -> Iterator[can.Message | UnreadableLine]:
                 if not fields or fields[0][0] == "#":
                     continue
                 try:
-                    _checked(fields, line, suspect)
+                    # suspect: not ASCII, or the file's last line
+                    _checked(fields, line, type(block) is not list)
                 except ValueError as error:
                     passed.append(_unreadable(line, number[0], error, cut[0]))
                     continue
@@ -194,7 +202,8 @@ def read_candump(stream: TextIO
     """(timestamp, frame) per line: a :class:`Frame` for a classic data frame, the
     ``can.Message`` python-can reads for anything else (remote, error, CAN FD), an
     :class:`UnreadableLine` for a line that is no frame (its timestamp NaN where it has
-    none). Lines over MAX_LINE raise :class:`~blinkcan.formats.log_source.LineTooLongError`;
+    none). A first line over MAX_LINE raises
+    :class:`~blinkcan.formats.log_source.LineTooLongError`, a later one is unreadable;
     a log none of whose lines is a frame raises ValueError once it is read."""
     new = _new_tuple
     for block in read_candump_columns(stream):
@@ -226,6 +235,8 @@ def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
             _read_lines(lines, columns, idents, read, False)
         elif isinstance(lines, UnterminatedLine) and lines.cut_short:
             columns.add_unreadable(_cut_short(lines[0], read + 1))
+        elif type(lines) is OverlongLine:
+            columns.add_unreadable(_overlong(lines, read + 1))
         else:  # not ASCII (a byte that is not UTF-8 is a surrogate escape), or the last line
             cut_off = type(lines) is UnterminatedLine
             start = 0
@@ -327,11 +338,29 @@ def _line_time(line: str) -> float | None:
     return time if time is not None and math.isfinite(time) else None
 
 
+def _not_handed(block: list[str], number: int) -> UnreadableLine:
+    """Line ``number``, no reader's to read: over MAX_LINE, or a compressed file's last, cut
+    short."""
+    if isinstance(block, OverlongLine):
+        return _overlong(block, number)
+    return _cut_short(block[0], number)
+
+
+def _overlong(line: OverlongLine, number: int) -> UnreadableLine:
+    """A line over MAX_LINE (its prefix; formats/log_source.py read past the rest)."""
+    return UnreadableLine(number, printable(line[0]), line.reason(), _line_time(line[0]),
+                          line.unterminated)
+
+
 def _cut_short(line: str, number: int) -> UnreadableLine:
     """The last line of a compressed log whose compressed stream was cut short: it may have
     been cut, whole or not, so it is no frame (or, empty, the cut is at a line's end)."""
     where = f"{shown(line)} is where" if line.strip() else "there"
     reason = f"{where} the compressed file ends, before its compressed stream does: cut short"
+    if number == 1 and not line:  # nothing came out: zstd's format decodes a block only
+        # whole (RFC 8878 §3.1.1.3: its sequences are read from the block's end)
+        reason = ("the compressed file ends before any line of it could be decompressed: cut "
+                  "short (a .zst block, up to 128 KiB of text, is decompressed only whole)")
     return UnreadableLine(number, printable(line), reason, _line_time(line), True)
 
 

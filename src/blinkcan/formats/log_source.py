@@ -8,10 +8,13 @@ Nothing in a log is trusted, not even what its path names:
   stream cannot be a format that needs to seek (.blf, .db, .mf4, compressed). A directory, a
   block device or a socket is refused naming what it is; a path that is not there says so
   (a dangling symlink names its missing target).
-- A text log is read in chunks and split into lines of at most :data:`MAX_LINE` bytes: a
-  longer line (a binary file, ``/dev/zero``, gigabytes without a newline) ends the reading
-  with ``line N is over MAX_LINE bytes: not a FORMAT log``. Memory stays bounded by one chunk
-  whatever the file holds, and an endless stream of zeros ends within one line.
+- A text log is read in chunks and split into lines of at most :data:`MAX_LINE` bytes. A
+  longer first line (a binary file, ``/dev/zero``, gigabytes without a newline) ends the
+  reading with ``line 1 is over MAX_LINE bytes: not a FORMAT log``, so an endless stream of
+  zeros ends within one line. A longer later line (a corrupt stretch of a capture) is one
+  unreadable line (:class:`OverlongLine`: its first MAX_LINE characters are kept, the rest
+  read past) and reading goes on at its newline: nothing after it is lost (issue 23).
+  Memory stays bounded by one chunk whatever the file holds.
 """
 
 from __future__ import annotations
@@ -21,12 +24,13 @@ import io
 import os
 import stat
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO, TextIO
 
 from blinkcan.errors import BlinkcanError
+from blinkcan.formats.unreadable import shown
 
 #: the longest line of a text log: a CAN FD candump line is under 200 bytes, an ASC one 400
 MAX_LINE = 4096
@@ -98,6 +102,26 @@ class DecompressedText(io.TextIOWrapper):
     @property
     def cut_short(self) -> bool:
         return self._ends.cut_short
+
+
+class OverlongLine(list[str]):
+    """A block of :func:`bounded_line_blocks` that is one line over :data:`MAX_LINE`: its
+    first MAX_LINE characters (a reader names it unreadable), ``length`` how long it is,
+    ``unterminated`` when the file ends inside it."""
+
+    length = 0
+    unterminated = False
+
+    @classmethod
+    def of(cls, line: str, length: int) -> OverlongLine:
+        overlong = cls([line[:MAX_LINE]])
+        overlong.length = length
+        return overlong
+
+    def reason(self) -> str:
+        """"'(1.0) can0 715#0000...' is 9,000 characters long, over MAX_LINE: no line"."""
+        return (f"{shown(self[0])} is {self.length:,} characters long, over the "
+                f"{MAX_LINE} a line of a log may have")
 
 
 class NonAsciiLines(list[str]):
@@ -201,29 +225,41 @@ def open_binary(source: LogSource) -> Iterator[BinaryIO]:
 
 def bounded_lines(stream: TextIO, kind: str) -> Iterator[str]:
     """The lines of ``stream`` (without their newline), each at most :data:`MAX_LINE` long;
-    a longer one raises :class:`LineTooLongError` ("not a ``kind`` log")."""
+    a longer first line raises :class:`LineTooLongError` ("not a ``kind`` log"), a longer
+    later one comes as its bounded prefix (:class:`OverlongLine` says which)."""
     for lines in bounded_line_blocks(stream, kind):
         yield from lines
 
 
 def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
-    """:func:`bounded_lines` a chunk at a time: for loops that want no call per line."""
+    """:func:`bounded_lines` a chunk at a time: for loops that want no call per line. A line
+    over :data:`MAX_LINE` after the first is a block of its own, an :class:`OverlongLine`
+    holding its first MAX_LINE characters; the rest of it is read past, never kept."""
     read = stream.read
     rest = ""
+    after = ""  # what followed a line over MAX_LINE in the chunk its newline was in
     number = 0  # lines yielded so far
-    while chunk := read(_CHUNK):
+    while True:
+        if after:
+            chunk, after = after, ""
+        elif not (chunk := read(_CHUNK)):
+            break
         text = rest + chunk if rest else chunk
         lines = text.split("\n")
         if not text.isascii():  # O(1): a str knows whether it is ASCII
             lines = NonAsciiLines(lines)
         rest = lines.pop()
         if len(rest) > MAX_LINE or (lines and max(map(len, lines)) > MAX_LINE):
-            long = next((n for n, line in enumerate(lines) if len(line) > MAX_LINE),
-                        len(lines))
-            if long:  # the lines before it first: what a log holds before a bad line is kept
-                yield type(lines)(lines[:long])
-            raise LineTooLongError(f"line {number + long + 1} is over {MAX_LINE} bytes: "
-                                   f"not a {kind} log")
+            yield from _with_overlong(lines, number, kind)
+            number += len(lines)
+            if len(rest) > MAX_LINE:  # read past it to its newline
+                if not number:
+                    raise LineTooLongError(_too_long(1, kind))
+                overlong, after = _read_past(read, rest)
+                rest = ""
+                number += 1
+                yield overlong
+            continue
         number += len(lines)
         yield lines
     cut_short = isinstance(stream, DecompressedText) and stream.cut_short
@@ -231,3 +267,37 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
         last = UnterminatedLine([rest])
         last.cut_short = cut_short
         yield last
+
+
+def _too_long(number: int, kind: str) -> str:
+    return f"line {number} is over {MAX_LINE} bytes: not a {kind} log"
+
+
+def _with_overlong(lines: list[str], number: int, kind: str) -> Iterator[list[str]]:
+    """``lines`` (after ``number`` lines) in blocks, each line over MAX_LINE an
+    :class:`OverlongLine` of its own; the log's first line over MAX_LINE ends the reading."""
+    start = 0
+    for index, line in enumerate(lines):
+        if len(line) > MAX_LINE:
+            if not number + index:
+                raise LineTooLongError(_too_long(1, kind))
+            if index > start:
+                yield type(lines)(lines[start:index])
+            yield OverlongLine.of(line, len(line))
+            start = index + 1
+    if start < len(lines):
+        yield type(lines)(lines[start:])
+
+
+def _read_past(read: Callable[[int], str], start: str) -> tuple[OverlongLine, str]:
+    """A line over MAX_LINE that starts with ``start`` and has no newline in it yet: read up to
+    its newline keeping none of it but its prefix; (the line, what follows its newline)."""
+    length = len(start)
+    while chunk := read(_CHUNK):
+        end = chunk.find("\n")
+        if end >= 0:
+            return OverlongLine.of(start, length + end), chunk[end + 1:]
+        length += len(chunk)
+    overlong = OverlongLine.of(start, length)
+    overlong.unterminated = True
+    return overlong, ""

@@ -2,9 +2,10 @@
 TRC, CSV, SQLite, MF4 with python-can's extra), and pcap with the SocketCAN link type.
 
 Reading checks what a path is and reads text in lines of a bounded length (a stream, a
-device, a file without newlines: formats/log_source.py), a ``.gz`` text log's too. A candump
-line that is no frame is an :class:`~blinkcan.formats.unreadable.UnreadableLine` in its place
-and reading goes on (formats/candump.py).
+device, a file without newlines: formats/log_source.py), a ``.gz`` text log's too. A line of
+a text log (candump, ASC, TRC, CSV) that is no frame, or is over the bound, is an
+:class:`~blinkcan.formats.unreadable.UnreadableLine` in its place and reading goes on
+(formats/candump.py, formats/text_logs.py).
 
 Lossless: remote (RTR), error and CAN FD frames are read and written like data frames, each
 whole (formats/log_writers.py mends python-can's writers where they change one; reading mends
@@ -42,8 +43,6 @@ from blinkcan.formats.log_source import (
     LineTooLongError,
     LogError,
     LogSource,
-    bounded_lines,
-    kind_of,
     log_source,
     open_binary,
     open_text,
@@ -100,8 +99,8 @@ def read_messages(path: str | os.PathLike[str], unreadable: Literal[True]
 def read_messages(path: str | os.PathLike[str], unreadable: bool = False
                   ) -> Iterator[can.Message] | Iterator[can.Message | UnreadableLine]:
     """Every frame of a log file as python-can messages: data, remote, error, CAN FD. A
-    candump line that is no frame is, with ``unreadable``, an :class:`UnreadableLine` in its
-    place (reading goes on), else a :class:`LogError` naming it. The path is checked and
+    line of a text log that is no frame is, with ``unreadable``, an :class:`UnreadableLine`
+    in its place (reading goes on), else a :class:`LogError` naming it. The path is checked and
     text is read in bounded lines (formats/log_source.py)."""
     messages = _messages(log_source(path))
     return messages if unreadable else _strict(messages, path)
@@ -133,12 +132,12 @@ def _text_suffix(source: LogSource) -> str | None:
 def _messages(source: LogSource) -> Iterator[can.Message | UnreadableLine]:
     import can  # noqa: PLC0415
 
-    from blinkcan.formats.pcap import PcapError, read_pcap_messages  # noqa: PLC0415
+    from blinkcan.formats.pcap import PcapError, pcap_items  # noqa: PLC0415
 
     if is_pcap(source.path):
         with open_binary(source) as stream:
             try:
-                yield from read_pcap_messages(stream)
+                yield from pcap_items(stream)
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
         return
@@ -175,8 +174,9 @@ def _open_text(source: LogSource, encoding: str | None, errors: str | None = Non
 
 def _text_messages(source: LogSource, suffix: str) -> Iterator[can.Message | UnreadableLine]:
     """A text log's messages from python-can's reader of its format (``suffix``), fed bounded
-    lines; a candump log's through formats/candump.py."""
-    from can.io.player import MESSAGE_READERS  # noqa: PLC0415
+    lines, read on past a line it cannot read (formats/text_logs.py); a candump log's through
+    formats/candump.py."""
+    from blinkcan.formats.text_logs import text_log_messages  # noqa: PLC0415
 
     candump = suffix == ".log"
     with _open_text(source, "utf-8" if candump else None,
@@ -185,11 +185,9 @@ def _text_messages(source: LogSource, suffix: str) -> Iterator[can.Message | Unr
             if candump:
                 yield from candump_messages(stream)
                 return
-            # an ASC file's times count from its start date: absolute, as every other format's
-            options = {"relative_timestamp": False} if suffix == ".asc" else {}
-            lines = bounded_lines(stream, kind_of(suffix))
-            for message in MESSAGE_READERS[suffix](lines, **options):  # type: ignore[arg-type]
-                yield _as_written(message, suffix)
+            for message in text_log_messages(stream, suffix):
+                yield message if isinstance(message, UnreadableLine) else \
+                    _as_written(message, suffix)
         except LineTooLongError as error:
             raise LogError(f"{source}: {error}") from None
         except _read_errors() as error:
@@ -212,7 +210,7 @@ def read_log(path: str | os.PathLike[str]
              ) -> Iterator[tuple[float, Frame | can.Message | UnreadableLine]]:
     """(timestamp, frame) pairs: a :class:`Frame` for each classic data frame, the
     ``can.Message`` for a remote, error or CAN FD frame, an :class:`UnreadableLine` for a
-    candump line that is no frame (its timestamp NaN where it has none: its ``time`` says).
+    line of a text log that is no frame (its timestamp NaN where it has none: its ``time`` says).
     candump logs (``.gz`` too) take a fast path."""
     source = log_source(path)
     if _text_suffix(source) == ".log":

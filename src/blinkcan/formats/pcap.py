@@ -9,8 +9,9 @@ frames are carried as SocketCAN does (CAN_RTR_FLAG, CAN_ERR_FLAG with the error 
 id, ``linux/can.h``, ``linux/can/error.h``). python-can writes no pcap.
 
 Reading never trusts a length: a packet longer than a CAN FD frame, a standard identifier over
-7FFh or a truncated file is a :class:`PcapError` naming the packet, and memory stays bounded by
-one frame whatever the file says.
+7FFh or a truncated file is named by its packet's number (:func:`pcap_items`: an unreadable
+packet in its place, the frames around it read; :func:`read_pcap_messages`: a
+:class:`PcapError`), and memory stays bounded by one frame whatever the file says.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from typing import BinaryIO
 import can
 
 from blinkcan.errors import BlinkcanError
+from blinkcan.formats.unreadable import UnreadableLine
 from blinkcan.protocol.frame import Frame
 
 LINKTYPE_CAN_SOCKETCAN = 227
@@ -104,7 +106,23 @@ def _message(number: int, timestamp: float, record: bytes) -> can.Message:
 
 
 def read_pcap_messages(stream: BinaryIO) -> Iterator[can.Message]:
-    """Every frame of a SocketCAN capture, remote, error and CAN FD frames included."""
+    """Every frame of a SocketCAN capture, remote, error and CAN FD frames included; a packet
+    that is no frame raises :class:`PcapError` naming it."""
+    for item in pcap_items(stream):
+        if isinstance(item, UnreadableLine):
+            raise PcapError(f"packet {item.number}: {item.reason}")
+        yield item
+
+
+def pcap_items(stream: BinaryIO) -> Iterator[can.Message | UnreadableLine]:
+    """Every frame of a SocketCAN capture, a packet that is no frame an
+    :class:`~blinkcan.formats.unreadable.UnreadableLine` (``unit`` "packet", its bytes in hex
+    as its text) in its place (issue 23: one bad packet does not cost the capture). A packet
+    whose frame says what no frame is (a standard identifier over 7FFh, more data than its
+    kind carries) is passed over: the next starts where its length says. One whose length is
+    no SocketCAN frame's ends the reading (the packets after it cannot be found), as does
+    one cut off at the end (a capture killed mid-write). A file that is no SocketCAN capture
+    (its header) raises :class:`PcapError`, and so does one none of whose packets is a frame."""
     header = stream.read(_HEADER.size)
     if len(header) < _HEADER.size:
         raise PcapError("too short for a pcap file")
@@ -114,19 +132,49 @@ def read_pcap_messages(stream: BinaryIO) -> Iterator[can.Message]:
     if linktype != LINKTYPE_CAN_SOCKETCAN:
         raise PcapError(f"link type {linktype}, not SocketCAN ({LINKTYPE_CAN_SOCKETCAN})")
     scale = 1e-9 if magic == _MAGIC_NANO else 1e-6
+    frames = 0
+    first: UnreadableLine | None = None
+    for item in _packets(stream, scale):
+        if isinstance(item, UnreadableLine):
+            first = first or item
+        else:
+            frames += 1
+        yield item
+    if first is not None and not frames:
+        raise PcapError(f"no packet is a CAN frame ({first})")
+
+
+def _packets(stream: BinaryIO, scale: float) -> Iterator[can.Message | UnreadableLine]:
+    """The packets after the file's header (:func:`pcap_items`)."""
     number = 0
     while packet := stream.read(_PACKET.size):
         number += 1
         if len(packet) < _PACKET.size:
-            raise PcapError(f"packet {number}: truncated header")
+            yield _unreadable(number, packet, "truncated header", None, cut_off=True)
+            break
         seconds, fraction, included, _ = _PACKET.unpack(packet)
+        time = seconds + fraction * scale
         if not _CAN.size <= included <= _CANFD.size:  # bounded: never read what a file claims
-            raise PcapError(f"packet {number}: {included} bytes, not a SocketCAN frame "
-                            f"({_CAN.size}..{_CANFD.size})")
+            yield _unreadable(number, packet, f"{included} bytes, not a SocketCAN frame "
+                              f"({_CAN.size}..{_CANFD.size}): the packets after it cannot be "
+                              "found", time)
+            break
         record = stream.read(included)
         if len(record) < included:
-            raise PcapError(f"packet {number}: truncated CAN frame")
-        yield _message(number, seconds + fraction * scale, record)
+            yield _unreadable(number, packet + record, "truncated CAN frame", time,
+                              cut_off=True)
+            break
+        try:
+            message = _message(number, time, record)
+        except PcapError as error:
+            yield _unreadable(number, packet + record, str(error).partition(": ")[2], time)
+            continue
+        yield message
+
+
+def _unreadable(number: int, data: bytes, reason: str, time: float | None,
+                cut_off: bool = False) -> UnreadableLine:
+    return UnreadableLine(number, data.hex(), reason, time, cut_off, "packet")
 
 
 def write_pcap(stream: BinaryIO, frames: Iterable[tuple[float, Frame]]) -> int:

@@ -45,12 +45,13 @@ class UnreadableLine(NamedTuple):
     reason: str
     time: float | None = None
     cut_off: bool = False
+    unit: str = "line"  # a pcap capture's: "packet"
 
     def __str__(self) -> str:
         """"line 7: 'garbage' is not a candump line ((TIME) CHANNEL ID#DATA)"."""
         ending = ": the capture ends there, cut off" if self.cut_off and \
             "cut short" not in self.reason else ""
-        return f"line {self.number}: {self.reason}{ending}"
+        return f"{self.unit} {self.number}: {self.reason}{ending}"
 
     def to_json(self) -> dict[str, object]:
         """The line as ``decode --json`` writes it, among the frames' objects."""
@@ -82,7 +83,8 @@ class UnreadableCount:
         numbers = ", ".join(str(line.number) for line in self.named)
         more = ", ..." if self.count > len(self.named) else ""
         plural = "s" if self.count != 1 else ""
+        unit = self.named[0].unit if self.named else "line"
         read = "" if frames is None else \
             f"; the {frames:,} frames around {'them' if plural else 'it'} were read"
-        return (f"{source}: {self.count:,} line{plural} could not be read (line{plural} "
+        return (f"{source}: {self.count:,} {unit}{plural} could not be read ({unit}{plural} "
                 f"{numbers}{more}): {kept}{read}")
