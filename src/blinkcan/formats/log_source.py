@@ -272,7 +272,8 @@ def bounded_line_blocks(stream: TextIO, kind: str, chunk_size: int = _CHUNK
 
 
 def _too_long(number: int, kind: str) -> str:
-    return f"line {number} is over {MAX_LINE} bytes: not a {kind} log"
+    article = "an" if kind[0] in "AEFHILMNORSX" else "a"  # as the name is spoken: an ASC log
+    return f"line {number} is over {MAX_LINE} bytes: not {article} {kind} log"
 
 
 def _with_overlong(lines: list[str], number: int, kind: str) -> Iterator[list[str]]:
