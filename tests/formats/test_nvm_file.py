@@ -344,3 +344,24 @@ def test_a_twin_without_a_file_loads_no_file_store() -> None:
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             check=False)
     assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.parametrize("text", ["[" * 100_000, '{"format": ' + "[" * 100_000],
+                         ids=["deep", "deep-inside"])
+def test_a_deeply_nested_file_is_an_nvm_error_and_kept(tmp_path: Path, text: str) -> None:
+    """A hostile file nested 100,000 deep raised RecursionError (the CLI: 'unexpected
+    RecursionError'), not the NvmError of a corrupt file (found by the attack pass)."""
+    path = tmp_path / "keypad.json"
+    path.write_text(text)
+    with pytest.raises(NvmError, match=str(path)):
+        KeypadTwin(nvm=path)
+    assert path.read_text() == text
+
+
+def test_a_file_far_larger_than_any_settings_is_refused_unread(tmp_path: Path) -> None:
+    """A huge file was read whole into memory before it was found to be no NVM file."""
+    path = tmp_path / "keypad.json"
+    path.write_text(" " * (2 << 20) + "{}")
+    with pytest.raises(NvmError, match=r"keypad\.json .*MiB"):
+        KeypadTwin(nvm=path)
+    assert path.stat().st_size == (2 << 20) + 2

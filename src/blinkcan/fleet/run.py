@@ -5,6 +5,7 @@ dataset is the same whichever ran it."""
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable, Iterable
 from functools import partial
 from pathlib import Path
@@ -16,6 +17,9 @@ from blinkcan.fleet.task import FileResult, decode_file
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
+
+#: seconds between a worker's checks that the process that started it still runs
+PARENT_CHECK = 0.5
 
 
 def log_files(paths: Iterable[str | os.PathLike[str]], out: str | None = None) -> list[str]:
@@ -109,15 +113,50 @@ def _pool_run(jobs: int, sources: list[str], task: Callable[..., FileResult],
     # fork: the workers need nothing of __main__ (python -m blinkcan runs the CLI on import)
     context = multiprocessing.get_context("fork" if "fork" in methods else None)
     broken: list[str] = []
-    with ProcessPoolExecutor(jobs, mp_context=context) as pool:
-        futures: dict[Future[FileResult], str] = {pool.submit(task, s): s for s in sources}
+    others = set(multiprocessing.active_children())
+    pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_worker,
+                               initargs=(os.getpid(),))
+    futures: dict[Future[FileResult], str] = {}
+    try:
+        for source in sources:
+            futures[pool.submit(task, source)] = source
         for future in as_completed(futures):
             source = futures[future]
             if keep_broken and isinstance(future.exception(), BrokenProcessPool):
                 broken.append(source)
             else:
                 finished(source, _result(source, future))
+    except BaseException:
+        # Ctrl-C (or an error of on_result), also while the files are handed out: no file
+        # starts any more, and the files in flight stop now, not when they end; their rows
+        # were written aside and never appear (the next run removes them and decodes those
+        # files again). The workers are the children that appeared since the pool was made.
+        for future in futures:
+            future.cancel()
+        for worker in multiprocessing.active_children():
+            if worker not in others:
+                worker.terminate()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
     return [source for source in sources if source in broken]  # in their order
+
+
+def _start_worker(parent: int) -> None:
+    """In each worker: Ctrl-C is the parent's to handle (a terminal sends it to every
+    process of the group; the parent stops the workers), and a worker whose parent died
+    (kill -9, the OOM killer) ends instead of waiting for work forever."""
+    import signal  # noqa: PLC0415
+    import threading  # noqa: PLC0415
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_CHECK)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="blinkcan-parent-watch", daemon=True).start()
 
 
 def _on_dask(client: Any, sources: list[str], task: Callable[..., FileResult],

@@ -24,8 +24,9 @@ user stored is lost or replaced:
   Writing in place instead would give up the atomicity (a write killed midway would leave half
   a file). One name and the resolved path is then one inode; a symlink is the way to give the
   file a second name.
-- A file that is corrupt, belongs to another model, or was changed by someone else since this
-  twin read or wrote it, is refused with a clear error, never replaced.
+- A file that is corrupt (nested too deeply or over MAX_SIZE included: never read whole),
+  belongs to another model, or was changed by someone else since this twin read or wrote
+  it, is refused with a clear error, never replaced.
 - Every error is an :class:`NvmError` naming the file.
 
 It needs no clock and no bus.
@@ -51,6 +52,8 @@ if sys.platform != "win32":
 
 FORMAT = "blinkcan-nvm"
 VERSION = 1
+#: bytes: an NVM file holds a device's settings (a few kB); a larger one is refused unread
+MAX_SIZE = 1 << 20
 _MKSTEMP_SUFFIX = re.compile(r"[a-z0-9_]{8}")
 
 
@@ -176,7 +179,12 @@ class JsonFileNvm:
 
     def _read(self) -> str | None:
         try:
-            return self.target.read_text(encoding="utf-8")
+            with self.target.open("rb") as stream:
+                data = stream.read(MAX_SIZE + 1)
+            if len(data) > MAX_SIZE:  # never read whole: a hostile or mistaken file
+                raise NvmError(f"NVM file {self.name} is over {MAX_SIZE >> 20} MiB, far more "
+                               "than any device's settings; refusing it")
+            return data.decode("utf-8")
         except FileNotFoundError:
             return None
         except (OSError, UnicodeDecodeError) as error:
@@ -189,6 +197,9 @@ class JsonFileNvm:
         except json.JSONDecodeError as error:
             raise NvmError(f"NVM file {self.name} is not valid JSON ({error.msg}, line "
                            f"{error.lineno}); refusing to replace it") from error
+        except RecursionError as error:  # a hostile file: arrays in arrays, 100,000 deep
+            raise NvmError(f"NVM file {self.name} is nested too deeply to be an NVM file; "
+                           "refusing to replace it") from error
         if not isinstance(document, dict) or document.get("format") != FORMAT:
             raise NvmError(f"{self.name} is not a blinkcan NVM file; refusing to replace it")
         if document.get("version") != VERSION:
