@@ -201,7 +201,7 @@ def test_one_client_more_than_it_serves_is_told_the_emulator_is_busy(
         with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as slow:
             slow.connect(str(path))  # accepted first: it holds the one place
             assert send(path, "list", timeout=60) == [
-                "Error: the emulator is busy with 1 other commands; try again when one has ended"]
+                "Error: the emulator is busy with another command; try again when one has ended"]
             slow.sendall(b"list\n")
             slow.shutdown(socket.SHUT_WR)
             assert slow.recv(4096).startswith(b"PKP-2600-SI keypad 15h")

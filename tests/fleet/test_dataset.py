@@ -282,6 +282,16 @@ def test_query_only_reads(tmp_path: Path, traffic: Traffic, sql: str) -> None:
     assert "can_id" in described.stdout
 
 
+def test_query_refusal_names_the_statement_the_user_wrote(tmp_path: Path,
+                                                          traffic: Traffic) -> None:
+    """DuckDB calls INSTALL a LOAD statement: the error quotes what the user typed."""
+    out = tmp_path / "lake"
+    decode_files([write_log(tmp_path / "unit.log", traffic)], str(out))
+    result = CliRunner().invoke(cli, ["query", str(out), "SELECT 1; INSTALL httpfs"])
+    assert result.exit_code == 1
+    assert result.output.startswith("Error: query only reads: 'INSTALL httpfs' is not a SELECT")
+
+
 @pytest.mark.parametrize("reader", ["read_csv('{secret}')", "read_text('{secret}')",
                                     "glob('{outside}/*')", "read_csv('{out}/../secret.csv')",
                                     "read_text('https://example.com/')"])

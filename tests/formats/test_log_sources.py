@@ -26,7 +26,7 @@ _READERS: dict[str, Callable[[Path], list[object]]] = {
     "read_log": lambda path: list(read_log(path)),
     "read_messages": lambda path: list(read_messages(path)),
 }
-_KINDS = {".log": "candump", ".asc": "ASC", ".trc": "TRC", ".csv": "CSV"}
+_KINDS = {".log": "a candump", ".asc": "an ASC", ".trc": "a TRC", ".csv": "a CSV"}
 
 
 def _no_newline(path: Path, size: int) -> Path:
@@ -50,7 +50,7 @@ def test_a_text_log_without_newlines_is_refused_at_line_one_in_bounded_memory(
     finally:
         tracemalloc.stop()
     assert str(refused.value) == (f"{path}: line 1 is over {MAX_LINE} bytes: "
-                                  f"not a {_KINDS[suffix]} log")
+                                  f"not {_KINDS[suffix]} log")
     assert peak < 2 << 20, f"{peak:,} bytes to refuse a 24 MB line"
 
 

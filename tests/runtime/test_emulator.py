@@ -245,3 +245,20 @@ def test_sends_on_a_shut_down_bus_are_reported_once_with_a_count(
     assert len(sends) == 2, sends  # the first failure, and the count at the end
     assert "send failed" in sends[0]
     assert f"{failures} frames could not be sent" in sends[1]
+
+
+@pytest.mark.parametrize("frame", [Frame(0x595, bytes.fromhex("4300100091010f00")),
+                                   Frame(0x18FF0021, b"\x01\x02", extended=True),
+                                   Frame(0x080, b"")], ids=["sdo", "extended", "empty"])
+def test_the_messages_a_port_sends_are_the_ones_to_message_makes(frame: Frame) -> None:
+    """The port builds its Message without the constructor (runtime/canport.py): every field
+    as python-can's constructor sets it."""
+    from blinkcan.runtime import canport
+
+    fast, made = canport._message_maker()(frame, 12.5), to_message(frame, 12.5)
+    assert type(fast) is can.Message
+    fields = [name for name in can.Message.__slots__ if name != "__weakref__"]
+    assert {name: getattr(fast, name) for name in fields} == {
+        name: getattr(made, name) for name in fields}
+    assert fast.equals(made)
+    assert to_frame(fast) == frame

@@ -116,7 +116,8 @@ def _serve(server: socket.socket, commands: TypedCommands, stopping: threading.E
     :data:`MAX_CLIENTS` at once are served, one more is answered that the emulator is busy."""
     slots = threading.BoundedSemaphore(MAX_CLIENTS)
     waiting = threading.BoundedSemaphore(MAX_CLIENTS)  # clients waiting for a place
-    busy = [f"Error: the emulator is busy with {MAX_CLIENTS} other commands; try again when "
+    others = "another command" if MAX_CLIENTS == 1 else f"{MAX_CLIENTS} other commands"
+    busy = [f"Error: the emulator is busy with {others}; try again when "
             "one has ended"]
 
     def wait_for_place() -> bool:

@@ -72,8 +72,8 @@ def _check_reads_only(connection: Any, sql: str) -> None:
     for statement in statements:
         if statement.type != duckdb.StatementType.SELECT:
             raise click.ClickException(
-                f"query only reads: {statement.type.name} is not a SELECT (DESCRIBE, SHOW, "
-                "SUMMARIZE, WITH and VALUES are)")
+                f"query only reads: {statement.query.strip()!r} is not a SELECT (DESCRIBE, "
+                "SHOW, SUMMARIZE, WITH and VALUES are)")
 
 
 @click.command("query")

@@ -16,9 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+import numpy as np
+import pyarrow as pa
+
 from blinkcan.decode.decoder import Decoder, Event, Kind
 from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows
-from blinkcan.formats.columns import FrameColumns
+from blinkcan.formats.columns import ArrowColumns, FrameColumns
 from blinkcan.formats.logs import describe_frame, frame_kind
 from blinkcan.formats.unreadable import UnreadableLine
 from blinkcan.protocol.frame import Frame
@@ -29,6 +32,9 @@ if TYPE_CHECKING:
 _new_tuple = tuple.__new__  # Frame.trusted without the call: the readers checked the frames
 #: texts of undecoded frames kept (then they start over): a log has a few hundred identifiers
 _TEXTS_KEPT = 4096
+#: the Arrow types of a frame's columns: time (seconds), channel, identifier, flag, data
+_FRAME_TYPES = (pa.float64(), pa.string(), pa.int32(), pa.bool_(), pa.binary())
+FrameArrays = tuple[pa.Array, pa.Array, pa.Array, pa.Array, pa.Array]
 
 
 @dataclass
@@ -57,6 +63,9 @@ class Segment:
     numbers: dict[Detail, int] = field(default_factory=dict)
     #: the number of the one detail of each kind of event that has nothing else
     simple: dict[Kind, int] = field(default_factory=dict)
+    #: the frame columns of the frames before those in the lists, as Arrow arrays (a block
+    #: read by Arrow is kept as it is; the lists before it become arrays then)
+    chunks: list[FrameArrays] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.simple.update((kind, self.number(rows[0])) for kind, rows in SIMPLE_ROWS.items())
@@ -108,10 +117,41 @@ class Segment:
             counts[position] = count
         return counts
 
+    def add_arrow(self, block: ArrowColumns, start: int, end: int) -> None:
+        """The frame columns of the block's frames ``start:end`` (their rows are added
+        apart)."""
+        self._seal()
+        size = end - start
+        self.chunks.append((block.arrow_times.slice(start, size),
+                            block.arrow_channels.slice(start, size),
+                            block.arrow_ids.slice(start, size),
+                            block.arrow_extended.slice(start, size),
+                            block.arrow_data.slice(start, size)))
+
+    def _seal(self) -> None:
+        """The frame columns in the lists as Arrow arrays, after the chunks before them."""
+        if self.times:
+            columns = (self.times, self.channels, self.ids, self.extended, self.data)
+            self.chunks.append(tuple(
+                pa.array(column, kind) for column, kind in zip(columns, _FRAME_TYPES,
+                                                               strict=True)))
+            for column in columns:
+                column.clear()
+
+    def frame_arrays(self) -> FrameArrays:
+        """Every frame's time (seconds), channel, identifier, flag and data, in order."""
+        self._seal()
+        if len(self.chunks) == 1:
+            return self.chunks[0]
+        if not self.chunks:
+            return tuple(pa.array([], kind) for kind in _FRAME_TYPES)
+        return tuple(pa.concat_arrays([chunk[n] for chunk in self.chunks])
+                     for n in range(len(_FRAME_TYPES)))
+
     def clear(self) -> None:
         for column in (self.times, self.channels, self.ids, self.extended, self.data,
                        self.nodes, self.models, self.texts, self.codes, self.details,
-                       self.multiple, self.counts):
+                       self.multiple, self.counts, self.chunks):
             column.clear()
         self.numbers.clear()
         self.simple.clear()
@@ -137,9 +177,111 @@ class FrameDecoder:
     def decode(self, block: FrameColumns, start: int, segment: Segment, limit: int) -> int:
         """Decode the block's frames from ``start`` into ``segment`` until it holds ``limit``
         rows or more; returns the position after the last frame decoded."""
+        if type(block) is ArrowColumns:
+            return self._decode_arrow(block, start, segment, limit)
         if block.others:
             return self._decode_mixed(block, start, segment, limit)
         return self._decode_run(block, start, len(block), segment, limit)
+
+    def _decode_arrow(  # noqa: PLR0915 (one loop per device frame, inlined as below)
+            self, block: ArrowColumns, start: int, segment: Segment, limit: int) -> int:
+        """A block read by Arrow: the frames another ECU sent and the decoder has seen (most
+        of a fleet's log; :meth:`Decoder.undecoded`: the decoder's state does not depend on
+        them) are filled in per identifier, the others decoded one by one, in order, as
+        :meth:`_decode_data` does. The devices' models, which a foreign frame's row names,
+        are learned from the bus (identity): where a frame changes them, this stops after
+        it, and the next call starts over from the state it left (so the rows are the
+        frame-by-frame path's). Nothing is kept per frame but plain values in flat lists
+        (objects that outlive a frame would wake the garbage collector)."""
+        decoder = self._decoder
+        decode, rows, devices = decoder.decode, self._rows.rows, decoder.devices
+        known = list(map(decoder.undecoded, *zip(*block.identifiers, strict=True)))
+        foreign = np.fromiter((k is not None for k in known), np.bool_, len(known))
+        index = block.index[start:]
+        at = np.flatnonzero(~foreign[index])
+        # every frame's row as a foreign frame's (by its identifier), then the others' set
+        places = index.tolist()
+        by_node = [None if k is None else k[1] for k in known]
+        nodes = list(map(by_node.__getitem__, places))
+        by_model = [None if device is None else device.model
+                    for device in map(devices.get, by_node)]  # type: ignore[arg-type]  # None: no device
+        models = list(map(by_model.__getitem__, places))
+        by_text = [None if k is None else k[0] for k in known]
+        texts = list(map(by_text.__getitem__, places))
+        codes = [segment.simple[Kind.FRAME]] * len(places)
+        several: list[int] = []  # frames of more than one row: where, how many, their codes
+        several_counts: list[int] = []
+        several_codes: list[int] = []
+        identifiers = block.identifiers
+        idents = list(map(identifiers.__getitem__, index[at].tolist()))
+        times = block.arrow_times.to_numpy()[at + start].tolist()
+        payloads = block.arrow_data.take(pa.array(at + start, pa.int64())).to_pylist()
+        snapshot = dict(devices)
+        simple, find_number, number = segment.simple, segment.numbers.get, segment.number
+        event_texts = self._texts
+        if len(event_texts) > _TEXTS_KEPT:
+            event_texts.clear()
+        new, frame_type = _new_tuple, Frame
+        base = segment.rows
+        rows_of_devices = 0  # the rows of the frames decoded
+        end = len(places)  # frames from start
+        for count, place in enumerate(at.tolist()):
+            total = base + (place - count) + rows_of_devices  # rows before this frame
+            if total >= limit:  # reached in the foreign frames before this one
+                end = place - (total - limit)
+                break
+            can_id, flag = idents[count]
+            event = decode(new(frame_type, (can_id, payloads[count], flag)), times[count])
+            code = simple.get(event.kind)
+            added = 1
+            if code is not None:  # another ECU's frame, or one of no detail
+                node = event.node_id
+                device = devices.get(node)  # type: ignore[arg-type]  # None: no device
+                nodes[place] = node
+                models[place] = None if device is None else device.model
+                seen = event_texts.get(event.text)  # str(event): device, node and text
+                if seen is not None and seen[0] == node and seen[1] == event.device:
+                    texts[place] = seen[2]
+                else:
+                    texts[place] = text = str(event)
+                    event_texts[event.text] = (node, event.device, text)
+                codes[place] = code
+            else:
+                nodes[place], models[place], details = rows(event)
+                texts[place] = str(event)
+                if len(details) == 1:
+                    code = find_number(details[0])
+                    codes[place] = number(details[0]) if code is None else code
+                else:
+                    added = len(details)
+                    several.append(place)
+                    several_counts.append(added)
+                    several_codes += map(number, details)
+            rows_of_devices += added
+            if total + added >= limit or devices != snapshot:
+                end = place + 1  # full, or a model learned: the rest with the new state
+                break
+        else:
+            total = base + (end - len(at)) + rows_of_devices
+            if total >= limit:
+                end -= total - limit
+        frames = len(segment.texts)
+        segment.nodes += nodes[:end]
+        segment.models += models[:end]
+        segment.texts += texts[:end]  # type: ignore[arg-type]  # every frame's is set
+        if several:
+            last = taken = 0
+            for place, rows_count in zip(several, several_counts, strict=True):
+                segment.codes += codes[last:place]
+                segment.multiple.append(frames + place)
+                segment.counts.append(rows_count)
+                segment.codes += several_codes[taken:taken + rows_count]
+                last, taken = place + 1, taken + rows_count
+            segment.codes += codes[last:end]
+        else:
+            segment.codes += codes[:end]
+        segment.add_arrow(block, start, start + end)
+        return start + end
 
     def _decode_mixed(self, block: FrameColumns, start: int, segment: Segment,
                       limit: int) -> int:

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO, TextIO
 
 from blinkcan.formats.candump import read_candump_columns
+from blinkcan.formats.candump_columns import BLOCK_CHARS, read_plain_block
 from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.log_source import DecompressedText
 from blinkcan.formats.logs import LogError, frame_kind, read_messages
@@ -100,9 +101,13 @@ def _open_text(path: Path, compression: str) -> TextIO:
     return path.open(encoding="utf-8", errors=_BYTES_KEPT)
 
 
-def _candump(path: Path, compression: str) -> Iterator[FrameColumns]:
+def _candump(path: Path, compression: str, arrow: bool, block_chars: int
+             ) -> Iterator[FrameColumns]:
     with _open_text(path, compression) as stream:
-        yield from read_candump_columns(stream)
+        if arrow:  # a block of plain frames read whole (formats/candump_columns.py)
+            yield from read_candump_columns(stream, read_plain_block, block_chars)
+        else:
+            yield from read_candump_columns(stream)
 
 
 def message_columns(messages: Iterable[can.Message | UnreadableLine], block: int = BLOCK
@@ -144,16 +149,19 @@ def _decompressed(path: Path, suffix: str, compression: str) -> Iterator[FrameCo
         os.unlink(name)
 
 
-def read_columns(path: str | os.PathLike[str]) -> Iterator[FrameColumns]:
+def read_columns(path: str | os.PathLike[str], arrow: bool = True,
+                 block_chars: int = BLOCK_CHARS) -> Iterator[FrameColumns]:
     """Every frame of a log file, in order, with its channel (None where the format has
     none), a block at a time. Raises :class:`LogError` (or the decompressor's error) for a
-    file it cannot read."""
+    file it cannot read. ``arrow``: a candump log's blocks (``block_chars`` characters) of
+    plain frames are read whole (:class:`~blinkcan.formats.columns.ArrowColumns`); False
+    reads every line on its own (the same frames: the tests compare both)."""
     source = Path(path)
     if not source.is_file():
         raise LogError(f"no such file: {source}")
     suffix, compression = _suffixes(source)
     if suffix == _CANDUMP:
-        return _candump(source, compression)
+        return _candump(source, compression, arrow, block_chars)
     if compression:
         return _decompressed(source, suffix, compression)
     return message_columns(read_messages(source, unreadable=True))

@@ -25,21 +25,22 @@ import os
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
-
-from fsspec import AbstractFileSystem
-from fsspec.core import url_to_fs
+from typing import TYPE_CHECKING, Any
 
 from blinkcan import __version__
 from blinkcan.decode.decoder import Decoder
 from blinkcan.decode.nodes import ModelsByNode
 from blinkcan.devices.registry import describe_device
 from blinkcan.fleet.frames import FrameDecoder, Segment
+from blinkcan.fleet.local_files import LocalFiles, is_local, local_root
 from blinkcan.fleet.schema import ROWS_PER_GROUP
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.writer import PartitionWriter
 from blinkcan.formats.logs import LogError
 from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
+
+if TYPE_CHECKING:  # fsspec loads for a URL only (start-up: fleet/local_files.py)
+    from fsspec import AbstractFileSystem
 
 META = "_blinkcan"
 #: how often (in frames) a local task reports its progress
@@ -81,11 +82,16 @@ def make_decoder(devices: ModelsByNode | None) -> Decoder:
 
 
 class _Store:
-    """The dataset's folder on any fsspec filesystem."""
+    """The dataset's folder on any fsspec filesystem (a plain path: on the disk, directly)."""
 
     def __init__(self, out: str, key: str) -> None:
-        fs, root = url_to_fs(out)
-        self.fs: AbstractFileSystem = fs
+        self.fs: AbstractFileSystem | LocalFiles
+        if is_local(out):
+            self.fs, root = LocalFiles(), local_root(out)
+        else:
+            from fsspec.core import url_to_fs  # noqa: PLC0415 (a URL only)
+
+            self.fs, root = url_to_fs(out)
         self.root = root.rstrip("/")
         self.meta = f"{self.root}/{META}"
         self.manifest = f"{self.meta}/{key}.json"

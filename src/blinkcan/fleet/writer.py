@@ -16,16 +16,20 @@ from __future__ import annotations
 import datetime
 import math
 from itertools import accumulate
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
-from fsspec import AbstractFileSystem
 
 from blinkcan.fleet.frames import Segment
 from blinkcan.fleet.rows import Detail
 from blinkcan.fleet.schema import ROWS_PER_GROUP, SCHEMA, UNKNOWN
+
+if TYPE_CHECKING:
+    from fsspec import AbstractFileSystem
+
+    from blinkcan.fleet.local_files import LocalFiles
 
 _EPOCH_ORDINAL = datetime.date(1970, 1, 1).toordinal()
 _DAY_S = 86_400
@@ -54,7 +58,7 @@ def partition_path(model: str, date: str) -> str:
 class PartitionWriter:
     """Writes the rows of one source file to its partitions; :meth:`close` says which files."""
 
-    def __init__(self, fs: AbstractFileSystem, folder: str, name: str, source: str,
+    def __init__(self, fs: AbstractFileSystem | LocalFiles, folder: str, name: str, source: str,
                  rows_per_group: int = ROWS_PER_GROUP) -> None:
         if rows_per_group < 1:
             raise ValueError(f"rows_per_group must be 1 or more, not {rows_per_group}")
@@ -84,19 +88,21 @@ class PartitionWriter:
             date = self._days[day] = datetime.date.fromordinal(_EPOCH_ORDINAL + day).isoformat()
         return date
 
-    def times_and_dates(self, seconds: list[float]) -> tuple[pa.Array, str | list[str]]:
+    def times_and_dates(self, seconds: list[float] | pa.DoubleArray
+                        ) -> tuple[pa.Array, str | list[str]]:
         """:meth:`time_and_date` of many times: the microseconds as an Arrow timestamp array,
         and the date of them all where they are of one day (a log's mostly are), else each
         time's date. The same figures either way (Arrow rounds half to even, as Python)."""
-        times = pa.array(seconds, pa.float64())
-        if seconds and pc.all(pc.is_finite(times)).as_py():
-            low, high = min(seconds), max(seconds)
+        times = seconds if isinstance(seconds, pa.Array) else pa.array(seconds, pa.float64())
+        if len(times) and pc.all(pc.is_finite(times)).as_py():
+            extremes = pc.min_max(times)
+            low, high = extremes["min"].as_py(), extremes["max"].as_py()
             day = int(low // _DAY_S)
             if low >= _EARLIEST_S and high < _LATEST_S and \
                     day * _DAY_S <= low and high < (day + 1) * _DAY_S:
                 micros = pc.round(pc.multiply(times, 1_000_000.0), round_mode="half_to_even")
                 return pc.cast(pc.cast(micros, pa.int64()), _TIME), self._date(day)
-        pairs = [self.time_and_date(s) for s in seconds]
+        pairs = [self.time_and_date(s) for s in times.to_pylist()]
         return pa.array([p[0] for p in pairs], _TIME), [p[1] for p in pairs]
 
     @property
@@ -113,14 +119,12 @@ class PartitionWriter:
         if rows != frames:
             offsets = pa.array(list(accumulate(segment.frame_rows(), initial=0)), pa.int32())
             index = pc.list_parent_indices(pa.ListArray.from_arrays(offsets, pa.nulls(rows)))
-        micros, dates = self.times_and_dates(segment.times)
+        seconds, channels, ids, extended, data = segment.frame_arrays()
+        micros, dates = self.times_and_dates(seconds)
         frame_columns = {
-            "time": micros, "channel": pa.array(segment.channels, pa.string()),
-            "can_id": pa.array(segment.ids, pa.int32()),
-            "extended": pa.array(segment.extended, pa.bool_()),
+            "time": micros, "channel": channels, "can_id": ids, "extended": extended,
             "node": pa.array(segment.nodes, pa.int16()),
-            "text": pa.array(segment.texts, pa.string()),
-            "data": pa.array(segment.data, pa.binary()),
+            "text": pa.array(segment.texts, pa.string()), "data": data,
         }
         details = pa.array(segment.codes, pa.int32())  # each row's number in segment.details
         partitions, codes = _partitions(segment.models, dates)

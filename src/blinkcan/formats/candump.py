@@ -39,7 +39,12 @@ from blinkcan.formats.unreadable import UnreadableLine, printable, shown
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads for the first unusual line (start-up: issue 22)
+    from collections.abc import Callable
+
     import can
+
+    #: reads a block of lines that are all plain frames whole (None: line by line here)
+    BlockReader = Callable[[list[str]], FrameColumns | None]
 
 _ERROR_FLAG = 0x20000000  # linux/can.h CAN_ERR_FLAG
 _DIRECTIONS = frozenset({"R", "T", "r", "t"})
@@ -219,17 +224,30 @@ def read_candump(stream: TextIO
             yield timestamp, new(Frame, (can_id, data, extended)) if other is None else other
 
 
-def read_candump_columns(stream: TextIO) -> Iterator[FrameColumns]:
+def read_candump_columns(stream: TextIO, fast: BlockReader | None = None,
+                         chunk_size: int | None = None) -> Iterator[FrameColumns]:
     """The log as :class:`~blinkcan.formats.columns.FrameColumns`, a block of lines at a time,
     each frame's channel the line's; a line that is not a frame is an
     :class:`~blinkcan.formats.unreadable.UnreadableLine` among them, in its place, and
     reading goes on. Comments (``#``) and blank lines are skipped. A log none of whose lines
-    is a frame raises ValueError once it is read."""
+    is a frame raises ValueError once it is read. ``fast`` reads a block of ASCII lines
+    whole where every line is a plain frame (formats/candump_columns.py), None otherwise
+    (then these lines are read here); ``chunk_size``: characters per block (None: the
+    default of log_source.py)."""
     idents: dict[str, tuple[int, bool] | None] = {}
     read = 0  # lines in the blocks before this one
     frames = 0
     first: UnreadableLine | None = None
-    for lines in bounded_line_blocks(stream, "candump"):
+    blocks = bounded_line_blocks(stream, "candump") if chunk_size is None else \
+        bounded_line_blocks(stream, "candump", chunk_size)
+    for lines in blocks:
+        if fast is not None and type(lines) is list:
+            block = fast(lines)
+            if block is not None:  # every line a frame
+                read += len(lines)
+                frames += len(block)
+                yield block
+                continue
         columns = FrameColumns()
         if type(lines) is list:
             _read_lines(lines, columns, idents, read, False)

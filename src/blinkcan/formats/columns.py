@@ -16,6 +16,9 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # python-can loads where a log needs it: a candump log reads without it
     import can
+    import numpy as np
+    import numpy.typing as npt
+    import pyarrow as pa
 
     from blinkcan.formats.unreadable import UnreadableLine
 
@@ -55,3 +58,36 @@ class FrameColumns:
         self.ids.append(0)
         self.extended.append(False)
         self.data.append(b"")
+
+
+
+class ArrowColumns(FrameColumns):
+    """A block of classic data frames only, read whole by Arrow (formats/candump_columns.py):
+    its frames are in Arrow arrays, ``others`` is empty; the lists are made from the arrays
+    where something reads them (the fleet's writer takes the arrays). ``identifiers`` are
+    the block's distinct identifier texts as (id, extended), ``index`` each frame's place
+    in them (a log has a few hundred identifiers)."""
+
+    def __init__(self, times: pa.DoubleArray, channels: pa.StringArray, ids: pa.Int32Array,
+                 extended: pa.BooleanArray, data: pa.BinaryArray,
+                 identifiers: list[tuple[int, bool]], index: npt.NDArray[np.int32]) -> None:
+        # not FrameColumns.__init__: its lists are made on first use (__getattr__)
+        self.others = {}
+        self.arrow_times, self.arrow_channels, self.arrow_ids = times, channels, ids
+        self.arrow_extended, self.arrow_data = extended, data
+        self.identifiers, self.index = identifiers, index
+
+    def __getattr__(self, name: str) -> list[object]:
+        """A list (``times``, ``channels``, ``ids``, ``extended``, ``data``) from its array."""
+        array = self.__dict__.get(f"arrow_{name}") if name in _LISTS else None
+        if array is None:
+            raise AttributeError(name)
+        values: list[object] = array.to_pylist()
+        setattr(self, name, values)
+        return values
+
+    def __len__(self) -> int:
+        return len(self.arrow_times)
+
+
+_LISTS = frozenset({"times", "channels", "ids", "extended", "data"})

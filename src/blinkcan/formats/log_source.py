@@ -231,10 +231,12 @@ def bounded_lines(stream: TextIO, kind: str) -> Iterator[str]:
         yield from lines
 
 
-def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
-    """:func:`bounded_lines` a chunk at a time: for loops that want no call per line. A line
-    over :data:`MAX_LINE` after the first is a block of its own, an :class:`OverlongLine`
-    holding its first MAX_LINE characters; the rest of it is read past, never kept."""
+def bounded_line_blocks(stream: TextIO, kind: str, chunk_size: int = _CHUNK
+                        ) -> Iterator[list[str]]:
+    """:func:`bounded_lines` a chunk (``chunk_size`` characters) at a time: for loops that
+    want no call per line. A line over :data:`MAX_LINE` after the first is a block of its
+    own, an :class:`OverlongLine` holding its first MAX_LINE characters; the rest of it is
+    read past, never kept."""
     read = stream.read
     rest = ""
     after = ""  # what followed a line over MAX_LINE in the chunk its newline was in
@@ -242,7 +244,7 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
     while True:
         if after:
             chunk, after = after, ""
-        elif not (chunk := read(_CHUNK)):
+        elif not (chunk := read(chunk_size)):
             break
         text = rest + chunk if rest else chunk
         lines = text.split("\n")
@@ -270,7 +272,8 @@ def bounded_line_blocks(stream: TextIO, kind: str) -> Iterator[list[str]]:
 
 
 def _too_long(number: int, kind: str) -> str:
-    return f"line {number} is over {MAX_LINE} bytes: not a {kind} log"
+    article = "an" if kind[0] in "AEFHILMNORSX" else "a"  # as the name is spoken: an ASC log
+    return f"line {number} is over {MAX_LINE} bytes: not {article} {kind} log"
 
 
 def _with_overlong(lines: list[str], number: int, kind: str) -> Iterator[list[str]]:

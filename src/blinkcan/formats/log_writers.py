@@ -8,6 +8,7 @@
   loses the rest of that millisecond; and a frame earlier than the first is written as an
   absolute time that reads back as a relative one. Here the times count from the first
   frame's millisecond, and an earlier frame takes that time (counted: formats/carried.py).
+  The date's milliseconds have three digits (python-can writes 50 ms as ``.50``: 500 ms).
 - ``.blf``: the header holds no date before 1990, yet python-can counts the times from the
   first frame: a log whose times start near 0 reads back shifted by its first time. Such a log
   counts from 0 here.
@@ -87,6 +88,11 @@ class AscWriter(ASCWriter):
                 super().log_event("Start of measurement")
             timestamp = max(timestamp, self.started)
         super().log_event(message, timestamp)
+
+    def _format_header_datetime(self, dt: datetime) -> str:
+        """Three digits of milliseconds: python-can writes 50 ms as ``.50``, read back as
+        500 ms, so every time of a log starting in a second's first 100 ms moved."""
+        return dt.strftime(self.FORMAT_DATE.format(f"{dt.microsecond // 1000:03d}"))
 
 
 class BlfWriter(BLFWriter):

@@ -3,14 +3,8 @@
 from blinkcan.host.aio import AsyncKeybox, AsyncKeypad, async_scan
 from blinkcan.host.behaviours import Cycle, Momentary, Toggle
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import (
-    HealthEvent,
-    Identity,
-    IdentityError,
-    NoDeviceError,
-    SharedNodeIdError,
-    WrongDeviceError,
-)
+from blinkcan.host.device import HealthEvent, Identity, NoDeviceError, WrongDeviceError
+from blinkcan.host.identity_errors import IdentityError, SharedNodeIdError
 from blinkcan.host.j1939_keypad import FoundJ1939, scan_j1939
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad

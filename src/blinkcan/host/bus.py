@@ -56,6 +56,9 @@ class HostBus:
     #: drivers attach and release one at a time, process-wide (rare, and never two hosts
     #: for one bus: two SDO channels to one node would take each other's replies)
     _attaching = threading.RLock()
+    #: ``send(frame)``: put a frame on the bus (the port's own send, no call in between:
+    #: every SDO request goes this way)
+    send: Callable[[Frame], None]
 
     def __init__(self, bus: can.BusABC | Port | None = None, *,
                  notifier: can.Notifier | None = None, network: Any = None,
@@ -70,6 +73,7 @@ class HostBus:
         self.bus: can.BusABC | None = taken.bus
         self._owns_port = taken.owned
         self.port: Port = taken.port
+        self.send = self.port.send
         self.scheduler: Scheduler = self.port.scheduler
         self.simulated = self.scheduler.simulated
         self._handlers: dict[int, list[Handler]] = {}
@@ -195,7 +199,7 @@ class HostBus:
     def wait(self, signal: Signal, timeout: float) -> bool:
         """Wait for ``signal`` (False after ``timeout``); returns at once when the bus is
         gone."""
-        if self.closed:
+        if self.reading.closed:
             return signal.is_set()
         return self.scheduler.wait(signal, timeout)
 
@@ -203,9 +207,6 @@ class HostBus:
         self.scheduler.sleep(seconds)
 
     # -- frames -------------------------------------------------------------------------------
-
-    def send(self, frame: Frame) -> None:
-        self.port.send(frame)
 
     def subscribe(self, can_id: int, handler: Handler) -> Callable[[], None]:
         """Call ``handler(frame, now)`` on this bus's loop for every frame with ``can_id``;

@@ -49,9 +49,9 @@ from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry, Value
 from blinkcan.devices.registry import identify
-from blinkcan.errors import BlinkcanError
 from blinkcan.host.bus import Handler, HostBus, Timer
 from blinkcan.host.events import EventSource
+from blinkcan.host.identity_errors import IdentityError, SharedNodeIdError, several_answer
 from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
@@ -95,28 +95,12 @@ class Identity:
     serial_number: str | None = None  # the keypad's 2200h; the Keybox documents none
 
 
-class IdentityError(BlinkcanError):
-    """The device at a node id is not the one the driver drives."""
-
-
 class WrongDeviceError(IdentityError):
     """Another kind of device answered at the node id; the message names it."""
 
 
 class NoDeviceError(IdentityError):
     """Nothing answered the identity reads at the node id."""
-
-
-class SharedNodeIdError(IdentityError):
-    """More than one device answers at the node id: every SDO request gets a reply from each,
-    and no driver can tell whose is whose. Give each device its own node id."""
-
-
-def several_answer(count: int, node_id: int) -> str:
-    """"two devices answer at node 15h ..." for ``count`` replies to one request."""
-    word = {2: "two", 3: "three", 4: "four"}.get(count, str(count))
-    return (f"{word} devices answer at node {node_id:02X}h (one SDO request got {count} "
-            "replies): give each device its own node id")
 
 
 def confirm_or_close(device: Device, verify: bool) -> None:
@@ -139,7 +123,7 @@ def check_one_device(sdo: SdoClient, window: float | None = None) -> None:
     (default: the client's timeout)."""
     replies = sdo.channel.answers(0x1000, 0, sdo.timeout if window is None else window)
     if len(replies) > 1:
-        raise SharedNodeIdError(several_answer(len(replies), sdo.node_id))
+        raise SharedNodeIdError(several_answer(len(replies), sdo.node_id), len(replies))
 
 
 @dataclass(frozen=True)

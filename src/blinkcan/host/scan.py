@@ -16,7 +16,8 @@ import can
 
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import several_answer, unreversed
+from blinkcan.host.device import unreversed
+from blinkcan.host.identity_errors import several_answer
 from blinkcan.host.sdo import SdoClient
 from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, NODE_ID_MIN
 from blinkcan.protocol.frame import Frame

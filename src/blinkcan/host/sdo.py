@@ -15,12 +15,25 @@ reply may still come and would complete the next request to the same object. Wha
 2. Before the next request to that node, the channel gets back in step: it reads 1000h/00 and
    discards every reply until the answer to that read (an upload reply or abort for 1000h/00).
    An SDO server answers in order and never reorders (a busy one drops), so once that answer
-   is in, nothing older can arrive. Replies discarded are counted in ``late_replies``.
+   is in, nothing older can arrive. Replies discarded are counted in ``late_replies``. The
+   read names an object no lost transfer named (1001h/00, 1018h/01 or /00 when a read of
+   1000h/00 was lost: every CANopen device has them, CiA 301 §7.5.2), else the lost one's late
+   reply would be taken for it.
 3. A reply that comes while no request is outstanding is discarded and counted too.
 
 Two devices at one node id (a wiring mistake) answer every request twice, and the second reply
 completes the next request: "reply for another object". :meth:`SdoChannel.answers` tells: it
 sends one read and gathers every reply to it for a while (host/device.py decides what it means).
+A second device may also answer later than the whole exchange (a slow one, a loaded emulator):
+its replies then come when no request waits. A reply that answers a request already answered
+while in step (an initiate response or abort naming its object, CiA 301 §7.2.4.3) is a duplicate
+answer: a server answers each request once and in order, so a second server sent it, or another
+client asked the same (a tool on the bus; CiA 301 §7.2.4 gives an SDO channel one client). The
+next request to that node tells which first: it gathers the replies to one read of 1000h for as
+long as the duplicate trailed its answer (at least the timeout; :meth:`SdoChannel.answers`) and
+raises :class:`SharedNodeIdError` when more than one device answers; with one, the request goes
+on. Out of step (after a timeout or a reply that did not fit) the channel forgets what was
+answered: a late reply is no duplicate.
 """
 
 from __future__ import annotations
@@ -29,12 +42,21 @@ import contextlib
 import logging
 import threading
 from collections.abc import Callable, Iterator
-from typing import Protocol
+from typing import Protocol, TypeVar
 
+from blinkcan.host.identity_errors import SharedNodeIdError, several_answer
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import SDO_RX, SDO_TX
+from blinkcan.protocol.cob import SDO_RX, SDO_TX, check_node_id
 from blinkcan.protocol.frame import Frame
-from blinkcan.protocol.sdo import SdoFrameError, multiplexer, parse_sdo
+from blinkcan.protocol.sdo import (
+    SCS_ABORT,
+    SCS_INITIATE_DOWNLOAD,
+    SCS_INITIATE_UPLOAD,
+    SdoFrameError,
+    multiplexer,
+    parse_sdo,
+    split_multiplexer,
+)
 from blinkcan.protocol.sdo_client import (
     DownloadTransfer,
     SdoError,
@@ -45,12 +67,18 @@ from blinkcan.protocol.sdo_client import (
 from blinkcan.runtime.scheduler import Signal
 
 log = logging.getLogger(__name__)
+T = TypeVar("T", UploadTransfer, DownloadTransfer)
+_new_tuple = tuple.__new__
 
 #: the command byte of an SDO abort (CiA 301 §7.2.4.3.17: ccs/scs 4)
 ABORT_COMMAND = 0x80
 
-# the object every CANopen device has (CiA 301 §7.5.2.1): read to get back in step
-_RESYNC_MUX = multiplexer(0x1000, 0)
+# objects every CANopen device has (CiA 301 §7.5.2: 1000h, 1001h, 1018h/00-01): one that no
+# lost request named is read to get back in step (module docstring)
+#: the longest a request waits to tell a second device from another client (module docstring)
+_MAX_DUPLICATE_WAIT = 5.0
+_RESYNC_MUXES = tuple(multiplexer(index, subindex) for index, subindex in
+                      ((0x1000, 0), (0x1001, 0), (0x1018, 1), (0x1018, 0)))
 
 
 class SdoHost(Protocol):
@@ -75,24 +103,40 @@ class SdoHost(Protocol):
 
 
 class SdoChannel:
-    """The client side of one node's SDO server."""
+    """The client side of one node's SDO server.
+
+    What answers a request: for the first request of a transfer, a whole SDO frame naming its
+    object, or an abort (one naming another object fails the transfer); for a segment's, any
+    whole SDO frame (segments name no object). Anything else (a malformed frame, a reply for
+    another object: another device's, or a stale one) is not this request's answer: discarded
+    and counted, the request waits on.
+    """
 
     def __init__(self, host: SdoHost, node_id: int, timeout: float = 0.5, retries: int = 1
                  ) -> None:
         self.host = host
-        self.node_id = node_id
+        self.node_id = check_node_id(node_id)  # checked once: requests are built unchecked
         self.timeout = timeout
         self.retries = retries
         self.late_replies = 0
         self._lock = threading.Lock()
         self._state_lock = threading.Lock()
         self._signal = host.signal()
-        self._reply = b""
+        self._reply: bytes | None = None  # the awaited reply, once it came
         self._awaiting = False
+        #: what the awaited reply must be: a whole SDO frame naming ``_wanted`` (an initiate
+        #: request's object) or an abort; any whole frame (None: a segment's); or what
+        #: ``_accept`` says (the resync read)
+        self._wanted: bytes | None = None
         self._accept: Callable[[bytes], bool] | None = None
         self._out_of_step = False
+        self._lost: set[bytes] = set()  # objects of requests whose replies may still come
         self._request_id = SDO_RX + node_id
         self._gathered: list[bytes] | None = None  # replies :meth:`answers` gathers
+        #: objects of the initiate requests answered while in step -> when (the last time)
+        self._answered: dict[bytes, float] = {}
+        #: the longest a duplicate answer trailed its answer, not yet looked into (None: none)
+        self._duplicate_lag: float | None = None
         host.subscribe_fast(SDO_TX + node_id, self._on_reply)
 
     def wake(self) -> None:
@@ -100,19 +144,29 @@ class SdoChannel:
         self._signal.set()
 
     def _on_reply(self, frame: Frame, now: float) -> None:
+        """On the reader thread: the awaited reply wakes its request; anything else is
+        discarded (and counted), or gathered by :meth:`answers`."""
         data = frame.data
         with self._state_lock:
+            if self._awaiting and len(data) >= 8:
+                wanted, accept = self._wanted, self._accept
+                if (accept(data) if accept is not None else
+                        wanted is None or data[1:4] == wanted or data[0] == ABORT_COMMAND):
+                    self._awaiting = False
+                    self._reply = data
+                    if wanted is not None:  # an initiate request answered (module docstring)
+                        self._answered[wanted] = now
+                    self._signal.set()
+                    return
             if self._gathered is not None:
                 self._gathered.append(data)
                 return
-            if not self._awaiting or (self._accept is not None and not self._accept(data)):
-                self.late_replies += 1
-                log.debug("node %02Xh: SDO reply %s discarded (no request awaits it)",
-                          self.node_id, data.hex(" "))
-                return
-            self._awaiting = False
-            self._reply = data
-            self._signal.set()
+            self.late_replies += 1
+            answered = self._answered.get(data[1:4])
+            if answered is not None and _answers_initiate(data):  # module docstring
+                self._duplicate_lag = max(self._duplicate_lag or 0.0, now - answered)
+            log.debug("node %02Xh: SDO reply %s discarded (no request awaits it)",
+                      self.node_id, data.hex(" "))
 
     @contextlib.contextmanager
     def replies_also_from(self, node_id: int) -> Iterator[None]:
@@ -130,40 +184,46 @@ class SdoChannel:
         answers once. Other replies heard meanwhile (late ones) are dropped."""
         if self.host.in_handler:
             raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
-        mux = multiplexer(index, subindex)
         with self._lock:
+            return self._gather(multiplexer(index, subindex), window)
+
+    def _gather(self, mux: bytes, window: float) -> list[bytes]:
+        """:meth:`answers`, holding the request lock."""
+        with self._state_lock:
+            self._gathered = []
+            self._answered.clear()  # every reply is gathered and counted here
+            self._duplicate_lag = None
+        try:
+            self.host.send(Frame(self._request_id, b"\x40" + mux + b"\x00\x00\x00\x00"))
+            self.host.sleep(window)
+        finally:
             with self._state_lock:
-                self._gathered = []
-            try:
-                self.host.send(Frame(self._request_id, b"\x40" + mux + b"\x00\x00\x00\x00"))
-                self.host.sleep(window)
-            finally:
-                with self._state_lock:
-                    gathered, self._gathered = self._gathered, None
+                gathered, self._gathered = self._gathered, None
         return [data for data in gathered if _answers_upload_of(data, mux)]
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        transfer = self._run(lambda: UploadTransfer(index, subindex), timeout, retries)
-        assert isinstance(transfer, UploadTransfer)
-        return transfer.value
+        return self._run(UploadTransfer(index, subindex), self.timeout if timeout is None
+                         else timeout, self.retries if retries is None else retries).value
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
-        self._run(lambda: DownloadTransfer(index, subindex, data), timeout, retries)
+        self._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is None
+                  else timeout, self.retries if retries is None else retries)
 
-    def _run(self, make: Callable[[], UploadTransfer | DownloadTransfer],
-             timeout: float | None, retries: int | None) -> UploadTransfer | DownloadTransfer:
-        """Run a fresh transfer per attempt; a timeout is retried, anything else raised."""
+    def _run(self, transfer: T, timeout: float, retries: int) -> T:
+        """Run ``transfer``, and a fresh one per retry; a timeout is retried, anything else
+        raised."""
         if self.host.in_handler:
             raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
-        timeout = self.timeout if timeout is None else timeout
-        retries = self.retries if retries is None else retries
         with self._lock:
+            if self._duplicate_lag is not None:
+                self._check_shared(timeout)
             first: SdoTimeoutError | None = None
             uncertain: SdoTimeoutError | None = None  # an attempt that may have taken effect
             for attempt in range(retries + 1):
-                transfer = make()
+                if attempt:
+                    transfer = transfer.again()
                 try:
                     if self._out_of_step:
                         self._resync(timeout, transfer)
@@ -182,60 +242,85 @@ class SdoChannel:
                     raise
             raise AssertionError("unreachable")
 
-    def _exchange(self, request: bytes, timeout: float,
+    def _check_shared(self, timeout: float) -> None:
+        """After a duplicate answer: :class:`SharedNodeIdError` when more than one device
+        answers a read of 1000h within the time the duplicate trailed (at least ``timeout``, at
+        most ``_MAX_DUPLICATE_WAIT``; module docstring). The request is not sent then."""
+        lag = self._duplicate_lag or 0.0
+        window = min(max(timeout, 1.5 * lag), max(timeout, _MAX_DUPLICATE_WAIT))
+        replies = self._gather(_RESYNC_MUXES[0], window)
+        if len(replies) > 1:
+            raise SharedNodeIdError(several_answer(len(replies), self.node_id), len(replies))
+
+    def _exchange(self, request: bytes, timeout: float, wanted: bytes | None,
                   accept: Callable[[bytes], bool] | None = None) -> bytes | None:
-        """Send ``request`` and wait for the reply it gets; None on a timeout."""
+        """Send ``request`` and wait for the reply it gets (see ``_wanted``); None on a
+        timeout."""
+        signal = self._signal
         with self._state_lock:
-            self._signal.clear()
+            signal.clear()
+            self._reply = None
+            self._wanted = wanted
             self._accept = accept
             self._awaiting = True
         try:
-            self.host.send(Frame(self._request_id, request))
-            self.host.wait(self._signal, timeout)
+            # the node id was checked and ``request`` is made here: Frame.trusted, inlined
+            self.host.send(_new_tuple(Frame, (self._request_id, request, False)))
+            self.host.wait(signal, timeout)
         finally:
             with self._state_lock:  # no reply is taken after this
                 self._awaiting = False
                 self._accept = None
-                arrived, reply = self._signal.is_set(), self._reply
-        if self.host.closed:
+                reply = self._reply
+                if reply is None:  # out of step: a late reply is no duplicate (module docstring)
+                    self._answered.clear()
+        if reply is None and self.host.closed:  # woken by :meth:`wake`, or timed out
             raise SdoError("the bus was shut down", self.node_id,
                            int.from_bytes(request[1:3], "little"), request[3])
-        return reply if arrived else None
+        return reply
 
     def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
         request: bytes | None = transfer.start()
-        accept = _initiate_reply_of(transfer.mux)  # then segments, which name no object
+        wanted: bytes | None = transfer.mux  # then segments, which name no object
         while request is not None:
-            reply = self._exchange(request, timeout, accept)
+            reply = self._exchange(request, timeout, wanted)
             if reply is None:
                 self._out_of_step = True
+                self._lost.add(transfer.mux)
                 self.host.send(Frame(self._request_id,
                                      transfer.abort_request(AbortCode.SDO_PROTOCOL_TIMED_OUT)))
                 raise self._timeout(transfer, timeout)
-            accept = _whole_frame
+            wanted = None
             try:
                 request = transfer.on_reply(reply)
             except SdoProtocolError:
                 # CiA 301 §7.2.4.3.17: a reply that does not fit aborts the transfer; the
                 # server's own reply may still come, so get back in step before the next request
                 self._out_of_step = True
+                with self._state_lock:
+                    self._answered.clear()
+                    self._lost.add(transfer.mux)
                 self.host.send(Frame(self._request_id, transfer.abort_request(
                     AbortCode.COMMAND_SPECIFIER_INVALID)))
                 raise
 
     def _resync(self, timeout: float, transfer: UploadTransfer | DownloadTransfer) -> None:
-        """Read 1000h/00, discarding every reply until its own (see the module docstring)."""
-        request = b"\x40" + _RESYNC_MUX + b"\x00\x00\x00\x00"
+        """Read 1000h/00 (or another object every device has, that no lost request named),
+        discarding every reply until its own (see the module docstring)."""
+        mux = next((mux for mux in _RESYNC_MUXES if mux not in self._lost), _RESYNC_MUXES[0])
+        request = b"\x40" + mux + b"\x00\x00\x00\x00"
 
         def answers_resync(data: bytes) -> bool:
-            return _answers_upload_of(data, _RESYNC_MUX)
+            return _answers_upload_of(data, mux)
 
-        if self._exchange(request, timeout, answers_resync) is None:
+        if self._exchange(request, timeout, None, answers_resync) is None:
+            index, subindex = split_multiplexer(mux)
             raise SdoTimeoutError(
                 f"no reply within {timeout} s (node {self.node_id:02X}h did not answer a read "
-                "of 1000h after an earlier timeout; nothing was sent for this request)",
-                self.node_id, transfer.index, transfer.subindex)
+                f"of {index:04X}h/{subindex:02X} after an earlier timeout; nothing was sent "
+                "for this request)", self.node_id, transfer.index, transfer.subindex)
         self._out_of_step = False
+        self._lost.clear()
 
     def _timeout(self, transfer: UploadTransfer | DownloadTransfer, timeout: float
                  ) -> SdoTimeoutError:
@@ -249,20 +334,11 @@ class SdoChannel:
                                transfer.subindex)
 
 
-def _initiate_reply_of(mux: bytes) -> Callable[[bytes], bool]:
-    """Whether a frame may answer the first request of a transfer of ``mux``: a whole SDO
-    frame naming that object, or an abort (one naming another object fails the transfer).
-    Anything else (a malformed frame, a reply for another object: another device's, or a
-    stale one) is not this request's answer: discarded and counted, the request waits on."""
-    def accept(data: bytes) -> bool:
-        return len(data) >= 8 and (data[0] == ABORT_COMMAND or data[1:4] == mux)
-
-    return accept
-
-
-def _whole_frame(data: bytes) -> bool:
-    """A segment's reply names no object: any whole SDO frame may be it."""
-    return len(data) >= 8
+def _answers_initiate(data: bytes) -> bool:
+    """Whether ``data`` can answer an initiate request (for the object it names): an upload or
+    download initiate response, or an abort (CiA 301 §7.2.4.3.3, .6, .17)."""
+    return len(data) >= 8 and data[0] >> 5 in (SCS_INITIATE_UPLOAD, SCS_INITIATE_DOWNLOAD,
+                                               SCS_ABORT)
 
 
 def _answers_upload_of(data: bytes, mux: bytes) -> bool:
@@ -285,12 +361,10 @@ class SdoClient:
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        return self.channel.upload(
-            index, subindex, timeout=self.timeout if timeout is None else timeout,
-            retries=self.retries if retries is None else retries)
+        return self.channel._run(UploadTransfer(index, subindex), self.timeout if timeout is None
+                                 else timeout, self.retries if retries is None else retries).value
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
-        self.channel.download(
-            index, subindex, data, timeout=self.timeout if timeout is None else timeout,
-            retries=self.retries if retries is None else retries)
+        self.channel._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is
+                          None else timeout, self.retries if retries is None else retries)

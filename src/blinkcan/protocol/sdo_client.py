@@ -14,10 +14,13 @@ from __future__ import annotations
 from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.sdo import (
+    EXPEDITED,
     EXPEDITED_DOWNLOAD_COMMAND,
+    LAST_SEGMENT,
     SCS_DOWNLOAD_SEGMENT,
     SCS_INITIATE_UPLOAD,
     SCS_UPLOAD_SEGMENT,
+    SIZE_INDICATED,
     TOGGLE,
     ZEROS,
     SdoFrame,
@@ -26,6 +29,10 @@ from blinkcan.protocol.sdo import (
 )
 
 QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowledges with 43h
+#: byte 0 of an expedited initiate upload response, masked to scs (bits 7-5) and e (bit 1)
+#: (CiA 301 §7.2.4.3.6): the common reply, taken without parsing the frame
+_EXPEDITED_UPLOAD_MASK = 0xE0 | EXPEDITED
+_EXPEDITED_UPLOAD = (SCS_INITIATE_UPLOAD << 5) | EXPEDITED
 
 
 class SdoError(BlinkcanError):
@@ -89,14 +96,15 @@ class _Transfer:
 
 
 class UploadTransfer(_Transfer):
-    """Read one object: :meth:`start`, then feed replies to :meth:`on_reply` until ``done``."""
+    """Read one object: :meth:`start`, then feed replies to :meth:`on_reply` until ``done``.
 
-    def __init__(self, index: int, subindex: int) -> None:
-        super().__init__(index, subindex)
-        self.value = b""
-        self._size: int | None = None
-        self._toggle = 0
-        self._buffer = bytearray()
+    Its own state starts as these class defaults (no ``__init__`` of its own: most reads are
+    one expedited reply); a segmented upload gets its buffer when the server announces it."""
+
+    value: bytes = b""
+    _size: int | None = None
+    _toggle = 0
+    _buffer: bytes | bytearray = b""
 
     @property
     def size(self) -> int | None:
@@ -108,11 +116,30 @@ class UploadTransfer(_Transfer):
         """How many bytes the segments brought so far."""
         return len(self._buffer)
 
+    def again(self) -> UploadTransfer:
+        """The same transfer, from its start (a retry)."""
+        return UploadTransfer(self.index, self.subindex)
+
     def start(self) -> bytes:
         return b"\x40" + self.mux + b"\x00\x00\x00\x00"
 
     def on_reply(self, data: bytes) -> bytes | None:
         """The next request, or None when the value is complete (then ``done``)."""
+        if len(data) == 8:  # the common replies, taken without parsing the frame
+            command = data[0]
+            started = self._size is not None or bool(self._buffer)
+            if (command & _EXPEDITED_UPLOAD_MASK == _EXPEDITED_UPLOAD and not started
+                    and data[1:4] == self.mux):
+                # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is
+                # stated, else all four (protocol.sdo.expedited_payload, inlined)
+                self.value = (data[4 : 8 - ((command >> 2) & 0x03)] if command & SIZE_INDICATED
+                              else data[4:8])
+                self.done = True
+                return None
+            if command >> 5 == SCS_UPLOAD_SEGMENT and started:
+                # CiA 301 §7.2.4.3.4: bytes 1-7 less the n unused ones (bits 3-1)
+                # (protocol.sdo.segment_payload, inlined)
+                return self._segment(command, data[1 : 8 - ((command >> 1) & 0x07)])
         reply = self._check_common(data)
         command = reply.command
         if self._size is None and not self._buffer and reply.specifier == SCS_INITIATE_UPLOAD:
@@ -124,13 +151,18 @@ class UploadTransfer(_Transfer):
                 return None
             size = reply.size
             self._size = -1 if size is None else size
+            self._buffer = bytearray()
             return b"\x60" + ZEROS[:7]
         if reply.specifier != SCS_UPLOAD_SEGMENT:
             raise self._fail(f"unexpected reply {command:02X}h")
-        if reply.toggle != self._toggle:  # CiA 301 §7.2.4.3.7
+        return self._segment(command, reply.segment_data)
+
+    def _segment(self, command: int, chunk: bytes) -> bytes | None:
+        """An upload segment response (``command``, its data ``chunk``): the next request."""
+        if command & TOGGLE != self._toggle:  # CiA 301 §7.2.4.3.7
             raise self._fail("toggle bit not alternated")
-        self._buffer += reply.segment_data
-        if reply.last:  # last segment (errata B6: strings of any length)
+        self._buffer += chunk
+        if command & LAST_SEGMENT:  # last segment (errata B6: strings of any length)
             if self._size not in (None, -1) and len(self._buffer) != self._size:
                 raise self._fail(f"{len(self._buffer)} bytes, {self._size} announced")
             self.value = bytes(self._buffer)
@@ -149,6 +181,10 @@ class DownloadTransfer(_Transfer):
         self._position = 0
         self._toggle = 0
         self._segmented = len(self.data) > 4 or not self.data
+
+    def again(self) -> DownloadTransfer:
+        """The same transfer, from its start (a retry)."""
+        return DownloadTransfer(self.index, self.subindex, self.data)
 
     def start(self) -> bytes:
         data = self.data

@@ -15,10 +15,43 @@ from collections.abc import Callable
 import can
 
 from blinkcan.protocol.frame import Frame
-from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_frame, to_message
+from blinkcan.runtime.canbus import BusReader, OwnFrames, ReadStats, to_message
 from blinkcan.runtime.scheduler import RealTimeScheduler
 
 FrameHandler = Callable[[Frame, float], None]
+_new_tuple = tuple.__new__
+_new_object = object.__new__
+#: python-can's Message fields, as :func:`_message` sets them all
+_MESSAGE_FIELDS = frozenset({
+    "arbitration_id", "bitrate_switch", "channel", "data", "dlc", "error_state_indicator",
+    "is_error_frame", "is_extended_id", "is_fd", "is_remote_frame", "is_rx", "timestamp"})
+
+
+def _message(frame: Frame, timestamp: float) -> can.Message:
+    """:func:`~blinkcan.runtime.canbus.to_message`, without ``Message.__init__``'s keyword
+    handling (half the cost of a send: every frame sent comes this way): every field set as
+    the constructor sets it for a data frame."""
+    message: can.Message = _new_object(can.Message)
+    message.timestamp = timestamp
+    message.arbitration_id = frame.can_id
+    message.is_extended_id = frame.extended
+    message.is_remote_frame = False
+    message.is_error_frame = False
+    message.channel = None
+    message.is_fd = False
+    message.is_rx = True
+    message.bitrate_switch = False
+    message.error_state_indicator = False
+    data = message.data = bytearray(frame.data)
+    message.dlc = len(data)
+    return message
+
+
+def _message_maker() -> Callable[[Frame, float], can.Message]:
+    """:func:`_message` where python-can's Message has exactly the fields it sets, else the
+    constructor (a python-can with other fields)."""
+    fields = set(getattr(can.Message, "__slots__", ())) - {"__weakref__"}
+    return _message if fields == _MESSAGE_FIELDS else to_message
 
 
 class _PortListener(can.Listener):
@@ -30,9 +63,12 @@ class _PortListener(can.Listener):
         self.clock = port.clock
 
     def on_message_received(self, msg: can.Message) -> None:
-        frame = to_frame(msg)
-        if frame is None:
+        # runtime.canbus.to_frame, inlined (every frame received comes this way): data frames
+        # of up to eight bytes; python-can checked the identifier (Frame.trusted)
+        data = msg.data
+        if msg.is_error_frame or msg.is_remote_frame or msg.dlc > 8 or len(data) > 8:
             return
+        frame = _new_tuple(Frame, (msg.arbitration_id, bytes(data), msg.is_extended_id))
         port = self.port
         now = self.clock()
         own = port.own
@@ -62,13 +98,14 @@ class CanBusPort:
         self._on_closed: list[Callable[[], object]] = []
         self._reader: BusReader | None = None
         self._listener = _PortListener(self)
+        self._message = _message_maker()
 
     def send(self, frame: Frame) -> None:
         now = self.clock()
         own = self.own
         if own.active:
             own.sent(frame, now)
-        self.bus.send(to_message(frame, now))
+        self.bus.send(self._message(frame, now))
 
     def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None
                ) -> Callable[[], None]:

@@ -291,7 +291,12 @@ class Emulator:
                 except Exception as error:
                     self._twin_failed(i, error)
                     replies = []
-                self._reschedule(i)
+                # self._reschedule(i), inlined (as self._call)
+                if twin.listening is not self._routes_seen[i]:
+                    self._index_dirty = True
+                deadline = twin.next_deadline()
+                if deadline != self._deadline[i]:
+                    self._plan(i, deadline)
                 if replies:
                     self._emit(i, replies, now)
 
