@@ -22,7 +22,7 @@ def test_demo_runs_the_controller_and_shows_outputs_and_frames() -> None:
 @pytest.mark.parametrize(("args", "message"), [
     (["emulate", "toaster"], "unknown device 'toaster'"),
     (["emulate", "keypad:0x80"], "node id 0x80 outside"),
-    (["emulate", "keypad", "--node-id", "zz"], "is not a number"),
+    (["emulate", "keypad", "--node-id", "zz"], "is not a node id: 01h..7Fh"),
     (["emulate", "keypad", "keypad:0x16", "--nvm", "x.json"], "--nvm names one file"),
     (["emulate", "keypad", "-i", "no-such-interface"], "cannot open the bus"),
 ])

@@ -43,7 +43,7 @@ def _encoders(found: Model) -> int:
     (["keypad", "read", "encoder_1"], "did you mean encoder_1_direction, encoder_1_ticks"),
     (["keypad", "write", "encoder_1_top", "99"], "takes 0x0, 0x2..0x10, not 99"),
     (["keypad", "write", "device_type", "1"], "is read-only"),
-    (["keypad", "write", "analog_period", "x"], "'x' is not a number"),
+    (["keypad", "write", "analog_period", "x"], "takes 0x8..0xc8, not 'x'"),
     (["keybox", "read", "encoder_1_top"], "no object 'encoder_1_top' (the Keybox)"),
     # J1939 (§18: 75h, period 05h-FEh x 10 ms): the keypad's own range and unit
     (["keypad", "--protocol", "j1939", "heartbeat", "30"],

@@ -133,8 +133,8 @@ def test_scan_lists_the_devices() -> None:
     finally:
         device_bus.shutdown()
     assert result.exit_code == 0, result.output
-    assert "Keybox3" in result.output
-    assert "PKP2600SI" in result.output
+    assert "keybox" in result.output  # the registered models (what --model takes)
+    assert "pkp-2600-si" in result.output
     assert "V2.2" in result.output
 
 

@@ -88,7 +88,7 @@ def test_scan_lists_j1939_keypads_beside_canopen_devices(
                             lambda: SimulatedBus(rig.network, "blinkcan scan"))
         result = CliRunner().invoke(cli, ["scan", "--listen", "0.05"], env={"COLUMNS": "150"})
     assert result.exit_code == 0, result.output
-    assert "PKP2600SI" in result.output  # the CANopen keypad
+    assert "pkp-2600-si" in result.output  # the CANopen keypad
     row = next(line for line in result.output.splitlines() if "J1939" in line)
     assert "30h" in row
     assert "V2.6" in row

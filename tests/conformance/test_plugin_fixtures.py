@@ -31,13 +31,6 @@ def test_the_marker_builds_every_registered_keypad(case: Case, rig: Rig,
                                       case.protocol)
 
 
-@pytest.mark.blinkcan(modle="pkp-3500-mt")
-def test_a_marker_option_it_does_not_know_is_a_usage_error(request: pytest.FixtureRequest
-                                                           ) -> None:
-    with pytest.raises(pytest.UsageError, match="does not take modle: it takes model, "):
-        request.getfixturevalue("keypad_twin")
-
-
 @pytest.mark.parametrize("fixture", ["rig", "keypad_twin", "keybox_twin", "golden_trace"])
 def test_every_fixture_has_a_docstring(fixture: str) -> None:
     from blinkcan.testing import plugin

@@ -9,12 +9,16 @@ from collections.abc import Mapping
 import click
 
 from blinkcan.cli.command_socket import SocketError, emulators, send
+from blinkcan.cli.whole import Whole
+
+#: the largest process id Linux gives (PID_MAX_LIMIT, 2**22)
+PID_MAX = 2**22
 
 
 @click.command("act", context_settings={"ignore_unknown_options": True,
                                         "allow_interspersed_args": False})
 @click.argument("words", nargs=-1, required=True, metavar="COMMAND...")
-@click.option("--to", "pid", type=int, default=None, metavar="PID",
+@click.option("--to", "pid", type=Whole(1, PID_MAX), default=None, metavar="PID",
               help="The emulator's process id, when several run.")
 def command(words: tuple[str, ...], pid: int | None) -> None:
     """Act on the devices of a running blinkcan emulate: press 3, 16h turn 1 -5,

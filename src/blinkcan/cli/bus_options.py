@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
+from blinkcan.cli.whole import Whole
 from blinkcan.protocol.cob import check_node_id
 
 if TYPE_CHECKING:  # python-can and the runtime load when a bus is opened (start-up: issue 22)
@@ -36,6 +37,8 @@ DEFAULT_INTERFACE = "udp_multicast"
 DEFAULT_GROUP = "239.74.163.2"
 DEFAULT_PORT = 43113
 DEFAULT_HOP_LIMIT = 0
+#: ISO 11898-1: a classical CAN bus (and CAN FD's arbitration phase) runs at 1 Mbit/s at most
+MAX_BITRATE = 1_000_000
 
 _META = "blinkcan.bus"
 _BUS_KWARG = re.compile(r"(?P<name>[_a-zA-Z][_a-zA-Z0-9-]*)=(?P<value>\S*)")
@@ -101,7 +104,8 @@ def bus_options(function: F) -> F:
                           "(this machine only)."),
         click.option("-c", "--channel", default=None, expose_value=False, callback=_remember,
                      help="Channel, e.g. can0, PCAN_USBBUS1 or a multicast group."),
-        click.option("-b", "--bitrate", type=int, default=None, expose_value=False,
+        click.option("-b", "--bitrate", type=Whole(1, MAX_BITRATE, "bit/s"), default=None,
+                     expose_value=False,
                      callback=_remember, help="Bit rate in bit/s (python-can config if unset)."),
         click.option("--bus-kwargs", multiple=True, metavar="NAME=VALUE...", expose_value=False,
                      callback=_remember,
@@ -190,6 +194,9 @@ def parse_node_id(text: str) -> int:
     """A node id 1..127 as engineers write it (21, 0x15 or 15h); BadParameter otherwise."""
     try:
         return check_node_id(parse_int(text))
+    except click.BadParameter:
+        raise click.BadParameter(f"{text!r} is not a node id: 01h..7Fh (21, 0x15 or "
+                                 "15h)") from None
     except ValueError as error:
         raise click.BadParameter(str(error)) from None
 

@@ -25,13 +25,16 @@ from blinkcan.cli.answers import confirm
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
 from blinkcan.cli.ranges import (
     Check,
+    Spans,
     candidates,
+    describe,
     entry_spans,
     merged,
     spans_of,
     whose,
     within,
 )
+from blinkcan.cli.whole import NegativeArguments
 from blinkcan.devices.colours import BacklightColour, led_colour
 from blinkcan.devices.keypad_j1939 import BITRATES as J1939_BITRATES
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS, colour_code
@@ -49,6 +52,8 @@ from blinkcan.protocol.sdo_client import SdoProtocolError, SdoTimeoutError
 
 #: what the group passes to its commands: the device kind and its node id
 Target = tuple[str, int]
+#: what a whole number argument may be for the models that may answer: spans, or said in words
+Valid = Callable[[Sequence[DeviceDescription]], "Spans | str"]
 #: ``blinkcan keypad --protocol j1939 --address 0x21``: kept in the context's meta
 _J1939_ADDRESS = "blinkcan.j1939_address"
 #: ``blinkcan keypad --model pkp-3500-mt``: kept in the context's meta
@@ -106,6 +111,82 @@ def _arguments(kind: str, check: Check) -> None:
         raise click.UsageError(f"{error} ({whose(descriptions)})") from None
 
 
+class ModelNumber(click.ParamType):  # type: ignore[type-arg]
+    """A whole number argument of a keypad/keybox command (12, 0x0C or 0Ch): text that is none
+    is a usage error naming the argument and what the models that may answer take (``valid``
+    of their descriptions); the range itself is checked with the command's other arguments."""
+
+    name = "integer"
+
+    def __init__(self, what: str, valid: Valid) -> None:
+        self.what = what
+        self.valid = valid
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+        try:
+            return parse_int(str(value))
+        except click.BadParameter:
+            self.fail(_not_whole(self.what, str(value), self.valid), param, ctx)
+
+
+def _not_whole(what: str, text: str, valid: Valid) -> str:
+    """"PWM duty 'abc' is not a whole number: 0..10 (the Keybox)", for the models that may
+    answer this command (its group's kind, ``--model``)."""
+    context = click.get_current_context(silent=True)
+    kind = context.obj[0] if context is not None and isinstance(context.obj, tuple) else None
+    if kind is None:
+        return f"{what} {text!r} is not a whole number"
+    descriptions = _candidates(kind)
+    shown = valid(descriptions)
+    return (f"{what} {text!r} is not a whole number: "
+            f"{shown if isinstance(shown, str) else describe(shown)} ({whose(descriptions)})")
+
+
+def _whole(what: str, text: str, valid: Valid, hint: str) -> int:
+    """``text`` (part of a list argument, e.g. PWM's PINS) as a whole number; else a usage
+    error naming the argument ``hint`` and what the models take."""
+    try:
+        return parse_int(text)
+    except click.BadParameter:
+        raise click.BadParameter(_not_whole(what, text, valid), param_hint=hint) from None
+
+
+def _pins(descriptions: Sequence[DeviceDescription]) -> Spans:
+    return merged(spans_of(d.face.pin_numbers) for d in descriptions)
+
+
+def _pwm_pins(descriptions: Sequence[DeviceDescription]) -> Spans:
+    return merged(spans_of(d.face.pwm_pins) for d in descriptions)
+
+
+def _led_keys(descriptions: Sequence[DeviceDescription]) -> Spans:
+    return merged(spans_of(d.face.led_keys) for d in descriptions)
+
+
+def _encoders(descriptions: Sequence[DeviceDescription]) -> Spans:
+    return merged(spans_of(e.number for e in d.face.encoders) for d in descriptions)
+
+
+def _entries(suffix: str) -> Valid:
+    """What the object ``suffix`` names takes; ``encoder_{n}_...`` over every encoder."""
+    def valid(descriptions: Sequence[DeviceDescription]) -> Spans | str:
+        names = sorted({suffix.format(n=e.number) for d in descriptions
+                        for e in d.face.encoders} if "{n}" in suffix else {suffix})
+        spans = merged(entry_spans(descriptions, name) for name in names)
+        entries = [d.table[name] for d in descriptions for name in names if name in d.table]
+        return spans or (entries[0].describe_valid() if entries else "none")
+
+    return valid
+
+
+def _bitrates(descriptions: Sequence[DeviceDescription]) -> str:
+    rates = sorted({rate for d in descriptions for rate in d.bitrates.values()})
+    return f"one of {', '.join(map(str, rates))} bit/s"
+
+
 @contextmanager
 def _device(target: Target, start: bool = False, check: Check | None = None
             ) -> Iterator[Any]:
@@ -123,8 +204,9 @@ def _device(target: Target, start: bool = False, check: Check | None = None
     bus = cli_bus()
     try:
         try:
-            if address is not None:  # J1939 mode answers no SDO: the kind's first model
-                device = driver_class(kind)(bus, node_id, protocol="j1939", address=address)
+            if address is not None:  # J1939 mode answers no SDO: --model, else the kind's first
+                device = driver_class(kind)(bus, node_id, protocol="j1939", address=address,
+                                            model=_chosen_model())
             else:
                 chosen = _chosen_model()
                 found = model(chosen) if chosen else _model_at(bus, node_id, kind)
@@ -277,6 +359,7 @@ def _group(kind: str) -> click.Group:
     def group(ctx: click.Context, node_id: int) -> None:
         ctx.obj = (kind, node_id)
 
+    group.command_class = NegativeArguments  # ``keybox on -1``: a pin, refused by its range
     return group
 
 
@@ -292,8 +375,9 @@ class J1939Address(click.ParamType):  # type: ignore[type-arg]
                 ctx: click.Context | None) -> int:
         try:
             address = parse_int(str(value))
-        except click.BadParameter as error:
-            self.fail(error.message, param, ctx)
+        except click.BadParameter:
+            self.fail(f"{value!r} is not a J1939 keypad address: 01h..{ADDRESS_MAX:02X}h (33, "
+                      "0x21 or 21h)", param, ctx)
         if not 0x01 <= address <= ADDRESS_MAX:
             self.fail(f"a J1939 keypad address is 01h..{ADDRESS_MAX:02X}h, not {value}", param,
                       ctx)
@@ -336,7 +420,8 @@ for group in (keypad, keybox):
             _info(device)
 
     @group.command("heartbeat")
-    @click.argument("milliseconds", type=click.IntRange(0, 0xFFFF))
+    @click.argument("milliseconds", type=ModelNumber("heartbeat period in ms",
+                                                     _entries("producer_heartbeat_time")))
     @bus_options
     @node_id_option
     @click.pass_obj
@@ -364,10 +449,12 @@ for group in (keypad, keybox):
         """Store a new node id (applies at the next reset; generation 2 keypads: at once).
         Over J1939 the keypad's source address (01h..FDh, at once). Asks once the device was
         found and the new id is free."""
+        argument = next(p for p in click.get_current_context().command.params
+                        if p.name == "new_id_text")  # NEW_ID, named in its errors
         if _j1939_address() is not None:
-            _set_j1939_address(target, J1939Address().convert(new_id_text, None, None), yes)
+            _set_j1939_address(target, J1939Address().convert(new_id_text, argument, None), yes)
             return
-        new_id = NODE_ID.convert(new_id_text, None, None)
+        new_id = NODE_ID.convert(new_id_text, argument, None)
 
         def check(descriptions: Sequence[DeviceDescription]) -> None:
             within("node id", new_id, entry_spans(descriptions, "node_id"))
@@ -380,7 +467,7 @@ for group in (keypad, keybox):
         _done(target, f"node id {new_id:02X}h stored")
 
     @group.command("set-baud")
-    @click.argument("bit_rate", metavar="BITRATE", type=int)
+    @click.argument("bit_rate", metavar="BITRATE", type=ModelNumber("bit rate", _bitrates))
     @click.option("--yes", is_flag=True, help="Do not ask.")
     @bus_options
     @node_id_option
@@ -480,7 +567,7 @@ def _blink_words(colour: str, blink: str | None) -> str:
 
 
 @keypad.command("led", epilog=f"Keys with an LED: {_per_model('keypad', lambda f: f.led_keys)}.")
-@click.argument("key", type=int)
+@click.argument("key", type=ModelNumber("key", _led_keys))
 @click.argument("colour")
 @click.option("--blink", is_flag=False, flag_value="", default=None, metavar="[COLOUR]",
               help="Blink: alone, COLOUR blinks on and off; with another colour, the LED "
@@ -502,7 +589,7 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
     blink = colour if blink == "" else blink
 
     def check(descriptions: Sequence[DeviceDescription]) -> None:
-        within("key", key, merged(spans_of(d.face.led_keys) for d in descriptions))
+        within("key", key, _led_keys(descriptions))
         # J1939 mode has colour codes of its own (§7a: amber, yellow/green)
         known = colour_code if _j1939_address() is not None else led_colour
         for name in (colour, blink):
@@ -519,7 +606,8 @@ def led(target: Target, key: int, colour: str, blink: str | None) -> None:
 
 @keypad.command("backlight")
 @click.option("--colour", default=None, help="Backlight colour (red ... yellow/green).")
-@click.option("--level", type=int, default=None, help="0-63 (0 = off).")
+@click.option("--level", type=ModelNumber("backlight level", _entries("backlight_brightness")),
+              default=None, help="0-63 (0 = off).")
 @bus_options
 @node_id_option
 @click.pass_obj
@@ -543,7 +631,7 @@ def backlight(target: Target, colour: str | None, level: int | None) -> None:
 
 
 @keypad.command("brightness")
-@click.argument("level", type=int)
+@click.argument("level", type=ModelNumber("brightness", _entries("indicator_brightness")))
 @bus_options
 @node_id_option
 @click.pass_obj
@@ -561,13 +649,13 @@ def brightness(target: Target, level: int) -> None:
 
 def _pin_command(name: str, action: str, doc: str, done: str) -> None:
     @keybox.command(name, help=doc)
-    @click.argument("pin", type=int)
+    @click.argument("pin", type=ModelNumber("pin", _pins))
     @bus_options
     @node_id_option
     @click.pass_obj
     def command(target: Target, pin: int) -> None:
         def check(descriptions: Sequence[DeviceDescription]) -> None:
-            within("pin", pin, merged(spans_of(d.face.pin_numbers) for d in descriptions))
+            within("pin", pin, _pins(descriptions))
 
         with _device(target, check=check) as device:
             getattr(device, action)(pin)
@@ -595,24 +683,27 @@ def pwm(target: Target, pins: str, duty: str) -> None:
     blinkcan keybox pwm 12 5
     blinkcan keybox pwm 12,13 30%
     """
-    chosen = [parse_int(pin) for pin in pins.split(",") if pin.strip()]
+    chosen = [_whole("PWM pin", pin, _pwm_pins, "PINS") for pin in pins.split(",")
+              if pin.strip()]
     levels = max((d.face.pwm_duty_max for d in _candidates(target[0])), default=0)
     step = 100 // levels if levels else 100  # KBX §22: 0Ah = 100 %, steps of 10 %
     percent = duty.strip().endswith("%")
-    level = parse_int(duty.strip()[:-1]) if percent else parse_int(duty)
+
+    def duties(descriptions: Sequence[DeviceDescription]) -> Spans:
+        top = max((d.face.pwm_duty_max for d in descriptions), default=0)
+        return ((0, top * step),) if percent else ((0, top),)
+
+    level = _whole("PWM duty in %" if percent else "PWM duty",
+                   duty.strip()[:-1] if percent else duty, duties, "DUTY")
     if percent and level % step:
         raise click.BadParameter(f"{duty} is not a step of {step} %", param_hint="DUTY")
     tenths = level // step if percent else level
 
     def check(descriptions: Sequence[DeviceDescription]) -> None:
-        allowed = merged(spans_of(d.face.pwm_pins) for d in descriptions)
+        allowed = _pwm_pins(descriptions)
         for pin in chosen:
             within("PWM pin", pin, allowed)
-        top = max((d.face.pwm_duty_max for d in descriptions), default=0)
-        if percent:
-            within("PWM duty in %", level, ((0, top * step),))
-        else:
-            within("PWM duty", level, ((0, top),))
+        within("PWM duty in %" if percent else "PWM duty", level, duties(descriptions))
 
     with _device(target, check=check) as device:
         assert isinstance(device, Keybox)
@@ -664,17 +755,22 @@ def _encoder_check(encoder: int, what: str = "encoders") -> Check:
 
     def check(descriptions: Sequence[DeviceDescription]) -> None:
         having(descriptions)
-        within("encoder", encoder,
-               merged(spans_of(e.number for e in d.face.encoders) for d in descriptions))
+        within("encoder", encoder, _encoders(descriptions))
 
     return check
 
 
-def _led_list(text: str) -> list[int]:
+def _led_list(text: str, encoder: int) -> list[int]:
     """"1,2,16" -> [1, 2, 16]; "off" or "" -> []."""
     if text.strip().lower() in ("", "off", "none"):
         return []
-    return [parse_int(part) for part in text.split(",") if part.strip()]
+
+    def ring_leds(descriptions: Sequence[DeviceDescription]) -> Spans:
+        return merged(spans_of(e.ring_leds) for d in descriptions for e in d.face.encoders
+                      if e.number == encoder)
+
+    return [_whole(f"ring {encoder} LED", part, ring_leds, "LEDS|off")
+            for part in text.split(",") if part.strip()]
 
 
 def _ring_leds(face: Face) -> list[int]:
@@ -682,7 +778,7 @@ def _ring_leds(face: Face) -> list[int]:
 
 
 @keypad.command("ring", epilog=f"Ring LEDs: {_per_model('keypad', _ring_leds)}.")
-@click.argument("encoder", type=int)
+@click.argument("encoder", type=ModelNumber("encoder", _encoders))
 @click.argument("leds", metavar="LEDS|off")
 @bus_options
 @node_id_option
@@ -695,7 +791,7 @@ def ring(target: Target, encoder: int, leds: str) -> None:
     blinkcan keypad ring 1 1,2,3
     blinkcan keypad ring 2 off
     """
-    chosen = _led_list(leds)
+    chosen = _led_list(leds, encoder)
     has_encoder = _encoder_check(encoder, "encoder rings")
 
     def check(descriptions: Sequence[DeviceDescription]) -> None:
@@ -713,10 +809,11 @@ def ring(target: Target, encoder: int, leds: str) -> None:
 
 
 @keypad.command("encoder")
-@click.argument("encoder", type=int)
-@click.option("--top", type=int, default=None,
+@click.argument("encoder", type=ModelNumber("encoder", _encoders))
+@click.option("--top", type=ModelNumber("TOP", _entries("encoder_{n}_top")), default=None,
               help="Store TOP: the counter stops at TOP clockwise and at 0 (0: it wraps).")
-@click.option("--counter", type=int, default=None,
+@click.option("--counter", type=ModelNumber("counter", _entries("encoder_{n}_ticks")),
+              default=None,
               help="Store the counter the encoder starts from at power-on.")
 @bus_options
 @node_id_option
@@ -780,19 +877,18 @@ def _object_check(name: str, value: str | None = None) -> Check:
             raise ValueError(f"{entry.label} ({entry.index:04X}h/{entry.subindex:02X}) is "
                              "read-only")
         entry = writable[0]
-        number: int | str = value if entry.data_type.is_string else _number(value)
+        number: int | str = value
+        if not entry.data_type.is_string:
+            try:
+                number = parse_int(value)
+            except click.BadParameter:
+                raise ValueError(f"{entry.label} ({entry.index:04X}h/{entry.subindex:02X}) "
+                                 f"takes {entry.describe_valid()}, not {value!r}") from None
         if not any(e.accepts(number) for e in writable):
             raise ValueError(f"{entry.label} ({entry.index:04X}h/{entry.subindex:02X}) takes "
                              f"{entry.describe_valid()}, not {value}")
 
     return check
-
-
-def _number(text: str) -> int:
-    try:
-        return parse_int(text)
-    except click.BadParameter as error:
-        raise ValueError(error.message) from None
 
 
 def _entry(device: Any, name: str) -> ObjectEntry:

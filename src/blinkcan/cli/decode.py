@@ -13,6 +13,7 @@ import click
 
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.cli.clock import ABSOLUTE, iso_utc
+from blinkcan.cli.whole import Whole
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.decoder import encode_json
 from blinkcan.decode.j1939 import is_j1939_node, j1939_node, parse_j1939_node
@@ -98,7 +99,7 @@ DEVICE_HELP = ("Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=k
               help="Decode the logs (files or folders) into the Parquet dataset OUT (a folder "
                    "or an fsspec URL): a row per event, by model and date. Needs "
                    "blinkcan[fleet].")
-@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1,
+@click.option("-j", "--jobs", type=Whole(1, 256), default=1,
               help="With --parquet: files decoded at once, on local processes.")
 @click.option("--force", is_flag=True,
               help="With --parquet: decode again files already decoded by this version.")

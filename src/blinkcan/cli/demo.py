@@ -275,7 +275,7 @@ def _until_interrupted() -> None:
 
 
 @click.command("demo")
-@click.option("--pause", type=Seconds(), default=0.6, show_default=True,
+@click.option("--pause", type=Seconds(maximum=60.0), default=0.6, show_default=True,
               help="Seconds between the scripted steps.")
 @click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
               metavar="[HOST:PORT]", help="Serve the front panel too, and keep running.")

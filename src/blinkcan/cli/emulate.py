@@ -168,7 +168,7 @@ def _free_node_id(near: int, taken: set[int]) -> int:
 @click.option("--quirks", type=click.Choice(["firmware", "cia301"]), default="firmware",
               show_default=True,
               help="Reproduce the manuals' firmware quirks, or be CiA 301-clean.")
-@click.option("--response-delay", type=Seconds(), default=0.0,
+@click.option("--response-delay", type=Seconds(maximum=10.0), default=0.0,
               show_default=True,
               help="Seconds between a request and the reply (real keypads drop overlapping SDO).")
 @click.option("--low-side", default="", metavar="PINS",

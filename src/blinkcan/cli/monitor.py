@@ -26,6 +26,7 @@ from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.decode import DEVICE_HELP, assumed_text, other_event, parse_devices
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.cli.seconds import Factor, Seconds
+from blinkcan.cli.whole import Whole
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.decode.view import BusView
@@ -104,7 +105,7 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
                    "once).")
 @click.option("--duration", type=Seconds(), default=None,
               help="Stop after this many seconds.")
-@click.option("--rows", type=click.IntRange(min=1), default=15, show_default=True,
+@click.option("--rows", type=Whole(1, 1000), default=15, show_default=True,
               help="Events shown (repeated heartbeats fold into one row).")
 @ABSOLUTE
 @bus_options

@@ -18,6 +18,7 @@ import click
 
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_node_id
 from blinkcan.cli.seconds import Seconds
+from blinkcan.cli.whole import NegativeArguments
 from blinkcan.protocol.cob import HEARTBEAT, split_cob_id
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
 from blinkcan.runtime import to_frame, to_message
@@ -40,7 +41,10 @@ def parse_target(text: str) -> int:
     """A node id 1..127, or 0 / ``all`` for every node (broadcast)."""
     if text.strip().lower() in ("all", "0", "0x0", "0x00", "00h", "0h"):
         return 0
-    return parse_node_id(text)
+    try:
+        return parse_node_id(text)
+    except click.BadParameter as error:
+        raise click.BadParameter(f"{error.message}, or all", param_hint="NODE") from None
 
 
 @click.group("nmt")
@@ -49,10 +53,13 @@ def command() -> None:
     """NMT commands (CiA 301) to a node, or to all of them with NODE = all."""
 
 
+command.command_class = NegativeArguments  # ``nmt start -1``: a NODE out of range
+
+
 def _nmt_command(name: str, code: NmtCommand, words: str) -> None:
     @command.command(name, help=f"NMT {words} to NODE (1..127, or all).")
     @click.argument("node")
-    @click.option("--listen", type=Seconds(), default=0.5, show_default=True,
+    @click.option("--listen", type=Seconds(maximum=3600.0), default=0.5, show_default=True,
                   help="Seconds to listen for the node's boot-up and heartbeat afterwards.")
     @bus_options
     def send(node: str, listen: float) -> None:

@@ -65,6 +65,7 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
     start = time.monotonic()
     frames = 0
     counts = {"decoded": 0, "skipped": 0, "failed": 0}
+    again = 0  # decoded again: files of theirs were gone from the dataset
     progress = _progress_bar(total) if sys.stderr.isatty() else None
     running: contextlib.AbstractContextManager[object] = progress if progress is not None else \
         contextlib.nullcontext()
@@ -87,8 +88,12 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
         show()
 
     def on_result(result: FileResult) -> None:
-        nonlocal frames
+        nonlocal frames, again
         counts[result.status] += 1
+        if result.missing:  # nothing a user stored is lost silently: say it is back
+            again += 1
+            say(f"{result.source}: decoded again, {len(result.missing)} of its files were "
+                f"gone from the dataset: {', '.join(result.missing)}")
         if result.status == "failed":
             say(f"cannot decode {result.source}: {result.error}")
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
@@ -107,8 +112,10 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
     skipped = f", {counts['skipped']} already decoded (--force decodes again)" \
         if counts["skipped"] else ""
     decoded = counts["decoded"]
+    restored = f", {again} of them again as files of theirs were gone from the dataset" \
+        if again else ""
     click.echo(f"{decoded} file{'' if decoded == 1 else 's'} decoded to {out} ({frames:,} "
-               f"frames in {elapsed:.1f} s){skipped}", err=True)
+               f"frames in {elapsed:.1f} s){restored}{skipped}", err=True)
     if counts["failed"]:
         raise click.ClickException(f"{counts['failed']} of {total} files could not be decoded "
                                    "(named above); the others are in the dataset")

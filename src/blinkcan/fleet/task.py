@@ -10,7 +10,9 @@ Whole or nothing, and never twice:
 - a task that finds a journal (its predecessor died while renaming) removes what the journal
   names first, and the attempts of dead predecessors (their temporary folders);
 - a file whose manifest matches its size, mtime, blinkcan version and decoding settings is
-  skipped unless ``force``.
+  skipped unless ``force``, and only while every output its manifest names is there: a
+  partition file deleted from the dataset is decoded again (``FileResult.missing`` names
+  it), its rows never silently lost.
 
 ``<key>`` is a hash of the source's absolute path, so one source always writes the same names.
 A file that cannot be read is a failed result with the reason, never an exception; a line
@@ -67,6 +69,9 @@ class FileResult:
     #: text), and the first few of them named
     unreadable: int = 0
     unreadable_lines: tuple[str, ...] = ()
+    #: outputs of an earlier decoding that were gone from the dataset (deleted since): the
+    #: file was decoded again for them
+    missing: tuple[str, ...] = ()
 
 
 def source_key(source: str) -> str:
@@ -167,8 +172,12 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
                 "blinkcan": __version__, "settings": settings}
     store.recover()
     old = store.read_json(store.manifest)
-    if not force and old is not None and all(old.get(k) == v for k, v in identity.items()):
-        outputs = old.get("outputs", [])
+    decoded_before = not force and old is not None and \
+        all(old.get(k) == v for k, v in identity.items())
+    outputs = old.get("outputs", []) if old is not None else []
+    missing = tuple(o for o in outputs if not store.fs.exists(f"{store.root}/{o}")) \
+        if decoded_before else ()
+    if old is not None and decoded_before and not missing:
         return FileResult(path, "skipped", int(old.get("frames", 0)), int(old.get("rows", 0)),
                           tuple(outputs), cut_off=old.get("cut_off"),
                           unreadable=int(old.get("unreadable", 0)),
@@ -192,7 +201,8 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
                 "unreadable": unreadable.count, "unreadable_lines": named, "cut_off": cut_off}
     store.commit(attempt, outputs, manifest)
     return FileResult(path, "decoded", frames, writer.rows, tuple(outputs), cut_off=cut_off,
-                      unreadable=unreadable.count, unreadable_lines=tuple(named))
+                      unreadable=unreadable.count, unreadable_lines=tuple(named),
+                      missing=missing)
 
 
 def _decode_into(writer: PartitionWriter, path: str, devices: ModelsByNode | None,

@@ -8,13 +8,17 @@ to ``on_key`` and the like still run on the bus thread, as with the blocking dri
 
 A cancelled call (``asyncio.wait_for``'s timeout) cancels that call only: the driver and its
 other calls go on. What the worker thread was sending still completes (as an SDO timeout's
-write may still have been applied); only the caller stops waiting for it.
+write may still have been applied); only the caller stops waiting for it. The driver's picture
+follows what the device confirms, whoever waits: a cancelled ``off(4)`` the Keybox acknowledges
+later makes ``actual[4]`` "off" then, never before; one whose acknowledge never comes is read
+back (``Keybox``). A failure nobody awaits any more is logged, never left unretrieved.
 """
 
 from __future__ import annotations
 
 import asyncio
 import functools
+import logging
 from collections.abc import AsyncIterator, Callable
 from typing import Any, Generic, TypeVar
 
@@ -26,6 +30,31 @@ from blinkcan.host.scan import Found, scan
 
 E = TypeVar("E")
 D = TypeVar("D", bound=Device)
+T = TypeVar("T")
+
+log = logging.getLogger(__name__)
+
+
+async def _in_worker(work: Callable[[], T], what: str) -> T:
+    """``work()`` in a worker thread. Cancelling the caller cancels its wait only: the work
+    runs to its end, and a failure nobody awaits any more is logged (else it would vanish)."""
+    running = asyncio.ensure_future(asyncio.to_thread(work))
+    try:
+        return await asyncio.shield(running)
+    except asyncio.CancelledError:
+        running.add_done_callback(functools.partial(_report_unawaited, what))
+        raise
+
+
+def _call_text(name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> str:
+    """``off(4)``: a call as its caller wrote it, for the log."""
+    shown = [repr(arg) for arg in args] + [f"{key}={value!r}" for key, value in kwargs.items()]
+    return f"{name}({', '.join(shown)})"
+
+
+def _report_unawaited(what: str, done: asyncio.Future[Any]) -> None:
+    if not done.cancelled() and done.exception() is not None:
+        log.warning("%s, cancelled by its caller, failed afterwards: %s", what, done.exception())
 
 
 def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
@@ -119,7 +148,7 @@ class AsyncDriver(Generic[D]):
 
             async def read() -> Any:
                 await self.open()
-                return await asyncio.to_thread(getattr, self._device, name)
+                return await _in_worker(functools.partial(getattr, self._device, name), name)
 
             return read()
         if callable(kind) and not name.startswith("on_"):
@@ -127,7 +156,9 @@ class AsyncDriver(Generic[D]):
             @functools.wraps(kind)
             async def call(*args: Any, **kwargs: Any) -> Any:
                 await self.open()
-                return await asyncio.to_thread(getattr(self._device, name), *args, **kwargs)
+                return await _in_worker(
+                    functools.partial(getattr(self._device, name), *args, **kwargs),
+                    _call_text(name, args, kwargs))
 
             return call
         return getattr(self.device, name)  # callbacks register at once; values as they are

@@ -85,7 +85,7 @@ def milliseconds(what: str, period: float) -> int:
 @dataclass(frozen=True)
 class Identity:
     node_id: int
-    model: str
+    model: str  # the registered model, as its description names it (what --model takes)
     device_type: int
     vendor_id: int
     device_name: str

@@ -31,6 +31,7 @@ from blinkcan.devices.keypad_j1939 import (
     channels_colour,
     command,
 )
+from blinkcan.devices.registry import models
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import BOOT_UP, NoDeviceError
 from blinkcan.protocol.frame import Frame
@@ -88,7 +89,7 @@ class J1939Identity:
     heartbeat (§18; None when none was heard within ``heartbeat_wait`` seconds)."""
 
     address: int
-    model: str
+    model: str  # the registered model, as its description names it (as Identity.model)
     software_version: str
     name: str | None
     claim: str
@@ -288,7 +289,9 @@ class J1939KeypadLink:
 @dataclass(frozen=True)
 class FoundJ1939:
     """A keypad in J1939 mode that answered: its source address, software revision (§11) and,
-    if it claimed its address (§20), its NAME as hex."""
+    if it claimed its address (§20), its NAME as hex. ``model``: the registered model (as
+    ``Found.model``), when one registered model has a J1939 mode (J1939 tells no model id);
+    None when several have."""
 
     address: int
     software_revision: str | None = None
@@ -296,6 +299,13 @@ class FoundJ1939:
     #: keypads that told their revision from this address: more than one share it (a mistake
     #: address claim, when on, resolves by moving one, J-5)
     answers: int = 1
+    model: str | None = None
+
+
+def j1939_models() -> list[str]:
+    """The registered models (their names) with a J1939 mode, from their descriptions."""
+    return [found.name for found in models()
+            if any("j1939" in found.description(g).features for g in found.generations)]
 
 
 def scan_j1939(bus: HostBus | can.BusABC, listen: float = 0.3,
@@ -327,5 +337,7 @@ def scan_j1939(bus: HostBus | can.BusABC, listen: float = 0.3,
         remove()
         host.release()
     # a claim alone may be another J1939 node: a keypad is one that told its revision
-    return [FoundJ1939(address, revisions[address], names.get(address), answers[address])
+    having = j1939_models()
+    model = having[0] if len(having) == 1 else None
+    return [FoundJ1939(address, revisions[address], names.get(address), answers[address], model)
             for address in sorted(revisions)]

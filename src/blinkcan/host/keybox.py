@@ -44,7 +44,7 @@ from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_mask, item_numbers
 from blinkcan.protocol.nmt import NmtCommand, NmtState
-from blinkcan.protocol.sdo_client import SdoError
+from blinkcan.protocol.sdo_client import SdoError, SdoTimeoutError
 
 log = logging.getLogger(__name__)
 
@@ -162,7 +162,7 @@ class Keybox(Device):
         with self._command_lock:
             if code != PIN_HIGH:
                 self._forget({pin})
-            self.write(f"pin_{pin}_state", code)
+            self._command(f"pin_{pin}_state", code)
             self._acknowledged({pin} if code == PIN_HIGH else set(),
                                {pin} if code == PIN_OFF else set(),
                                {pin} if code == PIN_RESET else set())
@@ -178,11 +178,30 @@ class Keybox(Device):
     def _write_masks(self, high_mask: int, off_mask: int) -> None:
         if off_mask:
             self._forget(_pins(off_mask))
-            self.write("output_off_mask", off_mask)
+            self._command("output_off_mask", off_mask)
             self._acknowledged(set(), _pins(off_mask), set())
         if high_mask:
-            self.write("output_high_mask", high_mask)
+            self._command("output_high_mask", high_mask)
             self._acknowledged(_pins(high_mask), set(), set())
+
+    def _command(self, name: str, value: int) -> None:
+        """Write an output command. One that timed out may have been applied
+        (``SdoTimeoutError.uncertain``), and its caller may be gone (an asyncio call cancelled
+        meanwhile): ``actual`` keeps what the Keybox last showed, and the driver reads the
+        states back in the background, so ``actual`` follows the Keybox once it answers."""
+        try:
+            self.write(name, value)
+        except SdoTimeoutError as error:
+            if error.uncertain:
+                self.host.spawn(self._confirm_outputs, ("confirm outputs", self.node_id))
+            raise
+
+    def _confirm_outputs(self) -> None:
+        """Best effort: a read that fails (device away, bus closing) is logged and skipped."""
+        try:
+            self.states()
+        except (SdoError, RuntimeError, TimeoutError) as error:
+            log.debug("reading back the outputs of node %02Xh skipped: %s", self.node_id, error)
 
     def _forget(self, pins: AbstractSet[int]) -> None:
         """Pins the application is switching OFF (or RESET, or into PWM) leave ``commanded``
@@ -221,7 +240,7 @@ class Keybox(Device):
         mask = sum(PWM_BITS[pin] for pin in chosen)
         with self._command_lock:
             self._forget(chosen)
-            self.write("pwm", pwm_register(mask, duty))
+            self._command("pwm", pwm_register(mask, duty))
             self.host.run(lambda: self._pwm_acknowledged(frozenset(chosen), duty))
 
     def _pwm_acknowledged(self, chosen: frozenset[int], duty: int) -> None:

@@ -604,7 +604,7 @@ class Keypad(Device):
         NAME and claim (§20), heartbeat (§18). (Typed Any: which one depends on the protocol
         the keypad speaks now.)"""
         if self.j1939 is not None:
-            return self.j1939.identity(self.description.title, self.sdo.timeout)
+            return self.j1939.identity(self.description.model, self.sdo.timeout)
         return super().identity()
 
     def set_node_id(self, node_id: int, *, confirm: bool = False) -> None:
