@@ -271,3 +271,28 @@ def test_a_compressed_candump_cut_inside_its_first_128_kib_says_what_it_kept(
     assert times[:-1] == [float(line[1:18]) for line in lines[: len(times) - 1]]
     assert len(times) > 100
     assert str(last).endswith("cut short")
+
+
+def test_a_corrupt_blf_container_costs_its_own_frames_only(tmp_path: Path) -> None:
+    path = tmp_path / "capture.blf"
+    count = 12_000  # several of python-can's log containers (128 KiB of objects each)
+    with FrameWriter(path) as writer:
+        for n in range(count):
+            writer.write(1_700_000_000 + n / 100, Frame(0x195, bytes([n % 256, n // 256, 7])))
+    data = bytearray(path.read_bytes())
+    containers = [at for at in range(len(data)) if data[at:at + 4] == b"LOBJ"]
+    assert len(containers) >= 4
+    middle = (containers[1] + containers[2]) // 2  # inside the second container's data
+    data[middle:middle + 8] = bytes(8)
+    path.write_bytes(bytes(data))
+    for reader, items in _read_everywhere(path).items():
+        numbers = _payloads(items)
+        [(position, corrupt)] = [(n, item) for n, item in enumerate(items)
+                                 if isinstance(item, UnreadableLine)]
+        assert isinstance(corrupt, UnreadableLine)
+        assert str(corrupt).startswith(f"byte {containers[2]}: the log container before this "
+                                       "byte is corrupt"), reader
+        assert numbers[:position] == list(range(position)), reader  # the first container's
+        lost = numbers[position] - position  # the second container's, and one split after it
+        assert 0 < lost < count // 4, reader
+        assert numbers[position:] == list(range(position + lost, count)), reader

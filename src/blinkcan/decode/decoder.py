@@ -110,7 +110,8 @@ def _encode(document: dict[str, Any]) -> str:
     """Compact JSON; orjson (the same text, ten times faster), the standard encoder for what
     orjson refuses; a document's time (its first field) as :func:`_stamp` writes it."""
     time = document.get("time")
-    if type(time) is float and not 1e-5 <= abs(time) < 1e16 and next(iter(document)) == "time":
+    if type(time) is float and not 1e-5 <= time < 1e16 and not -1e16 < time <= -1e-5 \
+            and next(iter(document)) == "time":
         rest = _encode({**document, "time": 0})
         return _TIME_FIELD + json_time(time) + rest[_ZERO_TIME:]
     try:

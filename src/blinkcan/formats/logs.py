@@ -22,6 +22,7 @@ flush (:class:`FrameWriter`).
 from __future__ import annotations
 
 import contextlib
+import copy
 import gzip
 import io
 import math
@@ -147,15 +148,81 @@ def _messages(source: LogSource) -> Iterator[can.Message | UnreadableLine]:
         return
     suffix = source.suffix
     try:
-        reader = can.LogReader(str(source.path))
+        reader = _blf_reader()(source.path) if suffix == ".blf" else \
+            can.LogReader(str(source.path))
     except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
         try:
+            if suffix == ".blf":
+                yield from _blf_messages(reader)
+                return
             for message in reader:
                 yield _as_written(message, suffix)
         except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _blf_reader() -> type[can.io.generic.MessageReader]:
+    from can.io.blf import BLFReader  # noqa: PLC0415
+
+    class _BlfReader(BLFReader):
+        """python-can's BLF reader, which can start again after a container it lost
+        (``resync``): at the first object that starts in the next one."""
+
+        resync = False
+
+        def _parse_container(self, data: bytes) -> Iterator[can.Message]:
+            if self.resync:  # the object split across the two is lost
+                self.resync = False
+                self._tail = b""
+                start = data.find(b"LOBJ")
+                data = data[start:] if start >= 0 else b""
+            yield from super()._parse_container(data)
+
+    return _BlfReader
+
+
+def _blf_messages(reader: can.io.generic.MessageReader
+                  ) -> Iterator[can.Message | UnreadableLine]:
+    """A BLF log's messages; a log container whose data is corrupt (zlib's error, or an
+    object in it that is none) costs its own frames only (issue 23), an
+    :class:`UnreadableLine` (``unit`` "byte": where the next container starts) in their
+    place. python-can's reader has read the whole container when it fails, so a copy of it
+    reads on from the next one (an object split across the two is lost with it). A second
+    error before a frame is read again (an object header that is none: the containers after
+    it cannot be found) ends the reading. A log none of whose containers can be read is no
+    BLF log."""
+    from can.io.blf import BLFParseError, BLFReader  # noqa: PLC0415
+
+    assert isinstance(reader, BLFReader)  # _blf_reader's
+    messages = iter(reader)
+    frames = 0
+    corrupt: list[UnreadableLine] = []  # since the last frame read
+    while True:
+        try:
+            message = next(messages, None)
+        except (zlib.error, BLFParseError) as error:
+            if corrupt:
+                message = None  # found nothing after the last: the rest cannot be framed
+            else:
+                corrupt.append(UnreadableLine(
+                    reader.file.tell(), "", "the log container before this byte is corrupt "
+                    f"({_reason(error)}): its frames are lost", unit="byte"))
+                reader = copy.copy(reader)
+                reader.resync = True  # type: ignore[attr-defined]  # _blf_reader's
+                messages = iter(reader)
+                continue
+        if message is None:
+            if corrupt and not frames:
+                raise LogError(f"{corrupt[0]}") from None
+            yield from corrupt
+            return
+        if corrupt:
+            yield from corrupt
+            corrupt.clear()
+        frames += 1
+        yield _as_written(message, ".blf")
 
 
 @contextlib.contextmanager

@@ -64,10 +64,17 @@ class _Feed:
         if self._resume:
             self._resume = False
             return _RESUME
-        for line in self._lines:
-            self.number += 1
-            self.last = line
-            return line
+        while True:
+            for line in self._lines:
+                self.number += 1
+                self.last = line
+                return line
+            block = self._next_block()
+            self.cut_off = type(block) is UnterminatedLine
+            self._lines = iter(block)
+
+    def _next_block(self) -> list[str]:
+        """The next block of lines a reader is handed (StopIteration at the end)."""
         try:
             block = next(self._blocks)
             while type(block) is OverlongLine or (
@@ -80,9 +87,7 @@ class _Feed:
         except BaseException as error:
             self.failed = error
             raise
-        self.cut_off = type(block) is UnterminatedLine
-        self._lines = iter(block)
-        return next(self)
+        return block
 
     def resume(self) -> None:
         """The next reader starts: hand it :data:`_RESUME` first."""
