@@ -20,16 +20,20 @@ from tests.fleet.logs import fleet_traffic, write_log
 from tests.formats.test_log_sources import CANDUMP, _no_newline
 
 
-def test_a_candump_log_without_newlines_is_refused_in_bounded_memory(tmp_path: Path) -> None:
-    path = _no_newline(tmp_path / "huge.log", 24 << 20)
+def _peak_to_refuse(path: Path) -> int:
+    """Bytes allocated at most while the fleet's reader refuses ``path``'s first line."""
     tracemalloc.start()
     try:
         with pytest.raises(ValueError, match=f"^line 1 is over {MAX_LINE} bytes: "
                                              "not a candump log$"):
             list(read_columns(path))
-        peak = tracemalloc.get_traced_memory()[1]
+        return tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
+
+
+def test_a_candump_log_without_newlines_is_refused_in_bounded_memory(tmp_path: Path) -> None:
+    peak = _peak_to_refuse(_no_newline(tmp_path / "huge.log", 24 << 20))
     assert peak < 2 << 20, f"{peak:,} bytes to refuse a 24 MB line"
 
 
@@ -56,14 +60,7 @@ def test_a_compressed_log_of_zeros_is_refused_in_bounded_memory(tmp_path: Path,
                                                                 suffix: str) -> None:
     path = _zeros(tmp_path / f"bomb.log{suffix}", 64 << 20)
     assert path.stat().st_size < 1 << 20
-    tracemalloc.start()
-    try:
-        with pytest.raises(ValueError, match=f"^line 1 is over {MAX_LINE} bytes: "
-                                             "not a candump log$"):
-            list(read_columns(path))
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    peak = _peak_to_refuse(path)
     assert peak < 4 << 20, f"{peak:,} bytes to refuse 64 MiB of zeros in {suffix}"
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import gzip
 import struct
 import tracemalloc
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
@@ -74,17 +74,19 @@ def _read_everywhere(path: Path) -> dict[str, list[object]]:
     }
 
 
-@pytest.mark.parametrize("where", WHERE)
-@pytest.mark.parametrize("suffix", TEXT_FORMATS)
-def test_a_bad_frame_line_is_named_in_its_place_and_reading_goes_on(
-        tmp_path: Path, suffix: str, where: str) -> None:
+def _one_line_replaced(tmp_path: Path, suffix: str, where: str,
+                       replace: Callable[..., str], *extra: str
+                       ) -> tuple[int, str, dict[str, UnreadableLine]]:
+    """A capture with the frame line at ``where`` replaced by ``replace(line, *extra)``, read by
+    every reader: each must read every other frame and that line as one unreadable item in
+    its place. Returns the line's index, its new text and each reader's unreadable item."""
     path, lines, frame_lines = _capture(tmp_path, suffix)
     index = _at(frame_lines, where)
     line_index = frame_lines[index]
-    bad = _broken(lines[line_index], suffix)
-    lines[line_index] = bad
+    new = lines[line_index] = replace(lines[line_index], *extra)
     path.write_text("\n".join(lines))
     expected = [n for n in range(COUNT) if n != index]
+    found: dict[str, UnreadableLine] = {}
     for reader, items in _read_everywhere(path).items():
         assert _payloads(items) == expected, reader
         [(position, unreadable)] = [(n, item) for n, item in enumerate(items)
@@ -92,6 +94,16 @@ def test_a_bad_frame_line_is_named_in_its_place_and_reading_goes_on(
         assert position == index, reader
         assert isinstance(unreadable, UnreadableLine)
         assert unreadable.number == line_index + 1, reader
+        found[reader] = unreadable
+    return line_index, new, found
+
+
+@pytest.mark.parametrize("where", WHERE)
+@pytest.mark.parametrize("suffix", TEXT_FORMATS)
+def test_a_bad_frame_line_is_named_in_its_place_and_reading_goes_on(
+        tmp_path: Path, suffix: str, where: str) -> None:
+    line_index, bad, found = _one_line_replaced(tmp_path, suffix, where, _broken, suffix)
+    for reader, unreadable in found.items():
         assert unreadable.text == bad.rstrip("\r"), reader
         assert str(unreadable).startswith(f"line {line_index + 1}: "), reader
 
@@ -100,20 +112,9 @@ def test_a_bad_frame_line_is_named_in_its_place_and_reading_goes_on(
 @pytest.mark.parametrize("suffix", TEXT_FORMATS)
 def test_a_line_over_max_line_is_one_unreadable_line_and_reading_goes_on(
         tmp_path: Path, suffix: str, where: str) -> None:
-    path, lines, frame_lines = _capture(tmp_path, suffix)
-    index = _at(frame_lines, where)
-    line_index = frame_lines[index]
-    long = lines[line_index] + "0" * (MAX_LINE * 50)  # 200 KiB: over three read chunks
-    lines[line_index] = long
-    path.write_text("\n".join(lines))
-    expected = [n for n in range(COUNT) if n != index]
-    for reader, items in _read_everywhere(path).items():
-        assert _payloads(items) == expected, reader
-        [(position, unreadable)] = [(n, item) for n, item in enumerate(items)
-                                    if isinstance(item, UnreadableLine)]
-        assert position == index, reader
-        assert isinstance(unreadable, UnreadableLine)
-        assert unreadable.number == line_index + 1, reader
+    _, long, found = _one_line_replaced(  # 200 KiB: over three read chunks
+        tmp_path, suffix, where, lambda line: line + "0" * (MAX_LINE * 50))
+    for reader, unreadable in found.items():
         assert unreadable.text == long[:MAX_LINE], reader  # a bounded prefix is kept
         assert f"is {len(long):,} characters long, over the {MAX_LINE}" in str(unreadable)
 
