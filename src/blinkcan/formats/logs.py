@@ -388,6 +388,7 @@ class FrameWriter:
         carries = CARRIES.get(suffix)
         self._cannot = carries.dropped if carries is not None else frozenset()
         self.losses = Losses(suffix)
+        self._numbered = self.losses.carries.channel == "number"
         self._unflushed = 0
         self.count = 0
         self.skipped: Counter[str] = Counter()
@@ -453,6 +454,11 @@ class FrameWriter:
             return
         self.count += 1
         self.losses.count(message, describe_frame)
+        if self._numbered and message.channel is not None:
+            # canN as N; any other name on the default channel (python-can's writers took
+            # a name's trailing digits: bench-12345678 as channel 12345678, past BLF's 16
+            # bits), as the losses said
+            message.channel = self.losses.number(message.channel)
         if self._pcap is not None:
             self._pcap.write(message)
         else:
