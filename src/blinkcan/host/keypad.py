@@ -126,7 +126,11 @@ class Keypad(Device):
     def connect(cls, bus: HostBus | can.BusABC, node_id: int = 0x15, **options: Any) -> Keypad:
         """The driver of whichever keypad answers at ``node_id``: its 100Bh model id names the
         model (two models share 1000h, MT M59). :class:`WrongDeviceError` for a device that is
-        no keypad, :class:`NoDeviceError` when nothing answers."""
+        no keypad, :class:`NoDeviceError` when nothing answers. A keypad in J1939 mode
+        (``protocol="j1939"``, ``address=``) answers no SDO and tells no model id (§11: its
+        software revision): the driver of the model with a J1939 mode confirms it as usual."""
+        if options.get("protocol", "canopen") != "canopen":
+            return cls(bus, node_id, **options)
         host = HostBus.attach(bus)
         try:
             raw = host.sdo(check_node_id(node_id), options.get("sdo_timeout", 0.5), 1).upload(
