@@ -22,6 +22,7 @@ import click
 from blinkcan import __version__
 from blinkcan.cli.answers import DeclinedError
 from blinkcan.cli.bus_options import bus_options, spread_bus_kwargs
+from blinkcan.cli.collector import collector_paused
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +63,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 def load_subcommand(name: str) -> click.Command:
     """The click command of a registered subcommand, its module imported now."""
     module, _, attribute = SUBCOMMANDS[name][0].partition(":")
-    command = getattr(import_module(module), attribute)
+    with collector_paused():  # start-up: a module's objects are no garbage
+        command = getattr(import_module(module), attribute)
     if not isinstance(command, click.Command):
         raise TypeError(f"{SUBCOMMANDS[name][0]} is a {type(command).__name__}, not a command")
     return command
