@@ -10,7 +10,6 @@ import json
 import re
 import subprocess
 import sys
-import tomllib
 from importlib.metadata import packages_distributions
 from pathlib import Path
 
@@ -19,10 +18,18 @@ ROOT = Path(__file__).resolve().parents[2]
 ENTRY_MODULES = ("blinkcan.fleet.run", "blinkcan.fleet.query", "blinkcan.cli.parquet")
 
 
+def _requirements(key: str) -> list[str]:
+    """The requirements of a list in pyproject.toml (``dependencies = [...]``; Python 3.10
+    has no tomllib)."""
+    text = (ROOT / "pyproject.toml").read_text()
+    block = re.search(rf"^{key} = \[(.*?)^\]", text, re.MULTILINE | re.DOTALL)
+    assert block is not None, key
+    return re.findall(r'^\s*"([^"]+)"', block.group(1), re.MULTILINE)
+
+
 def _declared() -> set[str]:
     """The distributions the core and the [fleet] extra name (normalised)."""
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    names = [*project["dependencies"], *project["optional-dependencies"]["fleet"]]
+    names = [*_requirements("dependencies"), *_requirements("fleet")]
     return {re.split(r"[\s<>=!~\[;]", name, maxsplit=1)[0].lower().replace("_", "-")
             for name in names}
 
