@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import datetime
 import math
-from itertools import accumulate
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
@@ -43,12 +44,19 @@ _TIME = SCHEMA.field("time").type
 _DETAILS = pa.struct([SCHEMA.field(name) for name in Detail._fields])
 #: columns of a value per frame (a dictionary of them costs time and space for nothing)
 _UNIQUE = ("time", "data")
+#: columns whose min and max in a row group select nothing (a group holds every state and
+#: colour of its keys and pins; texts and data are per frame): no statistics, which cost
+#: a comparison per row (issue 23: CPU per frame)
+_UNSELECTIVE = ("state", "colour", "text", "data")
 #: Parquet's dictionary encoding where values repeat; min/max statistics (which readers use
-#: to skip row groups) on all but the texts and data, whose min and max select nothing
+#: to skip row groups and files: time, source, ids, kinds, keys) on the others
 _PARQUET_OPTIONS = {
     "use_dictionary": [name for name in SCHEMA.names if name not in _UNIQUE],
-    "write_statistics": [name for name in SCHEMA.names if name not in ("text", "data")],
+    "write_statistics": [name for name in SCHEMA.names if name not in _UNSELECTIVE],
 }
+#: microseconds in a second, typed: a bare float would make Arrow infer its type,
+#: which imports dateutil (start-up)
+_MICROS = pa.scalar(1_000_000.0, pa.float64())
 
 
 def partition_path(model: str, date: str) -> str:
@@ -100,7 +108,7 @@ class PartitionWriter:
             day = int(low // _DAY_S)
             if low >= _EARLIEST_S and high < _LATEST_S and \
                     day * _DAY_S <= low and high < (day + 1) * _DAY_S:
-                micros = pc.round(pc.multiply(times, 1_000_000.0), round_mode="half_to_even")
+                micros = pc.round(pc.multiply(times, _MICROS), round_mode="half_to_even")
                 return pc.cast(pc.cast(micros, pa.int64()), _TIME), self._date(day)
         pairs = [self.time_and_date(s) for s in times.to_pylist()]
         return pa.array([p[0] for p in pairs], _TIME), [p[1] for p in pairs]
@@ -114,11 +122,13 @@ class PartitionWriter:
         frames = len(segment)
         if not frames:
             return
-        index: pa.Array | None = None  # the frame of each row, where a frame has several
         rows = segment.rows
+        # the frame of each row, where a frame has several (numpy: no Python list of them)
+        index: np.ndarray[Any, np.dtype[np.int32]] | None = None
         if rows != frames:
-            offsets = pa.array(list(accumulate(segment.frame_rows(), initial=0)), pa.int32())
-            index = pc.list_parent_indices(pa.ListArray.from_arrays(offsets, pa.nulls(rows)))
+            counts = np.ones(frames, np.int32)
+            counts[segment.multiple] = segment.counts
+            index = np.repeat(np.arange(frames, dtype=np.int32), counts)
         seconds, channels, ids, extended, data = segment.frame_arrays()
         micros, dates = self.times_and_dates(seconds)
         frame_columns = {
@@ -129,20 +139,16 @@ class PartitionWriter:
         details = pa.array(segment.codes, pa.int32())  # each row's number in segment.details
         partitions, codes = _partitions(segment.models, dates)
         sizes = [rows]
+        take: pa.Array | None = None if index is None else pa.array(index)
         if len(partitions) > 1:  # the rows by partition (a stable sort: each keeps its order)
-            row_codes = pa.array(codes, pa.int32())
-            if index is not None:
-                row_codes = row_codes.take(index)
-            order = pc.sort_indices(row_codes)
-            counts = pc.value_counts(row_codes)
-            found = dict(zip(counts.field("values").to_pylist(),
-                             counts.field("counts").to_pylist(), strict=True))
-            sizes = [found[code] for code in range(len(partitions))]
-            index = order if index is None else index.take(order)
-            details = details.take(order)
+            row_codes = codes if index is None else codes[index]
+            order = np.argsort(row_codes, kind="stable")  # a radix sort for 16-bit codes
+            sizes = np.bincount(row_codes, minlength=len(partitions)).tolist()
+            take = pa.array(order if index is None else index[order])
+            details = details.take(pa.array(order))
         row_details = _detail_struct(segment.details).take(details)
-        if index is not None:  # each row's frame columns: one take per column
-            frame_columns = {name: array.take(index) for name, array in frame_columns.items()}
+        if take is not None:  # each row's frame columns: one take per column
+            frame_columns = {name: array.take(take) for name, array in frame_columns.items()}
         arrays = [frame_columns[name] if name in frame_columns else row_details.field(name)
                   for name in _COLUMNS]
         arrays.insert(_SOURCE, pa.repeat(pa.scalar(self._source, pa.string()), rows))
@@ -197,17 +203,19 @@ def _detail_struct(details: list[Detail]) -> pa.StructArray:
 
 
 def _partitions(models: list[str | None], dates: str | list[str]
-                ) -> tuple[list[tuple[str, str]], list[int]]:
+                ) -> tuple[list[tuple[str, str]], np.ndarray[Any, np.dtype[np.signedinteger[Any]]]]:
     """The partitions of a segment's frames, in the order they first come, and each frame's
-    (its index in them)."""
-    keys: list[tuple[str | None, str]]
+    (its index in them: 16-bit where they are few, which numpy sorts by radix)."""
     if isinstance(dates, str):  # one date: the model says which (a lookup per frame)
         found = {model: (model or UNKNOWN, dates) for model in dict.fromkeys(models)}
         partitions = list(dict.fromkeys(found.values()))
         index = {partition: n for n, partition in enumerate(partitions)}
-        codes = {model: index[partition] for model, partition in found.items()}
-        return partitions, list(map(codes.__getitem__, models))
-    keys = list(zip(models, dates, strict=True))
-    partitions = list(dict.fromkeys((model or UNKNOWN, date) for model, date in keys))
-    index = {partition: n for n, partition in enumerate(partitions)}
-    return partitions, [index[model or UNKNOWN, date] for model, date in keys]
+        numbers = {model: index[partition] for model, partition in found.items()}
+        keys: Iterable[Any] = models
+        number: Callable[[Any], int] = numbers.__getitem__
+    else:
+        pairs = list(zip((model or UNKNOWN for model in models), dates, strict=True))
+        partitions = list(dict.fromkeys(pairs))
+        keys, number = pairs, {p: n for n, p in enumerate(partitions)}.__getitem__
+    kind = np.int16 if len(partitions) <= np.iinfo(np.int16).max else np.int32
+    return partitions, np.fromiter(map(number, keys), kind, len(models))
