@@ -289,7 +289,7 @@ def main(smoke: bool = False) -> None:
     print("SDO round trips: blinkcan (HostBus <-> twin in the Emulator) beside python-canopen "
           "(RemoteNode <-> LocalNode), same object dictionary, same run")
     _report("in one process (virtual bus)", in_one_process(count))
-    across = across_processes(count // 2)
+    across = across_processes(count)  # 24 blocks, as in one process: its ranges are wide
     if across is None:
         print("  across processes: udp_multicast is not available here (skipped)")
     else:

@@ -9,11 +9,15 @@ pure core (``protocol``, ``devices``, ``twin``) does no I/O and imports without 
 from __future__ import annotations
 
 from importlib import import_module
-from typing import TYPE_CHECKING, Any
 
 from blinkcan.errors import BlinkcanError
 
+#: typing is not imported: its import is the most of this package's (tens of milliseconds),
+#: before the command line's Ctrl-C handler is in place (cli/entry.py)
+TYPE_CHECKING = False
 if TYPE_CHECKING:
+    from typing import Any
+
     from blinkcan.host import Keybox, Keypad, scan
     from blinkcan.protocol import Frame
 

@@ -1,3 +1,3 @@
-from blinkcan.cli.main import main
+from blinkcan.cli.entry import main
 
 main()

@@ -97,3 +97,33 @@ def test_an_abort_is_any_command_specifier_4_frame() -> None:
     transfer.start()
     with pytest.raises(SdoAbortError, match="06020000h"):
         transfer.on_reply(bytes.fromhex("8108100000000206"))
+
+
+@pytest.mark.parametrize(("command", "size", "segment", "outcome"), [
+    (0x40, b"\x00\x00\x00\x00", b"\x01abcdefg", b"abcdefg"),  # no size stated: any length
+    (0x41, b"\x07\x00\x00\x00", b"\x01abcdefg", b"abcdefg"),  # 7 stated, 7 came
+    (0x41, b"\x05\x00\x00\x00", b"\x01abcdefg", "7 bytes, 5 announced"),
+    (0x4D, b"\x07\x00\x00\x00", b"\x01abcdefg", b"abcdefg"),  # n bits ignored while e is clear
+])
+def test_segmented_upload_opening(command: int, size: bytes, segment: bytes,
+                                  outcome: bytes | str) -> None:
+    """CiA 301 §7.2.4.3.6: an initiate upload response with e clear opens a segmented upload;
+    bytes 4-7 are its size only where s is set, and the segments must bring that many."""
+    upload = UploadTransfer(0x2300, 0)
+    upload.start()
+    assert upload.on_reply(bytes((command,)) + b"\x00\x23\x00" + size) == b"\x60" + bytes(7)
+    assert upload.size == (None if command & 0x01 == 0 else int.from_bytes(size, "little"))
+    if isinstance(outcome, str):
+        with pytest.raises(SdoProtocolError, match=outcome):
+            upload.on_reply(segment)
+        return
+    assert upload.on_reply(segment) is None
+    assert upload.done
+    assert upload.value == outcome
+
+
+def test_segmented_upload_opening_for_another_object_fails() -> None:
+    upload = UploadTransfer(0x2300, 0)
+    upload.start()
+    with pytest.raises(SdoProtocolError, match="reply for"):
+        upload.on_reply(b"\x41\x00\x24\x00\x07\x00\x00\x00")

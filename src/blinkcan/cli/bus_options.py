@@ -94,6 +94,36 @@ def spread_bus_kwargs(args: Sequence[str]) -> list[str]:
     return spread
 
 
+#: the bus options' names as a command line spells them -> their long names
+BUS_OPTION_NAMES = {"-i": "--interface", "--interface": "--interface", "-c": "--channel",
+                    "--channel": "--channel", "-b": "--bitrate", "--bitrate": "--bitrate",
+                    "--bus-kwargs": "--bus-kwargs"}
+
+
+def takes_bus_options(command: click.Command) -> bool:
+    """Whether ``command`` (or, for a group, its own options) takes the bus options."""
+    return any(param.name == "interface" for param in command.params)
+
+
+def given_bus_options(ctx: click.Context) -> list[str]:
+    """The bus options given so far on this command line (``-i/--interface``, ...)."""
+    given = _settings(ctx)
+    names = [f"--{name}" for name in ("interface", "channel", "bitrate") if name in given]
+    return names + (["--bus-kwargs"] if given["kwargs"] else [])
+
+
+def bus_option_in(args: Sequence[str]) -> str | None:
+    """The long name of the first of ``args`` (up to ``--``) that is a bus option (``-i``,
+    ``-iX``, ``--interface=X``: ``--interface``), or None."""
+    for arg in args:
+        if arg == "--":
+            return None
+        name = arg.partition("=")[0] if arg.startswith("--") else arg[:2]
+        if name in BUS_OPTION_NAMES:
+            return BUS_OPTION_NAMES[name]
+    return None
+
+
 def bus_options(function: F) -> F:
     """The bus options, recorded for :func:`cli_bus` (see the module docstring)."""
     options = [

@@ -13,6 +13,7 @@ import click
 
 from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, bus_settings, cli_bus, describe_bus
+from blinkcan.cli.extras import error_text
 from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.targets import check_target, writing
 from blinkcan.errors import BlinkcanError
@@ -54,7 +55,7 @@ def convert(source: str, target: str, force: bool) -> None:
     except LogError as error:
         for bad in unreadable.named:
             click.echo(f"{source}: {bad}", err=True)
-        raise click.ClickException(str(error)) from None
+        raise click.ClickException(error_text(error)) from None
     click.echo(f"{writer.count} frames written to {target}", err=True)
     for line in writer.lost_lines():
         click.echo(line, err=True)
@@ -110,7 +111,7 @@ def record(target: str, duration: float | None, force: bool) -> None:
                 for number, handler in previous.items():  # the closing is not interrupted
                     signal.signal(number, handler)
     except LogError as error:
-        raise click.ClickException(str(error)) from None
+        raise click.ClickException(error_text(error)) from None
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)

@@ -13,6 +13,7 @@ import click
 
 from blinkcan.cli.bus_options import parse_int
 from blinkcan.cli.clock import ABSOLUTE, iso_utc
+from blinkcan.cli.extras import error_text
 from blinkcan.cli.whole import Whole
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.decoder import encode_json, json_times
@@ -161,7 +162,7 @@ def _decode_to_stdout(decoder: Decoder, file: str, as_json: bool, progress: Prog
         else:
             _text_lines(decoder, file, output, unreadable, progress, absolute)
     except LogError as error:
-        raise click.ClickException(str(error)) from None
+        raise click.ClickException(error_text(error)) from None
     except BrokenPipeError:
         sys.stderr.close()
     finally:

@@ -10,6 +10,8 @@ import sys
 from importlib import metadata
 from urllib.parse import unquote, urlparse
 
+from blinkcan.formats.compressed import MissingExtraError
+
 
 def install_command(extra: str) -> str:
     """E.g. ``/repo/.venv/bin/python -m pip install -e '/repo[web]'`` for a checkout installed
@@ -25,3 +27,10 @@ def install_command(extra: str) -> str:
     if url.startswith("file://") and found.get("dir_info", {}).get("editable"):
         return f"{pip} -e {shlex.quote(unquote(urlparse(url).path) + f'[{extra}]')}"
     return f"{pip} {shlex.quote(f'blinkcan[{extra}]')}"
+
+
+def error_text(error: Exception) -> str:
+    """An error's line; one that names a missing extra ends with the command installing it."""
+    if isinstance(error, MissingExtraError):
+        return f"{error}: {install_command(error.extra)}"
+    return str(error)

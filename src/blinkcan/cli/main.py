@@ -21,7 +21,13 @@ import click
 
 from blinkcan import __version__
 from blinkcan.cli.answers import DeclinedError
-from blinkcan.cli.bus_options import bus_options, spread_bus_kwargs
+from blinkcan.cli.bus_options import (
+    bus_option_in,
+    bus_options,
+    given_bus_options,
+    spread_bus_kwargs,
+    takes_bus_options,
+)
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +62,13 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
               "OUT` wrote: its rows are the table `events` (columns: time, source, channel, "
               "can_id, extended, node, kind, key, pin, state, colour, value, text, data, model, "
               "date)."),
+}
+
+
+#: why a command that opens no bus has none (said when bus options are given to it)
+NO_BUS = {
+    "act": " (it reaches a running blinkcan emulate through its socket; --to PID picks one)",
+    "demo": " (its controller and devices share an in-process virtual bus)",
 }
 
 
@@ -95,6 +108,24 @@ class BlinkcanGroup(click.Group):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         return super().parse_args(ctx, spread_bus_kwargs(args))
+
+    def resolve_command(self, ctx: click.Context, args: list[str]
+                        ) -> tuple[str | None, click.Command | None, list[str]]:
+        """The subcommand; a command that opens no bus refuses the bus options, before or
+        after it, in one line (they were taken in silence, or, after ``act``'s words, sent
+        to the emulator as words)."""
+        name, command, rest = super().resolve_command(ctx, args)
+        if command is not None and not takes_bus_options(command):
+            given = given_bus_options(ctx)
+            after = bus_option_in(rest)
+            if after is not None:
+                given.append(after)
+            if given:
+                why = NO_BUS.get(command.name or "", "")
+                raise click.UsageError(f"blinkcan {name} opens no bus: {', '.join(given)} "
+                                       f"do{'es' if len(given) == 1 else ''} not apply{why}",
+                                       ctx)
+        return name, command, rest
 
     def main(self, args: Sequence[str] | None = None, prog_name: str | None = None,
              complete_var: str | None = None, standalone_mode: bool = True,

@@ -24,6 +24,7 @@ from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.decode import DEVICE_HELP, assumed_text, other_event, parse_devices
+from blinkcan.cli.extras import error_text
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.cli.seconds import Factor, Seconds
 from blinkcan.cli.whole import Whole
@@ -195,7 +196,7 @@ def _replay(log_file: str, speed: float, duration: float | None,
                     shown = time.monotonic()
             live.update(picture(), refresh=True)
     except LogError as error:
-        raise click.ClickException(str(error)) from None
+        raise click.ClickException(error_text(error)) from None
     except KeyboardInterrupt:
         pass
     finally:

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, BinaryIO, TextIO
 from blinkcan.formats.candump import read_candump_columns
 from blinkcan.formats.candump_columns import BLOCK_CHARS, read_plain_block
 from blinkcan.formats.columns import FrameColumns
+from blinkcan.formats.compressed import READ_SIZE, ZstdReader
 from blinkcan.formats.log_source import DecompressedText
 from blinkcan.formats.logs import LogError, frame_kind, read_messages
 from blinkcan.formats.unreadable import UnreadableLine
@@ -45,81 +46,8 @@ def _suffixes(path: Path) -> tuple[str, str]:
     return (suffixes[-1] if suffixes else ""), ""
 
 
-#: a skippable frame's 16 magic numbers (RFC 8878 §3.1.2)
-_SKIPPABLE = range(0x184D2A50, 0x184D2A60)
-#: the longest frame header: magic, descriptor, window, dictionary id, content size (§3.1.1.1)
-_HEADER_MAX = 18
-#: compressed bytes read at a time, and decompressed bytes given at most per read: a file
-#: holding gigabytes of zeros in a few kilobytes is read a buffer at a time
-_READ_SIZE = 1 << 16
-
-
-def _ends_with_a_frame(raw: BinaryIO) -> bool:
-    """Whether the .zst file ``raw`` ends where a frame does: its frames' headers and block
-    headers walked, the blocks skipped (RFC 8878 §3.1.1: a block header gives the block's
-    size and whether it is the frame's last; a checksum of 4 bytes may follow)."""
-    import zstandard  # noqa: PLC0415 (the [fleet] extra)
-
-    size = raw.seek(0, os.SEEK_END)
-    position = 0
-    while position < size:
-        raw.seek(position)
-        header = raw.read(_HEADER_MAX)
-        magic = int.from_bytes(header[:4], "little")
-        if magic in _SKIPPABLE:  # §3.1.2: magic, 4 bytes of size, the skipped bytes
-            position += 8 + int.from_bytes(header[4:8], "little")
-            continue
-        try:
-            position += zstandard.frame_header_size(header)
-            checksum = zstandard.get_frame_parameters(header).has_checksum
-        except zstandard.ZstdError:
-            return False
-        last = False
-        while not last and position < size:  # §3.1.1.2: 3 bytes, little-endian
-            raw.seek(position)
-            block = int.from_bytes(raw.read(3), "little")
-            last, kind, length = bool(block & 1), block >> 1 & 3, block >> 3
-            position += 3 + (1 if kind == 1 else length)  # an RLE block holds one byte
-        if not last:
-            return False
-        position += 4 if checksum else 0
-    return position == size
-
-
-class _ZstdReader(io.RawIOBase):
-    """A .zst file's bytes, frame after frame, a bounded buffer at a time (zstandard's
-    ``stream_reader``), that raises :class:`EOFError` where the file ends inside a frame: the
-    stream reader ends there as if the file were whole, so a log cut short would lose its
-    tail silently."""
-
-    def __init__(self, path: Path) -> None:
-        import zstandard  # noqa: PLC0415 (the [fleet] extra)
-
-        self._raw = path.open("rb")
-        self._stream = zstandard.ZstdDecompressor().stream_reader(
-            self._raw, read_size=_READ_SIZE, read_across_frames=True, closefd=False)
-        self._checked = False
-
-    def readable(self) -> bool:
-        return True
-
-    def readinto(self, buffer: bytearray | memoryview) -> int:  # type: ignore[override]
-        view = memoryview(buffer)[:_READ_SIZE]
-        size = self._stream.readinto(view)
-        if not size and view.nbytes and not self._checked:
-            self._checked = True  # once: the file's end is read again after an error
-            if not _ends_with_a_frame(self._raw):
-                raise EOFError("Compressed file ended before the end of its zstd frame")
-        return size
-
-    def close(self) -> None:
-        self._stream.close()  # type: ignore[no-untyped-call]  # zstandard types it so
-        self._raw.close()
-        super().close()
-
-
 def _zstd_text(path: Path) -> TextIO:
-    reader = io.BufferedReader(_ZstdReader(path))
+    reader = io.BufferedReader(ZstdReader(path))
     return DecompressedText(reader, "utf-8", _BYTES_KEPT)
 
 
@@ -176,7 +104,7 @@ MAX_DECOMPRESSED = 64 << 30
 def _copy_bounded(read: Callable[[int], bytes | None], target: BinaryIO, path: Path,
                   limit: int) -> None:
     copied = 0
-    while chunk := read(_READ_SIZE):
+    while chunk := read(READ_SIZE):
         copied += len(chunk)
         if copied > limit:
             raise LogError(f"{path} decompresses to over {limit:,} bytes, the most a "
@@ -198,7 +126,7 @@ def _decompressed(path: Path, suffix: str, compression: str, scratch: str | None
                 with gzip.open(path, "rb") as source:
                     _copy_bounded(source.read, target, path, limit)
             else:
-                with _ZstdReader(path) as source:
+                with ZstdReader(path) as source:
                     _copy_bounded(source.read, target, path, limit)
         yield from message_columns(read_messages(Path(name), unreadable=True))
     finally:

@@ -19,6 +19,11 @@ from dataclasses import dataclass
 
 import can
 
+#: the channel a frame that has none (a pcap's, a udp_multicast bus's) is written on where the
+#: format names every frame's channel: candump's interface, the numbered formats' channel 1
+#: (python-can numbers them from 1: read back as 0, "can0"); said once per file
+DEFAULT_CHANNEL = "can0"
+
 #: channels a numbered format keeps: its channel numbers are candump's canN
 _NUMBERED = re.compile(r"can(0|[1-9][0-9]*)")
 
@@ -36,13 +41,15 @@ class Carries:
     error_details: bool = True  # an error frame's class (its identifier) and data
     channel: str = "number"
     times: str = "any"
+    #: the highest canN a numbered format holds (BLF's channel is 16 bits, from 1)
+    max_channel: int | None = None
 
 
 CARRIES: dict[str, Carries] = {
     ".pcap": Carries(channel="none"),  # LINKTYPE_CAN_SOCKETCAN has no interface field
     ".log": Carries(channel="name"),
     ".asc": Carries(error_details=False, times="from_first"),  # "1  ErrorFrame", no class
-    ".blf": Carries(times="from_first"),
+    ".blf": Carries(times="from_first", max_channel=0xFFFE),
     ".mf4": Carries(),  # frames grouped by kind, read back merged by time
     # TRC 2.1 as formats/log_writers.py writes it: no error frames (python-can reads no ER
     # line), no ESI (python-can and PEAK read FE and BI differently)
@@ -55,7 +62,8 @@ CARRIES[".cap"] = CARRIES[".pcap"]
 #: what is lost -> how the line about it reads: (what the frames lost, why)
 LOST = {
     "channel": ("their channel", "{suffix} has no channel"),
-    "channel name": ("their channel name", "{suffix} numbers channels: only canN names keep"),
+    "channel name": ("their channel name", "{suffix} numbers channels: only canN names keep, "
+                                           f"the others are on {DEFAULT_CHANNEL}"),
     "fd flag": ("the CAN FD flag", "{suffix} has no CAN FD flag; only frames over 8 bytes "
                                    "read back as CAN FD"),
     "brs": ("the bit rate switch", "{suffix} has no BRS flag"),
@@ -113,9 +121,11 @@ class Losses:
         """What of ``message`` the format loses (see :data:`LOST`)."""
         carries = self.carries
         lost = []
-        channel_lost, _ = self._channel(message.channel)
+        channel_lost, key = self._channel(message.channel)
         if channel_lost is not None:
             lost.append(channel_lost)
+        elif key is None and carries.channel != "none":
+            lost.append("no channel")  # not lost: given the stated default
         if message.is_error_frame:
             if not carries.error_details and (message.arbitration_id or any(message.data)):
                 lost.append("error details")
@@ -144,10 +154,20 @@ class Losses:
         if key is not None:
             if self.carries.channel == "none":
                 lost = "channel"
-            elif self.carries.channel == "number" and not _NUMBERED.fullmatch(key):
+            elif self.carries.channel == "number" and self.number(channel) is None:
                 lost = "channel name"
         self._channels[channel] = lost, key
         return lost, key
+
+    def number(self, channel: object) -> int | None:
+        """``channel``'s number in a numbered format (``can3``, ``"3"``, 3: 3); None for a
+        name it cannot keep (written on :data:`DEFAULT_CHANNEL`)."""
+        matched = _NUMBERED.fullmatch(channel_key(channel) or "")
+        if matched is None:
+            return None
+        number = int(matched.group(1))
+        limit = self.carries.max_channel
+        return number if limit is None or number <= limit else None
 
     def count(self, message: can.Message, describe: Callable[[can.Message], str]) -> None:
         """Count what ``message`` loses; ``describe`` names it ("CAN FD frame 123h")."""
@@ -165,6 +185,11 @@ class Losses:
         channel"."""
         lines = []
         for what, count in self.counts.items():
+            if what == "no channel":
+                lines.append(f"{count} frame{'s' if count != 1 else ''} had no channel: "
+                             f"{self.suffix} names every frame's, so "
+                             f"{'they are' if count != 1 else 'it is'} on {DEFAULT_CHANNEL}")
+                continue
             lost, why = LOST[what]
             if count == 1:
                 lost = lost.replace("their ", "its ")

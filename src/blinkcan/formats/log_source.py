@@ -181,7 +181,7 @@ def log_source(path: str | os.PathLike[str]) -> LogSource:
     kind = "a FIFO" if stat.S_ISFIFO(mode) else "a character device"
     if suffix in STREAMABLE:
         return LogSource(source, suffix, stream=True)
-    if suffix in (".blf", ".db", ".mf4", ".gz"):
+    if suffix in (".blf", ".db", ".mf4", ".gz", ".zst"):
         raise LogError(f"{source} is {kind}: a {suffix} log is read from a regular file only "
                        "(streams carry candump, .asc, .trc, .csv and .pcap)")
     return LogSource(source, ".log", stream=True)

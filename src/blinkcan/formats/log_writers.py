@@ -47,12 +47,23 @@ from can.io.logger import MESSAGE_WRITERS
 from can.io.trc import TRCWriter
 from can.util import channel2int, len2dlc
 
-from blinkcan.formats.carried import BLF_DATED_FROM, channel_key, start_millisecond
+from blinkcan.formats.carried import (
+    BLF_DATED_FROM,
+    DEFAULT_CHANNEL,
+    channel_key,
+    start_millisecond,
+)
 from blinkcan.formats.pcap import CAN_EFF_MASK, CAN_ERR_FLAG, CANFD_BRS, CANFD_ESI
 
 
 class CandumpWriter(CanutilsLogWriter):
-    """candump ``-L`` lines as can-utils writes them (see the module docstring)."""
+    """candump ``-L`` lines as can-utils writes them (see the module docstring); a frame
+    with no channel on :data:`~blinkcan.formats.carried.DEFAULT_CHANNEL` (python-can's
+    default, ``vcan0``, named a channel no bus had)."""
+
+    def __init__(self, file: Any, channel: str = DEFAULT_CHANNEL, append: bool = False
+                 ) -> None:
+        super().__init__(file, channel=channel, append=append)
 
     def on_message_received(self, msg: can.Message) -> None:
         channel = channel_key(msg.channel) or self.channel

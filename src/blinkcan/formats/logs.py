@@ -35,12 +35,13 @@ from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING, Literal, TextIO, overload
+from typing import TYPE_CHECKING, BinaryIO, Literal, TextIO, overload
 
 from blinkcan.formats.candump import candump_messages, read_candump, read_candump_columns
 from blinkcan.formats.candump_blocks import PlainBlocks
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
 from blinkcan.formats.columns import FrameColumns
+from blinkcan.formats.compressed import COMPRESSIONS, open_decompressed
 from blinkcan.formats.log_source import (
     DecompressedText,
     LineTooLongError,
@@ -120,7 +121,7 @@ def _strict(messages: Iterator[can.Message | UnreadableLine], path: str | os.Pat
 def _text_suffix(source: LogSource) -> str | None:
     """The text format a log is read in by lines (``.log.gz``: ``.log``), None for the
     others (binary, or read by python-can whole)."""
-    suffix = Path(source.path.stem).suffix.lower() if source.suffix == ".gz" else source.suffix
+    suffix = _inner_suffix(source)
     if source.stream or suffix == ".log":  # a candump log reads without python-can
         return suffix
     from can.io.generic import TextIOMessageReader  # noqa: PLC0415
@@ -132,26 +133,53 @@ def _text_suffix(source: LogSource) -> str | None:
     return None
 
 
+def _inner_suffix(source: LogSource) -> str:
+    """The format a log is in: ``.asc`` for ``x.asc``, ``x.asc.gz`` and ``x.asc.zst``."""
+    if source.suffix in COMPRESSIONS:
+        return Path(source.path.stem).suffix.lower()
+    return source.suffix
+
+
+@contextlib.contextmanager
+def _open_bytes(source: LogSource) -> Iterator[BinaryIO]:
+    """A binary log's bytes, a compressed one's decompressed as they are read."""
+    if source.suffix not in COMPRESSIONS:
+        with open_binary(source) as stream:
+            yield stream
+        return
+    with open_decompressed(source.path, source.suffix) as decompressed:
+        yield decompressed  # type: ignore[misc]  # a BufferedIOBase reads as a BinaryIO
+
+
 def _messages(source: LogSource) -> Iterator[can.Message | UnreadableLine]:
     import can  # noqa: PLC0415
 
     from blinkcan.formats.pcap import PcapError, pcap_items  # noqa: PLC0415
 
-    if is_pcap(source.path):
-        with open_binary(source) as stream:
+    suffix = _inner_suffix(source)
+    if is_pcap(source.path) or suffix in (".pcap", ".cap"):
+        with _open_bytes(source) as stream:
             try:
                 yield from pcap_items(stream)
             except PcapError as error:
                 raise LogError(f"{source}: {error}") from None
+            except EOFError as error:  # a compressed capture cut short
+                raise LogError(f"{source}: {_reason(error)}") from None
         return
     text_suffix = _text_suffix(source)
     if text_suffix is not None:
         yield from _text_messages(source, text_suffix)
         return
-    suffix = source.suffix
+    if source.suffix == ".zst" and suffix != ".blf":  # SQLite, asammdf: a file of their own
+        raise LogError(f"{source}: a {suffix or 'log'} file is not read compressed "
+                       f"(decompress it first: zstd -d {source.path})")
     try:
-        reader = _blf_reader()(source.path) if suffix == ".blf" else \
-            can.LogReader(str(source.path))
+        if suffix == ".blf":  # python-can's reader reads it front to back: any stream
+            blf = open_decompressed(source.path, source.suffix) \
+                if source.suffix in COMPRESSIONS else source.path
+            reader = _blf_reader()(blf)  # type: ignore[arg-type]  # BLFReader takes a stream
+        else:
+            reader = can.LogReader(str(source.path))
     except _read_errors() as error:
         raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
     with reader:
@@ -230,13 +258,13 @@ def _blf_messages(reader: can.io.generic.MessageReader
 @contextlib.contextmanager
 def _open_text(source: LogSource, encoding: str | None, errors: str | None = None
                ) -> Iterator[TextIO]:
-    """A text log's stream, a ``.gz`` one decompressed as it is read."""
-    if source.suffix != ".gz":
+    """A text log's stream, a ``.gz`` or ``.zst`` one decompressed as it is read."""
+    if source.suffix not in COMPRESSIONS:
         with open_text(source, encoding, errors) as stream:
             yield stream
         return
     # a file cut short keeps every line before the cut (formats/log_source.py)
-    with DecompressedText(gzip.open(source.path, "rb"), encoding or "utf-8",
+    with DecompressedText(open_decompressed(source.path, source.suffix), encoding or "utf-8",
                           errors or "strict") as compressed:
         yield compressed
 
@@ -437,6 +465,7 @@ class FrameWriter:
         carries = CARRIES.get(suffix)
         self._cannot = carries.dropped if carries is not None else frozenset()
         self.losses = Losses(suffix)
+        self._numbered = self.losses.carries.channel == "number"
         self._unflushed = 0
         self.count = 0
         self.skipped: Counter[str] = Counter()
@@ -502,6 +531,11 @@ class FrameWriter:
             return
         self.count += 1
         self.losses.count(message, describe_frame)
+        if self._numbered and message.channel is not None:
+            # canN as N; any other name on the default channel (python-can's writers took
+            # a name's trailing digits: bench-12345678 as channel 12345678, past BLF's 16
+            # bits), as the losses said
+            message.channel = self.losses.number(message.channel)
         if self._pcap is not None:
             self._pcap.write(message)
         else:

@@ -64,8 +64,10 @@ def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
     loop = asyncio.get_running_loop()
     waiting: asyncio.Queue[E] = asyncio.Queue()
     removers: list[Callable[[], None]] = []
+    arrivals = _Arrivals()
 
     def deliver(event: E) -> None:
+        arrivals.count += 1
         try:
             loop.call_soon_threadsafe(waiting.put_nowait, event)
         except RuntimeError:  # the loop is closed: nobody will read this iterator
@@ -77,13 +79,42 @@ def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
 
     if opened._device is not None:
         subscribe(opened._device)
-    return _drain(opened, subscribe, removers, waiting, source, timeout)
+    return _drain(opened, subscribe, removers, waiting, arrivals, source, timeout)
+
+
+class _Arrivals:
+    """How many events reached an async iterator (counted on the bus thread): a simulated
+    wait for the next one runs until the count moves."""
+
+    __slots__ = ("abandoned", "count")
+
+    def __init__(self) -> None:
+        self.count = 0
+        #: the awaiting caller stopped waiting (cancelled): the simulation stops too
+        self.abandoned = False
+
+
+async def _next_simulated(events: EventSource[E], waiting: asyncio.Queue[E],
+                          arrivals: _Arrivals, timeout: float | None) -> bool:
+    """Simulated time: run the simulation in a worker thread (as the driver's own calls do)
+    until an event arrives, the driver closes or ``timeout`` virtual seconds pass; nothing
+    else would move the clock, so waiting for an event in real time would wait for ever.
+    True when an event is waiting."""
+    if waiting.empty():
+        seen = arrivals.count
+        try:
+            await asyncio.to_thread(events.run_until, lambda: arrivals.count != seen
+                                    or events.closed or arrivals.abandoned, timeout)
+        except asyncio.CancelledError:
+            arrivals.abandoned = True  # the worker's simulation stops at its next event
+            raise
+    return not waiting.empty()  # the arrivals' hand-offs ran before this resumed
 
 
 async def _drain(opened: AsyncDriver[Any], subscribe: Callable[[Any], None],
                  removers: list[Callable[[], None]], waiting: asyncio.Queue[E],
-                 source: Callable[[Any], EventSource[E]], timeout: float | None
-                 ) -> AsyncIterator[E]:
+                 arrivals: _Arrivals, source: Callable[[Any], EventSource[E]],
+                 timeout: float | None) -> AsyncIterator[E]:
     try:
         if not removers:
             await opened.open()
@@ -92,6 +123,11 @@ async def _drain(opened: AsyncDriver[Any], subscribe: Callable[[Any], None],
         while True:
             if events.closed and waiting.empty():
                 return  # the driver was closed
+            if events.simulated:
+                if not await _next_simulated(events, waiting, arrivals, timeout):
+                    return  # timeout virtual seconds without one, or the driver closed
+                yield waiting.get_nowait()
+                continue
             try:
                 yield await asyncio.wait_for(waiting.get(), 0.1 if timeout is None
                                              else min(timeout, 0.1))

@@ -21,20 +21,25 @@ E = TypeVar("E")
 _CLOSED = object()
 
 
-class _Arrived:
-    """A signal that is set while ``waiting`` holds an event (for simulated waits)."""
+#: virtual seconds an iterator with no timeout waits at most for its next event on a simulated
+#: bus: a simulated wait always ends (nothing else would ever move the clock)
+SIMULATED_FOREVER = 3600.0
 
-    def __init__(self, waiting: queue.SimpleQueue[object]) -> None:
-        self._waiting = waiting
+
+class _Holds:
+    """A signal that is set while ``ready()`` holds (for simulated waits)."""
+
+    def __init__(self, ready: Callable[[], object]) -> None:
+        self._ready = ready
 
     def set(self) -> None:
-        """Set by the queue itself."""
+        """Set by what ``ready`` reads."""
 
     def clear(self) -> None:
-        """Cleared by taking the event."""
+        """Cleared by what ``ready`` reads."""
 
     def is_set(self) -> bool:
-        return not self._waiting.empty()
+        return bool(self._ready())
 
 
 class EventSource(Generic[E]):
@@ -72,6 +77,21 @@ class EventSource(Generic[E]):
             for waiting in self._queues:
                 waiting.put(_CLOSED)
 
+    @property
+    def simulated(self) -> bool:
+        """Whether the driver runs in simulated time: waiting for an event then runs the
+        simulation (:meth:`run_until`), since nothing else would."""
+        return self._scheduler is not None and self._scheduler.simulated
+
+    def run_until(self, ready: Callable[[], object], timeout: float | None) -> bool:
+        """Simulated time only: run the simulation until ``ready()`` holds (True) or
+        ``timeout`` virtual seconds passed (None: :data:`SIMULATED_FOREVER`; False)."""
+        scheduler = self._scheduler
+        if scheduler is None or not scheduler.simulated:
+            raise RuntimeError("run_until runs a simulation: this driver is on a real bus")
+        limit = SIMULATED_FOREVER if timeout is None else timeout
+        return scheduler.wait(_Holds(ready), limit, background=True)
+
     def iterate(self, timeout: float | None = None) -> Iterator[E]:
         """Events from the moment of this call (not of the first ``next``); the iterator ends
         after ``timeout`` seconds without one (None: never) and when the source closes."""
@@ -83,10 +103,8 @@ class EventSource(Generic[E]):
         return self._drain(waiting, timeout)
 
     def _next(self, waiting: queue.SimpleQueue[E | object], timeout: float | None) -> object:
-        scheduler = self._scheduler
-        if scheduler is not None and scheduler.simulated and waiting.empty():
-            limit = 3600.0 if timeout is None else timeout  # a simulated wait always ends
-            scheduler.wait(_Arrived(waiting), limit, background=True)
+        if self.simulated and waiting.empty():
+            self.run_until(lambda: not waiting.empty(), timeout)
             return waiting.get_nowait()
         return waiting.get(timeout=timeout)
 

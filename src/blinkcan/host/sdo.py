@@ -257,12 +257,13 @@ class SdoChannel:
         """Send ``request`` and wait for the reply it gets (see ``_wanted``); None on a
         timeout."""
         signal = self._signal
-        with self._state_lock:
-            signal.clear()
-            self._reply = None
-            self._wanted = wanted
-            self._accept = accept
-            self._awaiting = True
+        # no lock: the reader takes a reply only while ``_awaiting`` (False here: the last
+        # exchange ended under the lock), so what it checks is in place before it is set
+        signal.clear()
+        self._reply = None
+        self._wanted = wanted
+        self._accept = accept
+        self._awaiting = True
         try:
             # the node id was checked and ``request`` is made here: Frame.trusted, inlined
             self.host.send(_new_tuple(Frame, (self._request_id, request, False)))

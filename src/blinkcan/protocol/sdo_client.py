@@ -33,6 +33,10 @@ QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowle
 #: (CiA 301 §7.2.4.3.6): the common reply, taken without parsing the frame
 _EXPEDITED_UPLOAD_MASK = 0xE0 | EXPEDITED
 _EXPEDITED_UPLOAD = (SCS_INITIATE_UPLOAD << 5) | EXPEDITED
+#: an initiate upload response that opens a segmented upload: scs 2, e clear
+_SEGMENTED_UPLOAD = SCS_INITIATE_UPLOAD << 5
+#: the first upload segment request (CiA 301 §7.2.4.3.7: ccs 3, toggle 0)
+_FIRST_SEGMENT_REQUEST = b"\x60" + ZEROS[:7]
 
 
 class SdoError(BlinkcanError):
@@ -136,6 +140,14 @@ class UploadTransfer(_Transfer):
                               else data[4:8])
                 self.done = True
                 return None
+            if (command & _EXPEDITED_UPLOAD_MASK == _SEGMENTED_UPLOAD and not started
+                    and data[1:4] == self.mux):
+                # CiA 301 §7.2.4.3.6: a segmented upload opens; bytes 4-7 give its size
+                # where s is set (SdoFrame.size, inlined)
+                self._size = (int.from_bytes(data[4:8], "little") if command & SIZE_INDICATED
+                              else -1)
+                self._buffer = bytearray()
+                return _FIRST_SEGMENT_REQUEST
             if command >> 5 == SCS_UPLOAD_SEGMENT and started:
                 # CiA 301 §7.2.4.3.4: bytes 1-7 less the n unused ones (bits 3-1)
                 # (protocol.sdo.segment_payload, inlined)
@@ -152,7 +164,7 @@ class UploadTransfer(_Transfer):
             size = reply.size
             self._size = -1 if size is None else size
             self._buffer = bytearray()
-            return b"\x60" + ZEROS[:7]
+            return _FIRST_SEGMENT_REQUEST
         if reply.specifier != SCS_UPLOAD_SEGMENT:
             raise self._fail(f"unexpected reply {command:02X}h")
         return self._segment(command, reply.segment_data)

@@ -176,7 +176,8 @@ class SdoServer:
         return bytes((SEGMENTED_UPLOAD_RESPONSE,)) + mux + size.to_bytes(4, "little")
 
     def _upload_segment(self, request: SdoFrame) -> bytes:
-        toggle = request.toggle  # CiA 301 §7.2.4.3.7: alternates from 0 on each segment
+        # CiA 301 §7.2.4.3.7: alternates from 0 on each segment (SdoFrame.toggle, inlined)
+        toggle = request.command & TOGGLE
         if toggle != self._toggle:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)

@@ -61,6 +61,9 @@ class _PortListener(can.Listener):
     def __init__(self, port: CanBusPort) -> None:
         self.port = port
         self.clock = port.clock
+        #: the echo check of a bus that echoes its own frames (udp_multicast), else None:
+        #: bound once, every frame received asks
+        self.is_echo = port.own.is_echo if port.own.active else None
 
     def on_message_received(self, msg: can.Message) -> None:
         # runtime.canbus.to_frame, inlined (every frame received comes this way): data frames
@@ -69,11 +72,11 @@ class _PortListener(can.Listener):
         if msg.is_error_frame or msg.is_remote_frame or msg.dlc > 8 or len(data) > 8:
             return
         frame = _new_tuple(Frame, (msg.arbitration_id, bytes(data), msg.is_extended_id))
-        port = self.port
         now = self.clock()
-        own = port.own
-        if own.active and own.is_echo(frame, now):
+        is_echo = self.is_echo
+        if is_echo is not None and is_echo(frame, now):
             return
+        port = self.port
         try:
             for handler in port.handlers:
                 handler(frame, now)
@@ -92,6 +95,8 @@ class CanBusPort:
         self.scheduler = RealTimeScheduler(name, clock)
         self.reading = ReadStats()
         self.own = OwnFrames(bus)
+        #: the record of a frame sent, where the bus echoes (else None): bound once
+        self._sent = self.own.sent if self.own.active else None
         #: the handlers, a tuple: the reader reads it per frame, listen and detach replace it
         self.handlers: tuple[FrameHandler, ...] = ()
         self._notifier = notifier
@@ -102,9 +107,9 @@ class CanBusPort:
 
     def send(self, frame: Frame) -> None:
         now = self.clock()
-        own = self.own
-        if own.active:
-            own.sent(frame, now)
+        sent = self._sent
+        if sent is not None:
+            sent(frame, now)
         self.bus.send(self._message(frame, now))
 
     def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None

@@ -20,12 +20,24 @@ ran the simulation, or at the ``rig`` fixture's teardown (``Rig.close``).
 
 Golden traces: ``assert_matches_trace(rig.frames, path)``; run pytest with
 ``--blinkcan-record`` to (re)write the traces instead of comparing (``golden_trace`` fixture).
+
+A test on the ``rig`` fixture never hangs: one still running after ``--blinkcan-wall-limit``
+real seconds (ini ``blinkcan_wall_limit``; default 60, 0: none) fails, saying the virtual time
+it reached. Only the simulation moves a rig's clock, so a test that waits in real time for what
+only the simulation brings (an ``asyncio.Event`` or a queue a handler feeds, a thread of its
+own, ``time.sleep`` in a handler) would otherwise wait for ever. The limit is an alarm signal
+(SIGALRM) in pytest's main thread, so it interrupts any blocking wait there; it is left off
+where that signal already has a handler (another plugin's timeout, the test's own).
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
+import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 import pytest
@@ -35,10 +47,18 @@ from blinkcan.testing.golden import assert_matches_trace, record_trace
 from blinkcan.testing.rig import Rig
 from blinkcan.twin import KeyboxTwin, KeypadTwin
 
+#: real seconds a test on the ``rig`` fixture may run (its simulation takes milliseconds)
+WALL_LIMIT = 60.0
+
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--blinkcan-record", action="store_true", default=False,
                      help="blinkcan: write golden traces instead of comparing with them")
+    parser.addoption("--blinkcan-wall-limit", type=float, default=None, metavar="SECONDS",
+                     help="blinkcan: real seconds a test on the rig fixture may run before "
+                          f"it fails (default {WALL_LIMIT:g}; 0: no limit)")
+    parser.addini("blinkcan_wall_limit", f"blinkcan: real seconds a test on the rig fixture "
+                  f"may run (default {WALL_LIMIT:g}; 0: no limit)", default=str(WALL_LIMIT))
 
 
 MARKER_OPTIONS = ("model", "manual", "protocol", "quirks", "keypad_node", "keybox_node",
@@ -46,6 +66,7 @@ MARKER_OPTIONS = ("model", "manual", "protocol", "quirks", "keypad_node", "keybo
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    _wall_limit(config)  # a wrong limit is a usage error before any test runs
     config.addinivalue_line(
         "markers", f"blinkcan({', '.join(MARKER_OPTIONS)}): the twins the blinkcan fixtures build")
 
@@ -99,10 +120,55 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
     pytest.fail(f"@pytest.mark.blinkcan: {wrong}", pytrace=False)  # one line, no traceback
 
 
+def _wall_limit(config: pytest.Config) -> float:
+    """The ``--blinkcan-wall-limit`` (or ini ``blinkcan_wall_limit``) in seconds; a usage
+    error naming the option for anything but a finite number >= 0."""
+    given = config.getoption("--blinkcan-wall-limit")
+    text = str(config.getini("blinkcan_wall_limit")) if given is None else str(given)
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = -1.0
+    if not 0 <= seconds < float("inf"):
+        raise pytest.UsageError(f"--blinkcan-wall-limit / blinkcan_wall_limit: seconds >= 0 "
+                                f"(0: no limit), not {text!r}")
+    return seconds
+
+
+@contextlib.contextmanager
+def _failing_after(seconds: float, bench: Rig) -> Iterator[None]:
+    """Fail the running test after ``seconds`` real seconds (SIGALRM: it interrupts a wait in
+    pytest's main thread); nothing where that cannot be done or a handler is already set."""
+    if (seconds <= 0 or not hasattr(signal, "setitimer")
+            or threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGALRM) not in (signal.SIG_DFL, None)):
+        yield
+        return
+
+    def expired(signum: int, frame: FrameType | None) -> None:
+        # pytest.fail raises an OutcomeException (a BaseException): no `except Exception` in
+        # the test, a handler or the simulation takes it for an error of theirs
+        pytest.fail(f"blinkcan: the test still ran after {seconds:g} s of wall time, at virtual "
+                    f"t={bench.now:.3f} s: something waits in real time for what only the "
+                    "simulation brings (an asyncio.Event or a queue fed by a handler, a thread "
+                    "of its own, time.sleep in a handler), and nothing runs the simulation "
+                    "meanwhile (rig.advance / rig.until, a driver call, a blocking iterator); "
+                    "--blinkcan-wall-limit changes the limit", pytrace=True)
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 @pytest.fixture
-def rig() -> Iterator[Rig]:
-    """Twins and drivers on one simulated bus, at virtual time 0."""
-    with Rig() as bench:
+def rig(request: pytest.FixtureRequest) -> Iterator[Rig]:
+    """Twins and drivers on one simulated bus, at virtual time 0; the test fails (never hangs)
+    after ``--blinkcan-wall-limit`` real seconds."""
+    with Rig() as bench, _failing_after(_wall_limit(request.config), bench):
         yield bench
 
 
