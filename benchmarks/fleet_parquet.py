@@ -5,10 +5,12 @@ table: a row for every frame, those no DBC knows (found by one dictionary lookup
 them by its id route) as undecoded rows with their raw data, like ours; the same columns and
 types, Hive-partitioned by model and date, row groups of 64k rows. (Ours writes more rows: a
 frame that presses two keys is two rows.) Both run as their own process, interpreter start
-included, on the realistic log of ``realistic_log.py`` (the devices' traffic from the twins
-a third, other ECUs' 11-bit and 29-bit J1939 frames a third each). "Per core" is frames per
-CPU second of the process (user + system), also shown as microseconds of CPU per frame.
-Repetitions are interleaved; medians with ranges. Target (DESIGN.md): >= 3x.
+included, on the realistic 1 M-frame log of the speed issue (``realistic_log.py``, as
+``decode_log.py``: the devices' traffic from the twins a third, other ECUs' 11-bit and 29-bit
+J1939 frames a third each). "Per core" is frames per CPU second of the process (user +
+system), also shown as microseconds of CPU per frame; then the same without each side's
+start-up (the CPU of a run on the log's first 20 frames). Repetitions are interleaved;
+medians with ranges. Target (DESIGN.md): >= 3x.
 
 Then the scaling: 4 such files decoded by 2 local workers (``-j 2``) against 1, wall time and
 the CPU time of all processes (a -j 2 run that takes as much CPU as -j 1 but less than half
@@ -230,23 +232,35 @@ def _anchor_stages(log: Path, out: Path) -> dict[str, Callable[[], object]]:
     return {"read": lambda: list(can.LogReader(log)), "rows": rows, "write": write}
 
 
-def stages(log: Path, frames: int, repeats: int, root: Path) -> None:
+def _tiny(log: Path, root: Path) -> Path:
+    """The log's first 20 frames: a run on it is the start-up (interpreter, imports)."""
+    tiny = root / "tiny.log"
+    with log.open() as lines:
+        tiny.write_text("".join(line for _, line in zip(range(20), lines, strict=False)))
+    return tiny
+
+
+def _start_ups(tiny: Path, root: Path) -> tuple[float, float]:
+    """CPU seconds of ours and of the anchor on the 20-frame log."""
+    ours = _run(_ours([tiny], root / "tiny-ours"))[1]
+    anchor = _run([sys.executable, "-c", ANCHOR, str(tiny), str(root / "tiny-anchor"),
+                   json.dumps(device_nodes())])[1]
+    return ours, anchor
+
+
+def stages(log: Path, frames: int, repeats: int, root: Path,
+           start_ups: dict[str, list[float]]) -> None:
     """Where a frame's CPU goes, ours and the anchor's: each stage in this process (medians
-    of interleaved repetitions), the start-up as its own process on a 20-frame log."""
+    of interleaved repetitions), the start-up (``start_ups``: CPU seconds of each side's
+    process on a 20-frame log) spread over the log's frames."""
     ours = _our_stages(log, root / "stages-ours")
     anchor = _anchor_stages(log, root / "stages-anchor")
-    times: dict[str, list[float]] = {}
+    times: dict[str, list[float]] = {f"{side} start-up": values
+                                     for side, values in start_ups.items()}
     for _ in range(repeats):
         for side, work in (("ours", ours), ("anchor", anchor)):
             for name, run in work.items():
                 times.setdefault(f"{side} {name}", []).append(_cpu(run))
-    tiny = root / "tiny.log"
-    tiny.write_text("".join(log.open().readlines()[:20]))
-    for _ in range(repeats):
-        times.setdefault("ours start-up", []).append(_run(_ours([tiny], root / "tiny-ours"))[1])
-        times.setdefault("anchor start-up", []).append(_run(
-            [sys.executable, "-c", ANCHOR, str(tiny), str(root / "tiny-anchor"),
-             json.dumps(device_nodes())])[1])
     per_frame = {name: statistics.median(values) / frames * 1e6 for name, values in times.items()}
     ours_split = {  # the decoder: on the frames the rows stage has it decode
         "reading": per_frame["ours read"], "decoder": per_frame["ours decoder"],
@@ -266,39 +280,74 @@ def stages(log: Path, frames: int, repeats: int, root: Path) -> None:
               f"{value / total_ours:4.0%} of ours")
     print(f"  {'sum':18}{total_ours:10.2f}{total_anchor:10.2f}   ratio "
           f"{total_anchor / total_ours:.2f}x")
+    running_ours = total_ours - ours_split["start-up"]
+    running_anchor = total_anchor - anchor_split["start-up"]
+    print(f"  {'sum, no start-up':18}{running_ours:10.2f}{running_anchor:10.2f}   ratio "
+          f"{running_anchor / running_ours:.2f}x")
     floor = ours_split["reading"] + ours_split["decoder"] + ours_split["start-up"]
     print(f"  3x the anchor is {total_anchor / 3:.2f} us/frame; reading, the decoder and the "
           f"start-up alone are {floor:.2f} (at most {total_anchor / floor:.2f}x with rows, "
           "Arrow and Parquet free)")
 
 
-def main(smoke: bool = False, scaling: bool = True, profile: bool = True) -> None:
-    """The end-to-end figures; then where the CPU goes (``profile``) and the -j 2 scaling
-    (``scaling``)."""
-    frames = 20_000 if smoke else 300_000
+def end_to_end(log: Path, frames: int, repeats: int, root: Path
+               ) -> tuple[list[float], dict[str, list[float]]]:
+    """Both sides' processes on the log, interleaved, with and without their start-up;
+    our frames per CPU second, and each side's start-up CPU seconds."""
+    tiny = _tiny(log, root)
+    devices = json.dumps(device_nodes())
+    ours, anchor, ours_cpu, anchor_cpu = [], [], [], []
+    start_ups: dict[str, list[float]] = {"ours": [], "anchor": []}
+    for repeat in range(repeats):  # interleaved
+        _, cpu = _run(_ours([log], root / f"ours-{repeat}"))
+        ours.append(frames / cpu)
+        ours_cpu.append(cpu)
+        _, cpu = _run([sys.executable, "-c", ANCHOR, str(log), str(root / f"anchor-{repeat}"),
+                       devices])
+        anchor.append(frames / cpu)
+        anchor_cpu.append(cpu)
+        for side, cpu in zip(("ours", "anchor"), _start_ups(tiny, root), strict=True):
+            start_ups[side].append(cpu)
+    print(f"fleet decode to Parquet: a {frames:,}-frame realistic candump log, frames per "
+          f"CPU second, end to end (target >= 3x); {_load()}")
+    print(f"  blinkcan decode --parquet                {_spread(ours)}  {_micros(ours)}")
+    print(f"  LogReader + cantools + pyarrow (anchor)  {_spread(anchor)}  "
+          f"{_micros(anchor)}")
+    ratios = [o / a for o, a in zip(ours, anchor, strict=True)]
+    print(f"  ratio {statistics.median(ratios):.2f}x ({min(ratios):.2f}-{max(ratios):.2f})")
+    # the same runs without the start-up (interpreter and imports: a 20-frame log's CPU)
+    ours_running = [frames / (cpu - start) for cpu, start in
+                    zip(ours_cpu, start_ups["ours"], strict=True)]
+    anchor_running = [frames / (cpu - start) for cpu, start in
+                      zip(anchor_cpu, start_ups["anchor"], strict=True)]
+    running = [o / a for o, a in zip(ours_running, anchor_running, strict=True)]
+    print(f"  start-up (a 20-frame log), CPU: ours "
+          f"{statistics.median(start_ups['ours']):.2f} s, the anchor's "
+          f"{statistics.median(start_ups['anchor']):.2f} s; without it:")
+    print(f"  blinkcan decode --parquet                {_spread(ours_running)}  "
+          f"{_micros(ours_running)}")
+    print(f"  LogReader + cantools + pyarrow (anchor)  {_spread(anchor_running)}  "
+          f"{_micros(anchor_running)}")
+    print(f"  ratio {statistics.median(running):.2f}x ({min(running):.2f}-{max(running):.2f})")
+    return ours, start_ups
+
+
+def main(smoke: bool = False, scaling: bool = True, profile: bool = True,
+         size: int | None = None) -> None:
+    """The end-to-end figures on the 1 M-frame log of the speed issue (``size`` frames if
+    given; 20,000 for a ``smoke`` run); then where the CPU goes (``profile``) and the -j 2
+    scaling (``scaling``)."""
+    frames = size if size is not None else 20_000 if smoke else 1_000_000
     repeats = 1 if smoke else 3
     with tempfile.TemporaryDirectory() as folder:
         root = Path(folder)
         log = root / "unit.log"
         traffic = realistic_traffic(frames)
         write_candump(log, traffic)
-        devices = json.dumps(device_nodes())
-        ours, anchor = [], []
-        for repeat in range(repeats):  # interleaved
-            _, cpu = _run(_ours([log], root / f"ours-{repeat}"))
-            ours.append(frames / cpu)
-            _, cpu = _run([sys.executable, "-c", ANCHOR, str(log), str(root / f"anchor-{repeat}"),
-                           devices])
-            anchor.append(frames / cpu)
-        print(f"fleet decode to Parquet: a {frames:,}-frame realistic candump log, frames per "
-              "CPU second, end to end (target >= 3x)")
-        print(f"  blinkcan decode --parquet                {_spread(ours)}  {_micros(ours)}")
-        print(f"  LogReader + cantools + pyarrow (anchor)  {_spread(anchor)}  "
-              f"{_micros(anchor)}")
-        ratios = [o / a for o, a in zip(ours, anchor, strict=True)]
-        print(f"  ratio {statistics.median(ratios):.2f}x ({min(ratios):.2f}-{max(ratios):.2f})")
+        del traffic
+        ours, start_ups = end_to_end(log, frames, repeats, root)
         if profile:
-            stages(log, frames, repeats, root)
+            stages(log, frames, repeats, root, start_ups)
         if not scaling:
             return
 

@@ -115,3 +115,44 @@ def test_a_request_reads_the_same_however_many_were_seen_and_in_any_form() -> No
             server.on_request(h("40002000") + sub.to_bytes(4, "little"))
         assert server.on_request(h("4000200000000000")) == expected, round_
         assert server.on_request(h("40002000")) == expected
+
+
+def _segments_of(value: bytes) -> list[bytes]:
+    """CiA 301 §7.2.4.3.7, written out: 7 bytes a segment, toggle from 0, n unused, c last."""
+    out = []
+    for k in range(max(1, -(-len(value) // 7))):
+        chunk = value[7 * k : 7 * k + 7]
+        last = 7 * k + 7 >= len(value)
+        out.append(bytes(((k % 2) << 4 | (7 - len(chunk)) << 1 | last,)) + chunk
+                   + bytes(7 - len(chunk)))
+    return out
+
+
+def test_segmented_uploads_of_every_length_read_again_and_after_a_change() -> None:
+    """Every length from 5 to 22 bytes (a whole last segment included), read twice, then after
+    the value changed: each read gets the segments of the value at its initiate."""
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    mux = multiplexer(0x3000, 0)
+    for size in range(5, 23):
+        for value in (bytes(range(size)), bytes(range(size)), bytes(range(100, 100 + size))):
+            fake.values[mux] = value
+            assert server.on_request(h("4000300000000000")) == (
+                h("41003000") + size.to_bytes(4, "little"))
+            fake.values[mux] = b"changed meanwhile"  # not what this upload carries
+            for k, segment in enumerate(_segments_of(value)):
+                assert server.on_request(bytes((0x60 | (k % 2) << 4,)) + bytes(7)) == segment
+            assert server.state.name == "IDLE"
+
+
+def test_an_upload_segment_with_the_wrong_toggle_aborts_and_the_next_read_starts_over() -> None:
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    fake.values[multiplexer(0x3000, 0)] = b"twenty bytes of text"
+    server.on_request(h("4000300000000000"))
+    assert server.on_request(h("6000000000000000")) == b"\x00twenty "
+    assert server.on_request(h("6000000000000000")) == h("8000300000000305")  # toggle not 1
+    server.on_request(h("4000300000000000"))
+    assert server.on_request(h("6000000000000000")) == b"\x00twenty "
+    assert server.on_request(h("7000000000000000")) == b"\x10bytes o"
+    assert server.on_request(h("6000000000000000")) == b"\x03f text\x00"  # 6 bytes, last

@@ -28,6 +28,7 @@ from blinkcan.cli.bus_options import (
     spread_bus_kwargs,
     takes_bus_options,
 )
+from blinkcan.cli.collector import collector_paused
 
 log = logging.getLogger(__name__)
 
@@ -75,7 +76,8 @@ NO_BUS = {
 def load_subcommand(name: str) -> click.Command:
     """The click command of a registered subcommand, its module imported now."""
     module, _, attribute = SUBCOMMANDS[name][0].partition(":")
-    command = getattr(import_module(module), attribute)
+    with collector_paused():  # start-up: a module's objects are no garbage
+        command = getattr(import_module(module), attribute)
     if not isinstance(command, click.Command):
         raise TypeError(f"{SUBCOMMANDS[name][0]} is a {type(command).__name__}, not a command")
     return command

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import click
 
 from blinkcan import fleet
+from blinkcan.cli.collector import collector_for_decoding
 from blinkcan.cli.extras import install_command
 from blinkcan.decode.nodes import NodeKey
 
@@ -59,6 +60,12 @@ def unreadable_text(result: FileResult) -> str:
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                       devices: dict[NodeKey, str]) -> None:
     check_extra()
+    with collector_for_decoding():  # from the imports on: CPU per frame (cli/collector.py)
+        _decode(files, out, jobs, force, devices)
+
+
+def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
+            devices: dict[NodeKey, str]) -> None:
     from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
 
     total = len(log_files(files))

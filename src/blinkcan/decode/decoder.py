@@ -158,6 +158,7 @@ _NO_FIELDS: dict[str, Any] = {}  # shared, never written
 #: before and after the data, and its event as text (Decoder._keep_raw)
 _Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str, str]
 _new_tuple = tuple.__new__
+_BOOT_UP = bytes((NmtState.BOOT_UP,))
 
 
 class Event(NamedTuple):
@@ -322,6 +323,30 @@ class Decoder:
             return parts
         raw = self._raw_standard.get(can_id)
         return None if raw is None else (raw[1], raw[2])
+
+    def repeat_state(self, can_id: int, extended: bool, data: bytes) -> tuple[int, ...] | None:
+        """For a batch reader that keeps what a frame made: where the frame's event depends on
+        nothing but its bytes, the devices' models and the state returned, and it changes no
+        state but that, the state; None otherwise (not routed yet; SDO: time and transfers).
+        A frame whose state is the same before and after it is then one that makes the same
+        event again from the same state, and changes nothing."""
+        key = (can_id, extended)
+        if key not in self._routes:
+            return None
+        if extended:  # a J1939 keypad PGN's: its meaning depends on the keypads' addresses
+            return (len(self.j1939.addresses),)  # (only ever added: Decoder._extended)
+        node = can_id & 0x7F
+        if key in self._keyed or (can_id & 0x780 == HEARTBEAT and data[:1] == _BOOT_UP):
+            return node, self._keys.get(node, 0)  # read, or reset by a boot-up (PKP §10)
+        return () if key in self._pure else None
+
+    def is_kept(self, event: Event) -> bool:
+        """Whether the event, just decoded, is one the decoder keeps and makes again (an SDO
+        read or value seen before, a J1939 keypad frame's): every event made from the same
+        kept entry has the same ``fields`` object, and is the same but for time and frame.
+        A batch reader may keep what it made of such an event by its fields."""
+        served = self._served
+        return served is not None and served[0][3] is event.fields
 
     def text(self, frame: Frame, time: float = 0.0) -> str:
         """``str(decode(frame, time))``: another ECU's frame is a lookup."""

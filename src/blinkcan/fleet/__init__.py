@@ -1,7 +1,7 @@
 """Fleet logs: many CAN log files decoded into one Parquet dataset (a row per event, Hive
 partitions by model and date), on this machine or a Dask cluster; queried with DuckDB.
 
-Needs the optional extra: ``pip install 'blinkcan[fleet]'`` (pyarrow, DuckDB, Dask,
+Needs the optional extra: ``pip install 'blinkcan[fleet]'`` (pyarrow, numpy, DuckDB, Dask,
 zstandard). ``decode_files`` is imported on first use, so ``import blinkcan.fleet`` works
 without it and :func:`missing` names what is not installed.
 """
@@ -25,7 +25,7 @@ _LAZY = {"decode_files": "blinkcan.fleet.run", "FileResult": "blinkcan.fleet.tas
 
 def missing(*modules: str) -> list[str]:
     """Which of the modules (default: those of decoding) are not installed."""
-    wanted = modules or ("pyarrow", "fsspec", "zstandard")
+    wanted = modules or ("pyarrow", "numpy", "fsspec", "zstandard")
     return [name for name in wanted if find_spec(name) is None]
 
 

@@ -20,6 +20,7 @@ import numpy as np
 import pyarrow as pa
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
+from blinkcan.devices.model import DeviceDescription
 from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows
 from blinkcan.formats.columns import ArrowColumns, FrameColumns
 from blinkcan.formats.logs import describe_frame, frame_kind
@@ -32,9 +33,20 @@ if TYPE_CHECKING:
 _new_tuple = tuple.__new__  # Frame.trusted without the call: the readers checked the frames
 #: texts of undecoded frames kept (then they start over): a log has a few hundred identifiers
 _TEXTS_KEPT = 4096
+#: device frames' rows kept (then they start over): a log's devices repeat a few hundred
+#: frames (heartbeats, the same PDOs, the same key state), random data would not repeat
+_ROWS_KEPT = 4096
+#: an identifier's frames are no longer kept when, after this many decoded, under 1 in 4 of
+#: its frames were made again
+_KEEP_TRIAL = 256
 #: the Arrow types of a frame's columns: time (seconds), channel, identifier, flag, data
 _FRAME_TYPES = (pa.float64(), pa.string(), pa.int32(), pa.bool_(), pa.binary())
 FrameArrays = tuple[pa.Array, pa.Array, pa.Array, pa.Array, pa.Array]
+#: what a device frame made: node, model, text, a detail per row
+KeptRows = tuple[int | None, str | None, str, list[Detail]]
+#: and the rows' state they read, if any: (the node, its state: EventRows.state)
+KeptFrame = tuple[int | None, str | None, str, list[Detail],
+                  tuple[int | None, tuple[object, ...] | None] | None]
 
 
 @dataclass
@@ -173,6 +185,22 @@ class FrameDecoder:
         self._rows = EventRows(decoder)
         #: an undecoded frame's text (str of its event) by the decoder's: (node, device, text)
         self._texts: dict[str, tuple[int | None, str | None, str]] = {}
+        #: a device frame's (node, model, text, details) by its identifier, data, and the
+        #: decoder's and the rows' state it reads (Decoder.repeat_state, EventRows.state),
+        #: for frames that changed neither: the same frame from the same state makes them
+        #: again. Valid for the devices' models it was made with
+        self._kept: dict[object, KeptFrame] = {}
+        #: what was made of an event the decoder keeps (Decoder.is_kept), by its kind and
+        #: fields (the fields object kept with it: its id is not reused while kept)
+        self._kept_events: dict[tuple[Kind, int], tuple[object, KeptRows]] = {}
+        self._kept_models: dict[int, DeviceDescription] = {}
+        #: per identifier: [frames made again, frames decoded]; those whose frames rarely
+        #: repeat (an LED picture, a sensor's value) are no longer kept (bounded: an
+        #: identifier has a route, Decoder.repeat_state)
+        self._tallies: dict[tuple[int, bool], list[int]] = {}
+        self._unkept: set[tuple[int, bool]] = set()
+        #: False: every frame decoded (the tests' reference)
+        self.keep = True
 
     def decode(self, block: FrameColumns, start: int, segment: Segment, limit: int) -> int:
         """Decode the block's frames from ``start`` into ``segment`` until it holds ``limit``
@@ -217,7 +245,15 @@ class FrameDecoder:
         times = block.arrow_times.to_numpy()[at + start].tolist()
         payloads = block.arrow_data.take(pa.array(at + start, pa.int64())).to_pylist()
         snapshot = dict(devices)
-        simple, find_number, number = segment.simple, segment.numbers.get, segment.number
+        kept, keep, event_rows = self._kept, self.keep, self._rows
+        kept_events, is_kept = self._kept_events, decoder.is_kept
+        tallies, unkept = self._tallies, self._unkept
+        if self._kept_models != snapshot:  # a model learned: the rows kept name the old ones
+            kept.clear()
+            kept_events.clear()
+            self._kept_models = snapshot
+        repeat_state, row_state, simple_rows = decoder.repeat_state, event_rows.state, SIMPLE_ROWS
+        find_number, number = segment.numbers.get, segment.number
         event_texts = self._texts
         if len(event_texts) > _TEXTS_KEPT:
             event_texts.clear()
@@ -231,32 +267,76 @@ class FrameDecoder:
                 end = place - (total - limit)
                 break
             can_id, flag = idents[count]
-            event = decode(new(frame_type, (can_id, payloads[count], flag)), times[count])
-            code = simple.get(event.kind)
+            payload = payloads[count]
+            made = state = None
+            if keep and idents[count] not in unkept:  # made before from the same state?
+                state = repeat_state(can_id, flag, payload)
+                if state is not None:
+                    key = (can_id, flag, payload, state)
+                    made = kept.get(key)
+                    tally = tallies.get(idents[count])
+                    if tally is None:
+                        tally = tallies[idents[count]] = [0, 0]
+                    if made is not None and (made[4] is None or
+                                             row_state(made[4][0]) == made[4][1]):
+                        nodes[place], models[place], texts[place], details, _ = made
+                        tally[0] += 1
+                    else:
+                        made = None
+                        changes, reads = event_rows.changes, event_rows.reads
+                        tally[1] += 1
+                        if tally[1] >= _KEEP_TRIAL and tally[0] * 4 < tally[0] + tally[1]:
+                            unkept.add(idents[count])  # its frames rarely repeat: not kept
+            if made is None:
+                event = decode(new(frame_type, (can_id, payload, flag)), times[count])
+                one = simple_rows.get(event.kind)
+                if one is not None:  # another ECU's frame, or one of no detail
+                    details = one
+                    node = event.node_id
+                    device = devices.get(node)  # type: ignore[arg-type]  # None: no device
+                    nodes[place] = node
+                    models[place] = None if device is None else device.model
+                    seen = event_texts.get(event.text)  # str(event): device, node and text
+                    if seen is not None and seen[0] == node and seen[1] == event.device:
+                        texts[place] = seen[2]
+                    else:
+                        texts[place] = text = str(event)
+                        event_texts[event.text] = (node, event.device, text)
+                elif keep and is_kept(event):  # made from an entry the decoder keeps
+                    fields = event.fields
+                    tag = (event.kind, id(fields))
+                    made_of = kept_events.get(tag)
+                    if made_of is not None and made_of[0] is fields:
+                        nodes[place], models[place], texts[place], details = made_of[1]
+                    else:
+                        before = event_rows.changes, event_rows.reads
+                        nodes[place], models[place], details = rows(event)
+                        texts[place] = str(event)
+                        if (event_rows.changes, event_rows.reads) == before:  # no state
+                            if len(kept_events) >= _ROWS_KEPT:
+                                kept_events.clear()
+                            kept_events[tag] = (fields, (nodes[place], models[place],
+                                                         texts[place], details))
+                else:
+                    nodes[place], models[place], details = rows(event)
+                    texts[place] = str(event)
+                if state is not None and event_rows.changes == changes and \
+                        repeat_state(can_id, flag, payload) == state:  # it changed nothing
+                    if len(kept) >= _ROWS_KEPT:
+                        kept.clear()
+                    node = event.node_id
+                    kept[key] = (nodes[place], models[place], texts[place], details,
+                                 None if event_rows.reads == reads else
+                                 (node, row_state(node)))
             added = 1
-            if code is not None:  # another ECU's frame, or one of no detail
-                node = event.node_id
-                device = devices.get(node)  # type: ignore[arg-type]  # None: no device
-                nodes[place] = node
-                models[place] = None if device is None else device.model
-                seen = event_texts.get(event.text)  # str(event): device, node and text
-                if seen is not None and seen[0] == node and seen[1] == event.device:
-                    texts[place] = seen[2]
-                else:
-                    texts[place] = text = str(event)
-                    event_texts[event.text] = (node, event.device, text)
-                codes[place] = code
+            if len(details) == 1:
+                code = find_number(details[0])
+                codes[place] = number(details[0]) if code is None else code
             else:
-                nodes[place], models[place], details = rows(event)
-                texts[place] = str(event)
-                if len(details) == 1:
-                    code = find_number(details[0])
-                    codes[place] = number(details[0]) if code is None else code
-                else:
-                    added = len(details)
-                    several.append(place)
-                    several_counts.append(added)
-                    several_codes += map(number, details)
+                added = len(details)
+                several.append(place)
+                several_counts.append(added)
+                several_codes += map(number, details)
             rows_of_devices += added
             if total + added >= limit or devices != snapshot:
                 end = place + 1  # full, or a model learned: the rest with the new state

@@ -82,6 +82,12 @@ class EventRows:
         self._leds: dict[tuple[int, str], tuple[int, int, int]] = {}
         self._outputs: dict[int, int] = {}  # node -> the pins HIGH (a mask: bit 0 is pin 1)
         self._faults: dict[int, int] = {}  # node -> the pins in FAULT (a mask)
+        #: node -> what is followed of it (its LEDs, outputs, faults), made again on a change
+        self._states: dict[int, tuple[object, ...]] = {}
+        #: changes of what is followed, counted (a frame that left it alone changed nothing)
+        self.changes = 0
+        #: reads of what is followed, counted (rows made without one depend on no state)
+        self.reads = 0
         self._models: dict[str, str] = {}
         self._heartbeats: dict[object, list[Detail]] = {}  # state -> its row (shared)
         self._pdo: dict[str, Callable[[int, dict[str, Any]], list[Detail]]] = {
@@ -89,6 +95,17 @@ class EventRows:
             "led_blink": self._led_picture, "outputs": self._output_states,
             "faults": self._fault_pins,
         }
+
+    def state(self, node: int | None) -> tuple[object, ...] | None:
+        """What is followed of a node (None: nothing yet): with the same event, the same
+        state gives the same rows (an event's rows read only its node's)."""
+        return self._states.get(node) if node is not None else None
+
+    def _changed(self, node: int) -> None:
+        self.changes += 1
+        self._states[node] = (tuple(sorted((k[1], v) for k, v in self._leds.items()
+                                           if k[0] == node)),
+                              self._outputs.get(node), self._faults.get(node))
 
     def rows(self, event: Event) -> Rowed:
         kind = event.kind
@@ -145,11 +162,14 @@ class EventRows:
 
     def _reboot(self, node: int | None) -> None:
         """Boot-up: LEDs dark, outputs OFF, no FAULT (the devices' power-on state)."""
+        self.reads += 1
         for key in [k for k in self._leds if k[0] == node]:
             del self._leds[key]
         if node is not None:
             self._outputs.pop(node, None)
             self._faults.pop(node, None)
+            if self._states.pop(node, None) is not None:
+                self.changes += 1
 
     def _keys(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         pressed, released = fields["pressed"], fields["released"]
@@ -167,11 +187,13 @@ class EventRows:
         lit = (_mask(fields.get("red", ())), _mask(fields.get("green", ())),
                _mask(fields.get("blue", ())))
         place = (node, name)
+        self.reads += 1
         before = self._leds.get(place, _DARK)
         changed = (lit[0] ^ before[0]) | (lit[1] ^ before[1]) | (lit[2] ^ before[2])
         if not changed:
             return [_LED_UNCHANGED]
         self._leds[place] = lit
+        self._changed(node)
         red, green, blue = lit
         details = []
         for key in numbers(changed):
@@ -184,18 +206,23 @@ class EventRows:
     def _output_states(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         """A row per pin that went HIGH or OFF (KBX §17: the decoder applied OFF wins)."""
         high = _mask(fields["high"])
+        self.reads += 1
         changed = high ^ self._outputs.get(node, 0)
         if not changed:
             return [_OUTPUT_UNCHANGED]
         self._outputs[node] = high
+        self._changed(node)
         return [_new(Detail, ("output", None, pin, "high" if high >> (pin - 1) & 1 else "off",
                               None, None)) for pin in numbers(changed)]
 
     def _fault_pins(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         faults = fields["faults"]
         now = _mask(faults)
+        self.reads += 1
         before = self._faults.get(node, 0)
-        self._faults[node] = now
+        if node not in self._faults or now != before:
+            self._faults[node] = now
+            self._changed(node)
         if now == before:
             return [_new(Detail, ("fault", None, None, "unchanged", None, len(faults)))]
         return [_new(Detail, ("fault", None, pin, "fault", None, None))

@@ -35,8 +35,8 @@ _EXPEDITED_UPLOAD_MASK = 0xE0 | EXPEDITED
 _EXPEDITED_UPLOAD = (SCS_INITIATE_UPLOAD << 5) | EXPEDITED
 #: an initiate upload response that opens a segmented upload: scs 2, e clear
 _SEGMENTED_UPLOAD = SCS_INITIATE_UPLOAD << 5
-#: the first upload segment request (CiA 301 §7.2.4.3.7: ccs 3, toggle 0)
-_FIRST_SEGMENT_REQUEST = b"\x60" + ZEROS[:7]
+#: the upload segment requests (CiA 301 §7.2.4.3.7: ccs 3), toggle bit clear and set
+_SEGMENT_REQUESTS = (b"\x60" + ZEROS[:7], b"\x70" + ZEROS[:7])
 
 
 class SdoError(BlinkcanError):
@@ -131,27 +131,27 @@ class UploadTransfer(_Transfer):
         """The next request, or None when the value is complete (then ``done``)."""
         if len(data) == 8:  # the common replies, taken without parsing the frame
             command = data[0]
-            started = self._size is not None or bool(self._buffer)
-            if (command & _EXPEDITED_UPLOAD_MASK == _EXPEDITED_UPLOAD and not started
-                    and data[1:4] == self.mux):
-                # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is
-                # stated, else all four (protocol.sdo.expedited_payload, inlined)
-                self.value = (data[4 : 8 - ((command >> 2) & 0x03)] if command & SIZE_INDICATED
-                              else data[4:8])
-                self.done = True
-                return None
-            if (command & _EXPEDITED_UPLOAD_MASK == _SEGMENTED_UPLOAD and not started
-                    and data[1:4] == self.mux):
-                # CiA 301 §7.2.4.3.6: a segmented upload opens; bytes 4-7 give its size
-                # where s is set (SdoFrame.size, inlined)
-                self._size = (int.from_bytes(data[4:8], "little") if command & SIZE_INDICATED
-                              else -1)
-                self._buffer = bytearray()
-                return _FIRST_SEGMENT_REQUEST
-            if command >> 5 == SCS_UPLOAD_SEGMENT and started:
-                # CiA 301 §7.2.4.3.4: bytes 1-7 less the n unused ones (bits 3-1)
-                # (protocol.sdo.segment_payload, inlined)
-                return self._segment(command, data[1 : 8 - ((command >> 1) & 0x07)])
+            if self._size is not None or self._buffer:  # a segmented upload under way
+                if command >> 5 == SCS_UPLOAD_SEGMENT:
+                    # CiA 301 §7.2.4.3.4: bytes 1-7 less the n unused ones (bits 3-1)
+                    # (protocol.sdo.segment_payload, inlined)
+                    return self._segment(command, data[1 : 8 - ((command >> 1) & 0x07)])
+            elif data[1:4] == self.mux:
+                opening = command & _EXPEDITED_UPLOAD_MASK
+                if opening == _EXPEDITED_UPLOAD:
+                    # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is
+                    # stated, else all four (protocol.sdo.expedited_payload, inlined)
+                    self.value = (data[4 : 8 - ((command >> 2) & 0x03)]
+                                  if command & SIZE_INDICATED else data[4:8])
+                    self.done = True
+                    return None
+                if opening == _SEGMENTED_UPLOAD:
+                    # CiA 301 §7.2.4.3.6: a segmented upload opens; bytes 4-7 give its size
+                    # where s is set (SdoFrame.size, inlined)
+                    self._size = (int.from_bytes(data[4:8], "little")
+                                  if command & SIZE_INDICATED else -1)
+                    self._buffer = bytearray()
+                    return _SEGMENT_REQUESTS[0]
         reply = self._check_common(data)
         command = reply.command
         if self._size is None and not self._buffer and reply.specifier == SCS_INITIATE_UPLOAD:
@@ -164,7 +164,7 @@ class UploadTransfer(_Transfer):
             size = reply.size
             self._size = -1 if size is None else size
             self._buffer = bytearray()
-            return _FIRST_SEGMENT_REQUEST
+            return _SEGMENT_REQUESTS[0]
         if reply.specifier != SCS_UPLOAD_SEGMENT:
             raise self._fail(f"unexpected reply {command:02X}h")
         return self._segment(command, reply.segment_data)
@@ -180,8 +180,8 @@ class UploadTransfer(_Transfer):
             self.value = bytes(self._buffer)
             self.done = True
             return None
-        self._toggle ^= TOGGLE
-        return bytes((0x60 | self._toggle,)) + ZEROS[:7]
+        toggle = self._toggle = self._toggle ^ TOGGLE
+        return _SEGMENT_REQUESTS[1] if toggle else _SEGMENT_REQUESTS[0]
 
 
 class DownloadTransfer(_Transfer):

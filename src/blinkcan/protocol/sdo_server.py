@@ -77,7 +77,7 @@ class SdoServer:
     """One server channel (one per node)."""
 
     __slots__ = ("_buffer", "_download", "_handlers", "_idle", "_mux", "_parsed", "_position",
-                 "_replies", "_size", "_state", "_tables", "_toggle", "_upload")
+                 "_replies", "_segments", "_size", "_state", "_tables", "_toggle", "_upload")
 
     def __init__(self, access: ObjectAccess) -> None:
         self._upload = access.sdo_upload  # bound once: called on every request
@@ -89,7 +89,11 @@ class SdoServer:
         self._toggle = 0
         self._size: int | None = None
         #: mux -> (value bytes, reply): an unchanged value object gets the same reply bytes
-        self._replies: dict[bytes, tuple[bytes, bytes]] = {}
+        #: (expedited: the reply; segmented: the initiate response, then every segment's)
+        self._replies: dict[bytes, tuple[bytes, bytes | tuple[bytes, ...]]] = {}
+        #: the open upload's replies: its initiate response, then its segments (``_position``:
+        #: the next)
+        self._segments: tuple[bytes, ...] = ()
         #: request bytes -> their parse. A master polls the same requests byte for byte (a
         #: read of an object is always the same eight bytes), an SdoFrame is immutable, and
         #: parsing costs about a third of a request (a NamedTuple of seven fields; measured,
@@ -160,36 +164,39 @@ class SdoServer:
         value = self._upload(mux)
         cached = self._replies.get(mux)
         if cached is not None and cached[0] is value:
-            return cached[1]
-        if not isinstance(value, bytes):
+            reply = cached[1]
+            if isinstance(reply, bytes):
+                return reply
+        elif not isinstance(value, bytes):
             return abort_data(mux, value)
-        size = len(value)
-        if size in EXPEDITED_UPLOAD_COMMAND:  # CiA 301: 1-4 bytes go expedited
-            reply = bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
+        else:
+            size = len(value)
+            if size in EXPEDITED_UPLOAD_COMMAND:  # CiA 301: 1-4 bytes go expedited
+                reply = bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
+                self._replies[mux] = (value, reply)
+                return reply
+            reply = (bytes((SEGMENTED_UPLOAD_RESPONSE,)) + mux + size.to_bytes(4, "little"),
+                     *_segment_replies(value))
             self._replies[mux] = (value, reply)
-            return reply
         self._enter(TransferState.UPLOADING)
         self._mux = mux
-        self._buffer = bytearray(value)
-        self._position = 0
+        self._segments = reply
+        self._position = 1
         self._toggle = 0
-        return bytes((SEGMENTED_UPLOAD_RESPONSE,)) + mux + size.to_bytes(4, "little")
+        return reply[0]
 
     def _upload_segment(self, request: SdoFrame) -> bytes:
         # CiA 301 §7.2.4.3.7: alternates from 0 on each segment (SdoFrame.toggle, inlined)
-        toggle = request.command & TOGGLE
-        if toggle != self._toggle:
+        if request.command & TOGGLE != self._toggle:
             self._enter(TransferState.IDLE)
             return abort_data(self._mux, AbortCode.TOGGLE_BIT_NOT_ALTERNATED)
-        start = self._position
-        chunk = bytes(self._buffer[start : start + 7])
-        self._position = start + len(chunk)
-        last = self._position >= len(self._buffer)
+        position = self._position
+        self._position = position + 1
         self._toggle ^= TOGGLE
-        if last:
+        segments = self._segments
+        if position + 1 == len(segments):  # the last one
             self._enter(TransferState.IDLE)
-        command = toggle | ((7 - len(chunk)) << 1) | last
-        return bytes((command,)) + chunk + ZEROS[len(chunk) : 7]
+        return segments[position]
 
     def _initiate_download(self, request: SdoFrame) -> bytes:
         command, mux = request.command, request.mux  # read once: properties cost a call
@@ -232,3 +239,17 @@ class SdoServer:
         if result > 0xFF:
             return abort_data(self._mux, result)
         return reply
+
+
+def _segment_replies(value: bytes) -> tuple[bytes, ...]:
+    """The upload segment responses that carry ``value``, in order (CiA 301 §7.2.4.3.7):
+    seven bytes each, the toggle bit alternating from 0, n (bits 3-1) the bytes unused, c (bit
+    0) on the last; an empty value is one empty last segment."""
+    replies = []
+    for start in range(0, max(len(value), 1), 7):
+        chunk = value[start : start + 7]
+        toggle = TOGGLE if start // 7 % 2 else 0
+        last = start + 7 >= len(value)
+        replies.append(bytes((toggle | ((7 - len(chunk)) << 1) | last,)) + chunk
+                       + ZEROS[len(chunk) : 7])
+    return tuple(replies)
