@@ -19,6 +19,7 @@ from blinkcan.cli.emulate import ForeignFrames
 from blinkcan.cli.main import cli
 from blinkcan.devices.registry import models
 from blinkcan.host import IdentityError, SharedNodeIdError, scan, scan_j1939
+from blinkcan.host.j1939_keypad import j1939_models
 from blinkcan.host.registry import driver_class
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator
@@ -175,3 +176,61 @@ def _wait_for(bus: can.BusABC, can_id: int, failure: str, within: float = 60.0) 
         if message is not None and message.arbitration_id == can_id:
             return
     pytest.fail(failure)
+
+
+# -- J1939: two keypads at one source address (found by the attack pass of session 7: the
+# driver and `blinkcan keypad --protocol j1939 led` went on, every command reaching both) ------
+
+J1939_MODELS = j1939_models()
+
+
+@pytest.mark.parametrize("name", J1939_MODELS)
+def test_a_j1939_driver_says_two_keypads_answer_at_its_address(name: str) -> None:
+    with Rig() as rig:
+        rig.add(build_twin(name, node_id=0x15, protocol="j1939"))
+        rig.add(build_twin(name, node_id=0x16, protocol="j1939"))  # both at 21h (J1939)
+        rig.settle()
+        asked = rig.now
+        with pytest.raises(SharedNodeIdError, match=r"^two keypads answer at J1939 address "
+                                                    r"21h \(one software revision request got "
+                                                    r"2 replies\): give each its own address"):
+            driver_class(name)(rig.bus, protocol="j1939", address=0x21)
+        assert rig.now == asked  # the answers due at that instant: no time waited
+
+
+@pytest.mark.parametrize("name", J1939_MODELS)
+def test_one_j1939_keypad_is_confirmed_after_twice_its_round_trip_more(name: str) -> None:
+    with Rig(latency=0.001) as rig:
+        rig.add(build_twin(name, node_id=0x15, protocol="j1939"))
+        rig.add(build_twin(name, node_id=0x16, protocol="j1939", settings={
+            "j1939_source_address": 0x22}))
+        rig.settle()
+        asked = rig.now
+        keypad = driver_class(name)(rig.bus, protocol="j1939", address=0x21)
+        # the request's round trip (2 ms), then twice as long for a second answer
+        assert rig.now - asked == pytest.approx(0.006)
+        keypad.set_led(1, "red")
+        keypad.close()
+
+
+@pytest.fixture
+def two_j1939_keypads() -> Iterator[list[str]]:
+    """Two keypads in J1939 mode at 21h on one bus (two ``blinkcan emulate keypad --protocol
+    j1939``), answering from one emulator back to back (see ``two_terminals``)."""
+    channel = f"shared-j1939-{uuid.uuid4().hex}"
+    bus = can.Bus(interface="virtual", channel=channel)
+    with Emulator(bus, [KeypadTwin(node_id=0x15, protocol="j1939"),
+                        KeypadTwin(node_id=0x16, protocol="j1939")]):
+        yield ["-i", "virtual", "-c", channel]
+    bus.shutdown()
+
+
+@pytest.mark.parametrize("command", [["info"], ["led", "1", "red"], ["brightness", "10"]])
+def test_the_command_line_says_two_j1939_keypads_answer(two_j1939_keypads: list[str],
+                                                         command: list[str]) -> None:
+    result = CliRunner().invoke(cli, ["keypad", "--protocol", "j1939", *command,
+                                      *two_j1939_keypads], env={"COLUMNS": "200"})
+    assert result.exit_code == 1, result.output
+    assert result.output.strip() == (
+        "Error: two keypads answer at J1939 address 21h (one software revision request got 2 "
+        "replies): give each its own address (address claim, 74h, moves one of them)")

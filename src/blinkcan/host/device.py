@@ -145,6 +145,7 @@ class Device:
                  *, sdo_timeout: float = 0.5, sdo_retries: int = 1) -> None:
         """Set up; a subclass calls :meth:`confirm` (unless told not to) before any command."""
         self.node_id = check_node_id(node_id)
+        check_time("sdo_timeout", sdo_timeout, 0)  # before anything is sent
         self.description = description
         self.host = HostBus.attach(bus)  # shared by every driver on this bus
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)

@@ -34,6 +34,7 @@ from blinkcan.devices.keypad_j1939 import (
 from blinkcan.devices.registry import models
 from blinkcan.host.bus import HostBus
 from blinkcan.host.device import BOOT_UP, NoDeviceError
+from blinkcan.host.identity_errors import SharedNodeIdError
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import (
     ADDRESS_MAX,
@@ -133,6 +134,11 @@ class J1939KeypadLink:
         self._revision_lock = threading.Lock()
         self._heard_signal = host.signal()
         self._heartbeat_signal = host.signal()
+        #: software revision replies since :meth:`confirm` asked, the time of the first, and
+        #: a signal set at the second (a second keypad at the address)
+        self._revision_replies = 0
+        self._first_reply_at = 0.0
+        self._second_reply = host.signal()
         #: the keypad's NAME once it claimed an address (§20), else None
         self.name: bytes | None = None
         #: "not claimed" (address claim off, §20), "claimed", or "lost to <NAME>"
@@ -163,12 +169,35 @@ class J1939KeypadLink:
         unacknowledged): a Request for Address Claimed and a software revision request (§11,
         §20); its revision, heartbeat or key message answers. :class:`NoDeviceError`
         otherwise."""
-        self._heard_signal.clear()
-        self._requested_claims = self.host.clock()
-        self.host.send(request_frame(PGN_ADDRESS_CLAIMED, self.source, self.address))
-        self.send("software_revision")
-        if not self.host.wait(self._heard_signal, timeout):
-            raise NoDeviceError(f"no keypad heard at {self.address:02X}h")
+        with self._revision_lock:  # no software_revision() request in between
+            self._heard_signal.clear()
+            self._revision_signal.clear()
+            self._second_reply.clear()
+            self._revision_replies = 0
+            asked = self._requested_claims = self.host.clock()
+            self.host.send(request_frame(PGN_ADDRESS_CLAIMED, self.source, self.address))
+            self.send("software_revision")
+            if not self.host.wait(self._heard_signal, timeout):
+                raise NoDeviceError(f"no keypad heard at {self.address:02X}h")
+            self._check_one_keypad(asked)
+
+    def _check_one_keypad(self, asked: float) -> None:
+        """:class:`SharedNodeIdError` when two keypads answer the one software revision
+        request (two keypads at one address, as CANopen's two devices at one node id: every
+        command reaches both). The second answer comes about as late as the first: it is
+        waited for twice as long again as the first took (in simulated time with no latency,
+        no time at all: the answers due at this instant). A keypad heard by its heartbeat or a
+        key before its reply is not counted (nothing is waited for)."""
+        if not self._revision_signal.is_set():
+            return
+        self.host.wait(self._second_reply, 2 * max(0.0, self._first_reply_at - asked))
+        answers = self._revision_replies
+        if answers > 1:
+            word = {2: "two", 3: "three", 4: "four"}.get(answers, str(answers))
+            raise SharedNodeIdError(
+                f"{word} keypads answer at J1939 address {self.address:02X}h (one software "
+                f"revision request got {answers} replies): give each its own address "
+                "(address claim, 74h, moves one of them)", answers)
 
     def forget_looks(self) -> None:
         """The keypad shows nothing now (it powered on): the next show sends every look."""
@@ -249,6 +278,11 @@ class J1939KeypadLink:
             self._heard_signal.set()
             self._on_key(data[3], data[4] == KEY_PRESSED, now)
         elif data[2] == SOFTWARE_REVISION_REPLY and data[3] != 0xFF:  # §11
+            self._revision_replies += 1
+            if self._revision_replies == 1:
+                self._first_reply_at = now
+            else:
+                self._second_reply.set()
             self._revision = data[3:7].rstrip(b"\x00").decode("ascii", "replace")
             self._revision_signal.set()
             self._heard_signal.set()

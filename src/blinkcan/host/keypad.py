@@ -61,7 +61,7 @@ from blinkcan.host.device import (
 from blinkcan.host.events import EventSource
 from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
 from blinkcan.host.registry import driver_class
-from blinkcan.protocol.cob import check_node_id, check_range
+from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import j1939_frame
@@ -126,7 +126,14 @@ class Keypad(Device):
     def connect(cls, bus: HostBus | can.BusABC, node_id: int = 0x15, **options: Any) -> Keypad:
         """The driver of whichever keypad answers at ``node_id``: its 100Bh model id names the
         model (two models share 1000h, MT M59). :class:`WrongDeviceError` for a device that is
-        no keypad, :class:`NoDeviceError` when nothing answers."""
+        no keypad, :class:`NoDeviceError` when nothing answers. A keypad in J1939 mode
+        (``protocol="j1939"``, ``address=``) answers no SDO and tells no model id (§11: its
+        software revision): the driver of the model with a J1939 mode confirms it as usual."""
+        if options.get("protocol", "canopen") != "canopen":
+            return cls(bus, node_id, **options)
+        for time_option in ("sdo_timeout", "long_press"):  # bad ones: before the read
+            if time_option in options:
+                check_time(time_option, options[time_option], 0)
         host = HostBus.attach(bus)
         try:
             raw = host.sdo(check_node_id(node_id), options.get("sdo_timeout", 0.5), 1).upload(
@@ -158,6 +165,7 @@ class Keypad(Device):
         self._model_given = model is not None
         if watchdog is not None:  # checked before anything is sent (the identity reads)
             milliseconds("watchdog period", watchdog)
+        check_time("long_press", long_press, 0)
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
