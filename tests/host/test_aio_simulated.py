@@ -138,3 +138,22 @@ def test_a_cancelled_wait_leaves_the_iterator_and_the_driver_working() -> None:
             return " ".join([f"{event.key} {event.action}" async for event in later])
 
         assert _bounded(main) == "4 press 4 release"
+
+
+@pytest.mark.parametrize("timeout", [-1.0, float("inf"), float("nan")])
+@pytest.mark.parametrize("name", ITERATORS)
+def test_an_iterator_timeout_is_checked_when_asked(name: str, timeout: float) -> None:
+    """A negative or infinite timeout is a ValueError at the call, blocking or asyncio (it
+    was taken: -1 ended the iterator at once, +inf ended it at the simulation's last event)."""
+    twin, driver, iterate = ITERATORS[name]
+    with Rig() as rig:
+        rig.add(twin())
+
+        async def main() -> None:
+            opened = await driver(rig).open()
+            with pytest.raises(ValueError, match=r"^timeout must be "):
+                iterate(opened, timeout)
+            with pytest.raises(ValueError, match=r"^timeout must be "):
+                iterate(opened.device, timeout)  # the blocking driver's own iterator
+
+        _bounded(main)

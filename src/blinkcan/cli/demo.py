@@ -11,7 +11,6 @@ and after each step what the devices show.
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import queue
 import threading
@@ -29,11 +28,13 @@ from rich.panel import Panel
 from rich.text import Text
 
 from blinkcan.cli.clock import Clock
+from blinkcan.cli.demo_model import run_model_demo, until_interrupted
 from blinkcan.cli.emulate import panel, panel_address
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.cli.seconds import Seconds
 from blinkcan.decode import Decoder
 from blinkcan.decode.eventlog import EventLog, Row
+from blinkcan.devices.registry import model_names, parse_spec
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
 from blinkcan.host.keybox import FaultEvent
 from blinkcan.protocol.frame import Frame
@@ -248,7 +249,7 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
                 console.line()
                 console.print(f"after the script: outputs HIGH {_high(states)}")
                 console.print("the controller keeps running with the panel; Ctrl-C stops")
-                (wait or _until_interrupted)()
+                (wait or until_interrupted)()
                 states = keybox.states()  # what was done on the panel counts too
             controller.stop()
             keypad.close()
@@ -265,20 +266,24 @@ def _high(states: dict[int, str]) -> list[int]:
     return sorted(pin for pin, state in states.items() if state == "high")
 
 
-def _until_interrupted() -> None:
-    """Until Ctrl-C. The wait wakes every half second, as emulate's does: one endless wait
-    could miss a signal that came right after start-up."""
-    never = threading.Event()
-    with contextlib.suppress(KeyboardInterrupt):
-        while not never.wait(0.5):
-            pass
-
-
-@click.command("demo")
+@click.command("demo", epilog=f"MODEL: {model_names()}.")
 @click.option("--pause", type=Seconds(maximum=60.0), default=0.6, show_default=True,
               help="Seconds between the scripted steps.")
 @click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
               metavar="[HOST:PORT]", help="Serve the front panel too, and keep running.")
-def command(pause: float, web: str | None) -> None:
+@click.option("--model", "spec", default=None, metavar="MODEL[@GENERATION]",
+              help="A short scripted scenario of this one model instead: started, then "
+                   "everything its face has done once (keys, knobs, inputs, fuses, power).")
+@click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
+              show_default=True, help="The protocol the --model device speaks.")
+def command(pause: float, web: str | None, spec: str | None, protocol: str) -> None:
     """A controller on a keypad and a Keybox twin: key N toggles output N, shown live."""
-    raise SystemExit(run_demo(output_console(), pause, web))
+    if spec is None:
+        if protocol != "canopen":
+            raise click.UsageError("--protocol is for the device of --model")
+        raise SystemExit(run_demo(output_console(), pause, web))
+    try:
+        parse_spec(spec)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="--model") from None
+    raise SystemExit(run_model_demo(output_console(), spec, protocol, pause, web))

@@ -27,6 +27,7 @@ from blinkcan.host.events import EventSource
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.host.scan import Found, scan
+from blinkcan.protocol.cob import check_time
 
 E = TypeVar("E")
 D = TypeVar("D", bound=Device)
@@ -61,6 +62,8 @@ def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
              timeout: float | None) -> AsyncIterator[E]:
     """Events from the moment of this call on (from the moment the driver is open, if it is
     still opening). A subscription whose event loop has closed removes itself."""
+    if timeout is not None:
+        check_time("timeout", timeout, 0)
     loop = asyncio.get_running_loop()
     waiting: asyncio.Queue[E] = asyncio.Queue()
     removers: list[Callable[[], None]] = []

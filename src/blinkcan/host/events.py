@@ -14,6 +14,7 @@ import threading
 from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
+from blinkcan.protocol.cob import check_time
 from blinkcan.runtime.scheduler import Scheduler
 
 log = logging.getLogger(__name__)
@@ -94,7 +95,10 @@ class EventSource(Generic[E]):
 
     def iterate(self, timeout: float | None = None) -> Iterator[E]:
         """Events from the moment of this call (not of the first ``next``); the iterator ends
-        after ``timeout`` seconds without one (None: never) and when the source closes."""
+        after ``timeout`` seconds without one (None: never; else finite, >= 0: ValueError at
+        this call) and when the source closes."""
+        if timeout is not None:
+            check_time("timeout", timeout, 0)
         waiting: queue.SimpleQueue[E | object] = queue.SimpleQueue()
         with self._lock:
             if self.closed:

@@ -1,0 +1,142 @@
+"""``blinkcan demo --model NAME``: a short scripted scenario for one registered model.
+
+The model's twin runs in an Emulator on a virtual bus; a host starts it (NMT, when it speaks
+CANopen), then a hand does to it, once each, everything its face has (twin/actions.py: press
+and release a key, turn a knob, set an input, blow and replace a fuse, switch the power off
+and on), so a new model's face brings its scenario with it. Every frame is a line: seconds
+since the start, the direction, the frame and its meaning. The emulator runs in real time;
+``pause`` is the time between the steps.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
+import can
+from rich.console import Console
+
+from blinkcan.cli.clock import Clock
+from blinkcan.cli.emulate import build_twins, decoder_devices, panel, panel_address
+from blinkcan.decode import Decoder
+from blinkcan.host import HostBus
+from blinkcan.host.j1939_keypad import scan_j1939
+from blinkcan.host.scan import scan
+from blinkcan.protocol.frame import Frame
+from blinkcan.protocol.nmt import NmtCommand, nmt_frame
+from blinkcan.runtime import Emulator
+from blinkcan.twin.actions import Action, actions_of
+from blinkcan.twin.base import CanopenTwin
+
+#: the value a scripted step gives an argument where its range's first is not the one to show
+_SHOWN: dict[str, Callable[[float, float], float]] = {
+    "ticks": lambda low, high: min(high, 4),  # a quarter turn clockwise
+    "volts": lambda low, high: round((low + high) / 2, 2),
+    "level": lambda low, high: high,
+}
+#: how long the twin may take to become operational after the host's NMT start
+_START_TIMEOUT = 5.0
+
+
+def scripted_steps(twin: CanopenTwin) -> list[tuple[str, Action, dict[str, Any]]]:
+    """(title, action, arguments) for every action the twin's face has, in the table's order,
+    each with the first value of its range (or :data:`_SHOWN`'s)."""
+    face = twin.description.face
+    steps = []
+    for action in actions_of(face):
+        values: dict[str, Any] = {}
+        for argument in action.arguments:
+            low, high = argument.bounds(face)
+            shown = _SHOWN.get(argument.name)
+            values[argument.name] = low if shown is None else shown(low, high)
+        named = ", ".join(f"{name} {value}" for name, value in values.items())
+        steps.append((f"{action.doing}{f' ({named})' if named else ''}", action, values))
+    return steps
+
+
+def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
+                   pause: float = 0.6, web: str | None = None,
+                   wait: Callable[[], None] | None = None) -> int:
+    """The scenario of the model ``spec`` ("pkp-3500-mt", "keypad@1.5"); see the module."""
+    address = None if web is None else panel_address(web)
+    twins = build_twins((spec,), None, None, "firmware", protocol=protocol)
+    twin = twins[0]
+    decoder = Decoder(decoder_devices(twins))
+    clock = Clock(start=time.monotonic())
+    frames = 0
+
+    def show(frame: Frame, sent: bool, now: float) -> None:
+        nonlocal frames
+        frames += 1
+        console.out(f"{clock(now):>7} {'<' if sent else '>'} {frame.can_id:03X} "
+                    f"{frame.data.hex(' ').upper():<23} {decoder.text(frame, now)}",
+                    highlight=False)
+
+    channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
+    title = twin.description.title
+    try:
+        with can.Bus(interface="virtual", channel=channel) as device_bus, \
+                can.Bus(interface="virtual", channel=channel) as host_bus, \
+                HostBus(host_bus) as host:
+            emulator = Emulator(device_bus, twins)
+            emulator.on_frame = show
+            console.out(f"== {title} at node {twin.node_id:02X}h ({protocol}) is powered on",
+                        highlight=False)
+            with emulator, panel(emulator, address, console):
+                _started(console, emulator, twin, host, protocol)
+                for step, action, values in scripted_steps(twin):
+                    time.sleep(pause)
+                    console.out(f"== {step}", highlight=False)
+                    emulator.run(partial(_perform, action, twin, values))
+                time.sleep(pause)
+                emulator.run(lambda now: None)  # what the last step sent is shown
+                if web is not None:
+                    console.out("the twin keeps running with the panel; Ctrl-C stops",
+                                highlight=False)
+                    (wait or until_interrupted)()
+    finally:
+        for each in twins:
+            each.close()
+    console.out(f"\n{frames} frames on the bus ({title})", highlight=False)
+    return 0
+
+
+def _started(console: Console, emulator: Emulator, twin: CanopenTwin, host: HostBus,
+             protocol: str) -> None:
+    """The host finds the device as ``blinkcan scan`` does and, in CANopen, starts it."""
+    if protocol != "canopen":
+        console.out("== the host asks every J1939 keypad for its software revision",
+                    highlight=False)
+        revisions = [found.software_revision for found in scan_j1939(host, listen=0.2)]
+        console.out(f"   found: {', '.join(map(str, revisions)) or 'none'}", highlight=False)
+        return
+    console.out("== the host reads its identity (1000h, 1018h, 100Bh)", highlight=False)
+    found = scan(host, listen=0.05, node_ids=range(twin.node_id, twin.node_id + 1))
+    named = ", ".join(f"{device.model_id} {device.software_version}" for device in found)
+    console.out(f"   found: {named or 'none'}", highlight=False)
+    console.out("== the host starts it (NMT start)", highlight=False)
+    start = nmt_frame(NmtCommand.START, twin.node_id)
+    host.send(start)
+    deadline = time.monotonic() + _START_TIMEOUT
+    while emulator.snapshot(twin)["nmt_state"] != "operational" \
+            and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+def _perform(action: Action, twin: CanopenTwin, values: dict[str, Any], now: float
+             ) -> object:
+    return action.perform(twin, values, now)
+
+
+def until_interrupted() -> None:
+    """Until Ctrl-C. The wait wakes every half second, as emulate's does: one endless wait
+    could miss a signal that came right after start-up."""
+    never = threading.Event()
+    with contextlib.suppress(KeyboardInterrupt):
+        while not never.wait(0.5):
+            pass
