@@ -22,6 +22,7 @@ median (range) over the repetitions.
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 import time
@@ -104,6 +105,11 @@ def _undecodable(count: int) -> tuple[float, float, float]:
     return best[0], best[1], best[2]
 
 
+def _load() -> str:
+    """The machine's 1-minute load average: CPU figures of a shared machine say it beside."""
+    return f"{os.getloadavg()[0]:.1f}"
+
+
 def main(smoke: bool = False) -> None:
     frames, repeats = (20_000, 1) if smoke else (1_000_000, 3)
     python = sys.executable
@@ -116,7 +122,7 @@ def main(smoke: bool = False) -> None:
         ours = [python, "-m", "blinkcan", "decode", *device_options()]
         print(f"decode a realistic {count:,}-frame candump log (a third the devices', a third "
               "other 11-bit, a third J1939 engine frames): frames per CPU-second, median (range) "
-              f"of {repeats}")
+              f"of {repeats}; load average {_load()}")
         json_runs = interleaved({
             "ours": lambda: child_cpu([*ours, "--json", str(log)]),
             "anchor": lambda: child_cpu([python, "-c", ANCHOR, str(dbc), str(log)]),
@@ -153,6 +159,7 @@ def main(smoke: bool = False) -> None:
         print(f"        ratio --help {ratio_text(start_runs['help'], start_runs['anchor'])}, "
               f"decode {ratio_text(start_runs['decode'], start_runs['anchor'])}"
               "  (target >= 1.00x: no more CPU than the anchor)")
+    print(f"  load average after the runs {_load()}")
     as_json, as_event, skip = _undecodable(20_000 if smoke else 200_000)
     print(f"  an undecodable J1939 engine frame: json_line {as_json:.2f} us, decode "
           f"{as_event:.2f} us; a loop that skips it by id {skip:.2f} us (target <= 1 us)")

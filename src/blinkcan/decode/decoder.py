@@ -90,6 +90,14 @@ def _stamp(time: float) -> str:
     return _dumps(time).decode() if 1e-5 <= time < 1e16 else json_time(time)
 
 
+def json_times(times: list[float]) -> list[str]:
+    """:func:`_stamp` of each of ``times``, in one orjson call where all are in its range
+    (a block of a log: the same digits, a tenth of the cost)."""
+    if times and min(times) >= 1e-5 and max(times) < 1e16:
+        return _dumps(times)[1:-1].decode().split(",")
+    return list(map(json_time, times))
+
+
 def json_time(time: float) -> str:
     """:func:`_stamp` for any finite time (negative ones included)."""
     if 1e-5 <= abs(time) < 1e16:
@@ -249,6 +257,8 @@ class Decoder:
         self._raw_standard: dict[int, _Raw] = {}
         #: 29-bit identifiers of PGNs the keypad never uses (other ECUs'), with their text
         self._foreign: dict[int, str] = {}
+        #: their JSON line around time and data (raw_json), made once
+        self._foreign_json: dict[int, tuple[str, str]] = {}
         #: SDO events that the same frame makes again (an upload request; an expedited upload
         #: response in the same transfer): [the event's text, node, device, fields; its JSON
         #: body after the time, once written; the transfer a request opens]
@@ -293,6 +303,26 @@ class Decoder:
             return None if text is None else (text, None, None)
         raw = self._raw_standard.get(can_id)
         return None if raw is None else (raw[3], raw[0][1], raw[0][2])
+
+    def raw_json(self, can_id: int, extended: bool) -> tuple[str, str] | None:
+        """(what follows the time, what follows the data) of the JSON line every frame of
+        this identifier makes (:meth:`json_line`: ``'{"time":' + time + first + data hex +
+        second``), where it means nothing here (:meth:`undecoded`); None otherwise. For a
+        batch writer (decode --json a block at a time): such a frame costs a lookup."""
+        if extended:
+            text = self._foreign.get(can_id)
+            if text is None:
+                return None
+            parts = self._foreign_json.get(can_id)
+            if parts is None:  # the text has no character JSON escapes (Decoder._extended)
+                if len(self._foreign_json) >= _FOREIGN_KEPT:
+                    self._foreign_json.clear()
+                parts = self._foreign_json[can_id] = (
+                    f',"id":{can_id},"extended":true,"data":"',
+                    f'","kind":"frame","node":null,"device":null,"text":"{text}"}}')
+            return parts
+        raw = self._raw_standard.get(can_id)
+        return None if raw is None else (raw[1], raw[2])
 
     def repeat_state(self, can_id: int, extended: bool, data: bytes) -> tuple[int, ...] | None:
         """For a batch reader that keeps what a frame made: where the frame's event depends on

@@ -28,6 +28,7 @@ import re
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, TextIO
 
+from blinkcan.formats.candump_blocks import PlainBlocks
 from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.log_source import (
     LineTooLongError,
@@ -211,7 +212,7 @@ def read_candump(stream: TextIO
     :class:`~blinkcan.formats.log_source.LineTooLongError`, a later one is unreadable;
     a log none of whose lines is a frame raises ValueError once it is read."""
     new = _new_tuple
-    for block in read_candump_columns(stream):
+    for block in read_candump_columns(stream, PlainBlocks()):
         others = block.others
         if not others:
             for timestamp, can_id, data, extended in zip(block.times, block.ids, block.data,

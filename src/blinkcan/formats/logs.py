@@ -37,8 +37,10 @@ from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, BinaryIO, Literal, TextIO, overload
 
-from blinkcan.formats.candump import candump_messages, read_candump
+from blinkcan.formats.candump import candump_messages, read_candump, read_candump_columns
+from blinkcan.formats.candump_blocks import PlainBlocks
 from blinkcan.formats.capture_file import WholeRecords, create_exclusively
+from blinkcan.formats.columns import FrameColumns
 from blinkcan.formats.compressed import COMPRESSIONS, open_decompressed
 from blinkcan.formats.log_source import (
     DecompressedText,
@@ -326,6 +328,53 @@ def read_log(path: str | os.PathLike[str]
                                              message.is_extended_id)
         else:
             yield message.timestamp, message
+
+
+#: items of a log that is not candump per block of :func:`read_log_columns`
+_BLOCK_ITEMS = 1024
+
+
+def read_log_columns(path: str | os.PathLike[str]) -> Iterator[FrameColumns]:
+    """:func:`read_log` a block at a time, as columns (for a writer with no call per
+    frame): a candump log's blocks of plain data frames read whole
+    (formats/candump_blocks.py); a frame that is not a classic data frame, or a line that is
+    no frame, is in the block's ``others`` in its place, its time in ``times`` as
+    :func:`read_log` gives it."""
+    source = log_source(path)
+    if _text_suffix(source) == ".log":
+        return _candump_columns(source)
+    return _as_columns(read_log(path))
+
+
+def _candump_columns(source: LogSource) -> Iterator[FrameColumns]:
+    with _open_text(source, "utf-8", "surrogateescape") as stream:
+        try:
+            yield from read_candump_columns(stream, PlainBlocks())
+        except LineTooLongError as error:
+            raise LogError(f"{source}: {error}") from None
+        except _read_errors() as error:
+            raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _as_columns(items: Iterator[tuple[float, Frame | can.Message | UnreadableLine]]
+                ) -> Iterator[FrameColumns]:
+    columns = FrameColumns()
+    for timestamp, item in items:
+        if isinstance(item, Frame):
+            columns.times.append(timestamp)
+            columns.channels.append(None)
+            columns.ids.append(item.can_id)
+            columns.extended.append(item.extended)
+            columns.data.append(item.data)
+        elif isinstance(item, UnreadableLine):
+            columns.add_unreadable(item)
+        else:
+            columns.add_other(item, None)
+        if len(columns) >= _BLOCK_ITEMS:
+            yield columns
+            columns = FrameColumns()
+    if columns.times:
+        yield columns
 
 
 def read_frames(path: str | os.PathLike[str]) -> Iterator[tuple[float, Frame]]:
