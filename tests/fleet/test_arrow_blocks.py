@@ -19,12 +19,19 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from blinkcan.decode.nodes import ModelsByNode
-from blinkcan.devices.registry import describe_device, identify, models
+from blinkcan.devices.registry import (
+    default_descriptions,
+    describe_device,
+    identify,
+    models,
+    sole_senders,
+)
 from blinkcan.fleet import task
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.task import FileResult
 from blinkcan.formats.columns import ArrowColumns
 from blinkcan.protocol import Frame
+from blinkcan.protocol.cob import HEARTBEAT, SDO_RX, SDO_TX
 from tests.fleet.logs import EPOCH, candump_lines, fleet_traffic
 
 
@@ -116,31 +123,61 @@ def _identity(node: int, model: Any) -> list[Frame]:
                 4, "little"))]
 
 
+def _unused_base() -> int:
+    """A PDO COB-ID base no registered model uses: a node's frame there is another ECU's
+    (a frame only one model sends would name the node's model: decode/decoder.py)."""
+    used = {layout.cob_base for d in default_descriptions() for layout in d.pdos}
+    return next(base for base in range(0x180, HEARTBEAT, 0x80)
+                if base not in used | {SDO_TX, SDO_RX})
+
+
+def _learned_mid_block(tmp_path: Path, node: int, teaching: list[Frame]) -> dict[str, Any]:
+    """Another ECU's frames, some at ``node``, with ``teaching`` at 1.495 s: the partitions
+    of the dataset (the same both ways) by their first directory, and the time taught."""
+    foreign = (Frame(_unused_base() + node, bytes(8)), Frame(0x7E0, b"\x02\x01\x0c"),
+               Frame(0x18FEF100, bytes(8), extended=True))
+    traffic = [(EPOCH + n * 0.01, foreign[n % len(foreign)]) for n in range(300)]
+    traffic[150:150] = [(EPOCH + 1.495, frame) for frame in teaching]
+    log = tmp_path / "learn.log"
+    log.write_text("".join(candump_lines(traffic)))
+    for block_chars in (1_500, 2_000, 2_500):  # the teaching frame inside a block read whole
+        files = assert_same_dataset(log, tmp_path / str(block_chars), block_chars, 1 << 16)
+    return {name.split("/")[0]: rows for name, (rows, _) in files.items()}
+
+
+def _assert_learned_at(partitions: dict[str, Any], node: int, model: str) -> None:
+    """The node's frames before 1.495 s are of no model, those after of ``model``."""
+    learning = EPOCH + 1.495
+    before = [r["time"].timestamp() for r in partitions["model=unknown"] if r["node"] == node]
+    after = [r["time"].timestamp() for r in partitions[f"model={model}"] if r["node"] == node]
+    assert before
+    assert after
+    assert max(before) <= learning <= min(after) < max(after)
+
+
+@pytest.mark.parametrize("model", models(), ids=lambda model: model.name)
+def test_a_model_learned_from_a_frame_only_it_sends_names_the_frames_after_it(
+        tmp_path: Path, model: Any) -> None:
+    """As from identity: a PDO only this model sends (sole_senders) names the node's model
+    mid-block; the fast path and the line-by-line one give the same rows."""
+    node = 0x3A
+    bases = [base for base, sender in sole_senders().items() if sender.model == model.name]
+    if not bases:
+        pytest.skip(f"{model.name} sends no frame another model does not")
+    partitions = _learned_mid_block(tmp_path, node, [Frame(bases[0] + node, bytes(8))])
+    _assert_learned_at(partitions, node, model.name)
+
+
 @pytest.mark.parametrize("model", models(), ids=lambda model: model.name)
 def test_a_model_learned_mid_block_names_the_frames_after_it(tmp_path: Path,
                                                              model: Any) -> None:
     """Another ECU's frames of a node before and after the node's identity names its model:
     the fast path fills them in per identifier, but not past the frame that teaches it."""
     node = 0x3A
-    foreign = (Frame(0x280 + node, bytes(8)), Frame(0x7E0, b"\x02\x01\x0c"),
-               Frame(0x18FEF100, bytes(8), extended=True))
-    traffic = [(EPOCH + n * 0.01, foreign[n % len(foreign)]) for n in range(300)]
-    learning = EPOCH + 1.495
-    traffic[150:150] = [(learning, frame) for frame in _identity(node, model)]
-    log = tmp_path / "learn.log"
-    log.write_text("".join(candump_lines(traffic)))
-    for block_chars in (1_500, 2_000, 2_500):  # the identity inside a block read whole
-        files = assert_same_dataset(log, tmp_path / str(block_chars), block_chars, 1 << 16)
-    partitions = {name.split("/")[0]: rows for name, (rows, _) in files.items()}
+    partitions = _learned_mid_block(tmp_path, node, _identity(node, model))
     learned = identify(device_type=_device_type(model))
     assert learned is not None
-    before = [r["time"].timestamp() for r in partitions["model=unknown"] if r["node"] == node]
-    after = [r["time"].timestamp() for r in partitions[f"model={learned.model}"]
-             if r["node"] == node]
-    # the node's frames before its identity are of no model, those after of the model
-    assert before
-    assert after
-    assert max(before) <= learning <= min(after) < max(after)
+    _assert_learned_at(partitions, node, learned.model)
 
 
 # -- random mixes --------------------------------------------------------------------------

@@ -160,7 +160,7 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
     file = files[0]
     if not devices:
         click.echo(assumed_text(), err=True)
-    decoder = Decoder(known)
+    decoder = Decoder(known, assumed=not devices)
     progress = None
     if not as_json and sys.stderr.isatty():
         from rich.console import Console  # noqa: PLC0415 (start-up: only on a terminal)

@@ -1,8 +1,10 @@
 """Frames -> events for both devices, with a generic CANopen fallback. Pure: no I/O, no clock.
 
 Which node is which device comes from the caller (``{0x15: "keypad"}``) or is learned from the
-bus: an SDO reply of 1000h (device type) or 100Bh (model) names the model. Everything a device
-means is read from its description in ``devices/`` (object names, PDO layouts).
+bus: an SDO reply of 1000h (device type) or 100Bh (model) names the model, and so does a PDO
+only one registered model sends (devices/registry.py sole_senders). A frame before the one
+that names the model keeps the meaning it had. Everything a device means is read from its
+description in ``devices/`` (object names, PDO layouts).
 
 Per node the decoder remembers what it needs to say what changed: the keys held, and the SDO
 transfer in progress (segmented uploads are reassembled into one value).
@@ -31,7 +33,7 @@ from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRE
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
 from blinkcan.devices.pdo import PdoLayout
-from blinkcan.devices.registry import identify
+from blinkcan.devices.registry import identify, sole_senders
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX, SYNC
 from blinkcan.protocol.frame import Frame
@@ -227,10 +229,12 @@ class Decoder:
     """Decode frames of one bus. ``devices`` maps node ids to "keypad", "keybox" (optionally
     "keypad@1.1") or descriptions, and J1939 addresses (``"j1939:0x30"``) to models that have
     J1939 (decode/nodes.py; none named: 21h, §5); ``learn`` names unknown nodes from identity
-    traffic. ValueError for a device it cannot name."""
+    traffic and from PDOs only one model sends; ``assumed``: the CANopen ``devices`` are a
+    guess (no --device given), which that learning corrects. ValueError for a device it
+    cannot name."""
 
     def __init__(self, devices: DevicesByNode | None = None,
-                 learn: bool = True) -> None:
+                 learn: bool = True, assumed: bool = False) -> None:
         self.learn = learn
         named = split_devices(devices)
         self.devices: dict[int, DeviceDescription] = named.canopen
@@ -247,8 +251,9 @@ class Decoder:
         #: per route: [cache hits, cache misses]; routes whose frames rarely repeat go uncached
         self._cache_stats: dict[tuple[int, bool], list[int]] = {}
         self._uncached: set[tuple[int, bool]] = set()
-        #: nodes named from 1000h alone: 100Bh may still correct them (two keypads share it)
-        self._guessed: set[int] = set()
+        #: nodes named from 1000h alone (two keypads share it) or assumed: 100Bh or a PDO
+        #: only one model sends may still correct them
+        self._guessed: set[int] = set(self.devices) if assumed else set()
         #: keypads in J1939 mode, by address (decode/j1939.py)
         self.j1939 = J1939KeypadDecoder(() if named.j1939 else (J1939_DEFAULT_ADDRESS,),
                                         named.j1939)
@@ -498,6 +503,8 @@ class Decoder:
         if function in (SDO_TX, SDO_RX) and node:
             self._pure.discard(key)
             return self._sdo
+        if node:
+            self._learn_sender(can_id, node)
         device = self.devices.get(node)
         if device is not None:
             for layout in device.pdos:
@@ -825,6 +832,22 @@ class Decoder:
         kind = self._who(node)
         return Event(time, frame, Kind.SDO_VALUE, f"SDO value {name} = {_show(value)}", node,
                      kind, {**fields, "value": value})
+
+    def _learn_sender(self, can_id: int, node: int) -> None:
+        """Name an unknown (or guessed) node's model from a PDO only that model sends
+        (sole_senders): as certain as 100Bh, so later identity does not change it. Routed
+        once per identifier: the frames before this one keep their meaning."""
+        sender = sole_senders().get(can_id - node)
+        if sender is None or not self.learn:
+            return
+        known = self.devices.get(node)
+        if known is not None and node not in self._guessed:
+            return  # named by the caller, or by 100Bh
+        self._guessed.discard(node)
+        if known is not None and known.model == sender.model:
+            return
+        self.devices[node] = sender
+        self._forget_routes(node)
 
     def _learn(self, node: int, index: int, value: int | str) -> bool:
         """Name an unknown node's model from its identity; True when it was learned."""

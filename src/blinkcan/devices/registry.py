@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from functools import cache
 from importlib import import_module
+from types import MappingProxyType
 from typing import TypeVar
 
 from blinkcan.devices.model import DeviceDescription, Model
+from blinkcan.devices.pdo import Direction
 
 ENTRY_POINT_GROUP = "blinkcan.models"
 
@@ -135,3 +137,20 @@ def identify(device_type: int | None = None, model_id: str | None = None
         if description.table["device_type"].default == device_type:
             return description
     return None
+
+
+@cache
+def sole_senders() -> MappingProxyType[int, DeviceDescription]:
+    """PDO COB-ID base (node id added on the bus) -> the description of the one registered
+    model whose frames use it, where that model transmits it (a TPDO): a frame there, at a
+    node, names that node's model as identity does (decode/decoder.py learns from it). The
+    model's first generation that transmits it; bases two models use name none."""
+    users: dict[int, set[str]] = {}
+    senders: dict[int, DeviceDescription] = {}
+    for description in default_descriptions():
+        for layout in description.pdos:
+            users.setdefault(layout.cob_base, set()).add(description.model)
+            if layout.direction is Direction.TX:
+                senders.setdefault(layout.cob_base, description)
+    return MappingProxyType({base: sender for base, sender in senders.items()
+                             if users[base] == {sender.model}})

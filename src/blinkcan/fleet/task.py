@@ -86,7 +86,7 @@ def make_decoder(devices: ModelsByNode | None) -> Decoder:
     if devices:
         return Decoder(devices)
     known = [describe_device(name) for name in DEFAULT_DEVICES]
-    return Decoder({d.default_node_id: d for d in known})
+    return Decoder({d.default_node_id: d for d in known}, assumed=True)
 
 
 class _Store:

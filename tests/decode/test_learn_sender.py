@@ -1,0 +1,86 @@
+"""A node's model learned from a PDO only that model sends (devices/registry.py sole_senders),
+as from identity: in a capture that starts mid-stream (no identity traffic), once such a frame
+is seen every frame decodes as with the model named; the frames before keep what they meant."""
+
+from __future__ import annotations
+
+import pytest
+
+from blinkcan.decode import Decoder
+from blinkcan.devices.model import DeviceDescription, Model
+from blinkcan.devices.pdo import Direction
+from blinkcan.devices.registry import default_descriptions, describe_device, models, sole_senders
+from blinkcan.protocol import Frame
+
+#: the devices decode assumes without --device (cli/decode.py DEFAULT_DEVICES)
+_ASSUMED = ("keypad", "keybox")
+
+
+def _assumed() -> dict[int, DeviceDescription]:
+    return {d.default_node_id: d for d in map(describe_device, _ASSUMED)}
+
+
+def _traffic(description: DeviceDescription, node: int) -> list[Frame]:
+    """A frame of each of the model's PDOs, twice with other bytes (keys, LEDs, values)."""
+    return [Frame(layout.cob_id(node), bytes((fill,) * layout.length))
+            for fill in (0x00, 0x21, 0x00) for layout in description.pdos]
+
+
+def test_every_sole_sender_is_the_one_model_using_its_identifier_and_sends_it() -> None:
+    """Registry-driven: a base names a model only where that model transmits it and no
+    other registered model's PDO uses it; every such base is listed."""
+    users: dict[int, set[str]] = {}
+    for description in default_descriptions():
+        for layout in description.pdos:
+            users.setdefault(layout.cob_base, set()).add(description.model)
+    for description in default_descriptions():
+        for layout in description.pdos:
+            sole = users[layout.cob_base] == {description.model}
+            if layout.direction is Direction.TX and sole:
+                assert sole_senders()[layout.cob_base].model == description.model
+            elif not sole:
+                assert layout.cob_base not in sole_senders()
+    for base, sender in sole_senders().items():
+        assert any(p.cob_base == base and p.direction is Direction.TX for p in sender.pdos)
+
+
+@pytest.mark.parametrize("model", models(), ids=lambda model: model.name)
+@pytest.mark.parametrize("assumed", [True, False], ids=["assumed", "unknown"])
+def test_a_mid_stream_capture_learns_the_model_from_a_frame_only_it_sends(
+        model: Model, assumed: bool) -> None:
+    """At the model's own node with the defaults assumed there, and at a node no device is
+    assumed at: after the distinguishing frame every frame decodes as with --device; before
+    it, as without learning."""
+    node = model.default_node_id if assumed else 0x3A
+    description = describe_device(model.name)
+    assumed_devices = _assumed() if assumed else {}
+    traffic = _traffic(description, node)
+    teaching = [n for n, frame in enumerate(traffic)
+                if sole_senders().get(frame.can_id - node) is not None
+                and sole_senders()[frame.can_id - node].model == model.name]
+    learning = Decoder(assumed_devices, assumed=True)
+    events = [learning.decode(frame, n * 0.01) for n, frame in enumerate(traffic)]
+    if not teaching:  # no frame of its own: nothing learned, nothing changed
+        assert learning.devices == assumed_devices
+        return
+    first = teaching[0]
+    named = Decoder({**assumed_devices, node: description})
+    unlearned = Decoder(assumed_devices, learn=False)
+    expected = [named.decode(frame, n * 0.01) for n, frame in enumerate(traffic)]
+    before = [unlearned.decode(frame, n * 0.01) for n, frame in enumerate(traffic[:first])]
+    assert events[:first] == before
+    assert events[first:] == expected[first:]
+    assert learning.devices[node].model == model.name
+    assert [learning.json_line(f, 9.0) for f in traffic] == \
+        [named.json_line(f, 9.0) for f in traffic]
+
+
+def test_a_node_named_by_the_caller_is_never_relearned() -> None:
+    """--device names the node: a frame of another model's keeps the model given."""
+    keypad = describe_device("keypad")
+    frames = [Frame(base + 0x15, bytes(8)) for base in sole_senders()]
+    assert frames
+    decoder = Decoder({0x15: keypad})
+    for frame in frames:
+        decoder.decode(frame)
+    assert decoder.devices[0x15] is keypad
