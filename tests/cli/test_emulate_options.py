@@ -8,11 +8,12 @@ from __future__ import annotations
 import pytest
 from click.testing import CliRunner
 
-from blinkcan.cli.emulate import build_twins, decoder_devices
+from blinkcan.cli.emulate import build_twins, decoder_devices, device_protocols
 from blinkcan.cli.main import cli
 from blinkcan.cli.typed_commands import TypedCommands
 from blinkcan.decode import Decoder
 from blinkcan.devices.registry import models
+from blinkcan.runtime.simbus import SimulatedBus
 from blinkcan.testing import Rig
 from blinkcan.twin import KeypadTwin
 
@@ -156,3 +157,56 @@ def test_an_address_two_j1939_keypads_share_as_node_id_names_them_both() -> None
         [answer] = TypedCommands(rig.emulator).execute("15h press 3")
     assert answer.startswith("Error: '15h' names 2 devices (PKP-2600-SI keypad 80h (J1939), "
                              "PKP-2600-SI keypad 90h (J1939)); start with the address")
+
+
+# -- a protocol per device (session 7) ----------------------------------------------------------
+
+#: every (model, mode) the registry has besides CANopen: a device spec can name each
+PROTOCOL_MODES = [(m.name, p) for m in models() for p in device_protocols()
+                  if p != "canopen" and p in m.description().features]
+
+
+@pytest.mark.parametrize(("model", "protocol"), PROTOCOL_MODES)
+@pytest.mark.parametrize("default", ["canopen", "other"])
+def test_one_emulator_runs_each_device_in_the_protocol_it_names(
+        model: str, protocol: str, default: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    # --protocol applied to the whole run: a CANopen and a J1939 PKP-2600-SI could not be
+    # emulated together. DEVICE/PROTOCOL names one device's; --protocol stays the default
+    specs = (f"{model}/canopen:0x15", f"{model}:0x30") if default == "other" else \
+        (f"{model}:0x15", f"{model}/{protocol}:0x30")
+    twins = build_twins(specs, None, None, "firmware", (),
+                        protocol if default == "other" else "canopen")
+    assert [getattr(twin, "protocol", "canopen") for twin in twins] == ["canopen", protocol]
+    with Rig() as rig:
+        for twin in twins:
+            rig.add(twin)
+        monkeypatch.setattr("blinkcan.cli.scan.cli_bus",
+                            lambda: SimulatedBus(rig.network, "blinkcan scan"))
+        result = CliRunner().invoke(cli, ["scan", "--listen", "0.05"], env={"COLUMNS": "150"})
+    assert result.exit_code == 0, result.output
+    canopen = [line for line in result.output.splitlines() if "15h" in line]
+    other = [line for line in result.output.splitlines() if "30h" in line]
+    assert len(canopen) == 1, result.output  # answered its SDO reads at node 15h
+    assert protocol.upper() not in canopen[0]
+    assert len(other) == 1, result.output  # answered its own protocol's requests at 30h
+    assert protocol.upper() in other[0]
+
+
+@pytest.mark.parametrize("spec", ["keypad/j1939x", "keypad/", "keypad@1.5/can:0x15"])
+def test_a_device_protocol_no_device_runs_is_one_line_naming_them(spec: str) -> None:
+    result = CliRunner().invoke(cli, ["emulate", "keybox", spec, *NO_BUS])
+    assert result.exit_code == 2, result.output
+    [line] = result.output.splitlines()
+    assert line.startswith("Error: ")
+    assert f"not one of {', '.join(device_protocols())}" in line
+    assert "no-such-interface" not in result.output
+
+
+@pytest.mark.parametrize(("model", "protocol"),
+                         [(m.name, p) for m in models() for p in device_protocols()
+                          if p not in m.description().features and p != "canopen"])
+def test_a_device_naming_a_protocol_it_lacks_is_a_usage_error(model: str, protocol: str) -> None:
+    result = CliRunner().invoke(cli, ["emulate", f"{model}/{protocol}", *NO_BUS])
+    assert result.exit_code == 2, result.output
+    assert f"has no {protocol} mode" in result.output
+    assert "no-such-interface" not in result.output

@@ -21,7 +21,7 @@ from blinkcan.decode.j1939 import is_j1939_node, j1939_node, parse_j1939_node
 from blinkcan.decode.nodes import NodeKey, split_devices
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription
-from blinkcan.devices.registry import describe_device
+from blinkcan.devices.registry import describe_device, models
 from blinkcan.formats.logs import (
     LogError,
     describe_frame,
@@ -49,13 +49,35 @@ def default_devices() -> dict[int, str | DeviceDescription]:
     return {d.default_node_id: d for d in descriptions}
 
 
+def assumed_devices() -> str:
+    """The devices a decoder assumes where no --device is given, read from one built so:
+    "keybox 0Ch, keypad 15h and a J1939 keypad at 21h" (the stderr note and the help say it)."""
+    decoder = Decoder(parse_devices(()))
+    canopen = [f"{d.kind} {node:02X}h" for node, d in sorted(decoder.devices.items())]
+    j1939_kinds = sorted({m.description().kind for m in models()
+                          if "j1939" in m.description().features})
+    j1939 = [f"a J1939 {' or '.join(j1939_kinds)} at {address:02X}h"
+             for address in sorted(decoder.j1939.addresses)]
+    return " and ".join(filter(None, [", ".join(canopen), *j1939]))
+
+
 def assumed_text() -> str:
     """What the decoder assumes where no --device is given (stderr: the output stays data)."""
-    named = ", ".join(f"{d.kind if isinstance(d, DeviceDescription) else d} {node:02X}h"
-                      for node, d in sorted(default_devices().items()))
-    return (f"no --device given: assuming {named} and a J1939 keypad at "
-            f"{J1939_DEFAULT_ADDRESS:02X}h (others learned from identity traffic and their "
-            "own messages)")
+    return (f"no --device given: assuming {assumed_devices()} (others learned from identity "
+            "traffic and their own messages)")
+
+
+#: where a command's help says which devices it assumes (AssumingHelp fills it in)
+ASSUMED = "{assumed}"
+
+
+class AssumingHelp(click.Command):
+    """A command whose help names the devices assumed without --device (:data:`ASSUMED`),
+    from :func:`assumed_devices` when the help is shown (not at every start-up)."""
+
+    def format_help_text(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        self.help = (self.help or "").replace(ASSUMED, assumed_devices())
+        super().format_help_text(ctx, formatter)
 
 
 def other_event(decoder: Decoder, message: can.Message) -> Event:
@@ -98,10 +120,11 @@ def parse_devices(specs: tuple[str, ...]) -> dict[NodeKey, str | DeviceDescripti
 #: --device's help, the same for decode and monitor
 DEVICE_HELP = ("Say which node is which device: 0x15=keypad, 0x0C=keybox, 0x15=keypad@1.1; a "
                "keypad in J1939 mode by its source address: j1939:0x30=keypad (none named: "
-               "21h). Others are learned from identity traffic and their own messages.")
+               f"{J1939_DEFAULT_ADDRESS:02X}h). Others are learned from identity traffic and "
+               "their own messages.")
 
 
-@click.command("decode")
+@click.command("decode", cls=AssumingHelp)
 @click.argument("files", metavar="FILE...", nargs=-1, required=True,
                 type=click.Path(allow_dash=True))
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line.")
@@ -119,8 +142,8 @@ def command(files: tuple[str, ...], as_json: bool, devices: tuple[str, ...],
             parquet: str | None, jobs: int, force: bool, absolute: bool) -> None:
     """Decode a log file (any python-can format, or .pcap) into what happened; with
     --parquet, any number of them into a dataset for SQL (blinkcan query). Without
-    --device the keypad is assumed at 15h and the Keybox at 0Ch. Times: seconds since the
-    first frame, or --absolute; --json keeps the log's own timestamps."""
+    --device it assumes {assumed}. Times: seconds since the first frame, or --absolute;
+    --json keeps the log's own timestamps."""
     if absolute and (as_json or parquet is not None):
         raise click.UsageError("--absolute is for the text output; --json and --parquet keep "
                                "the log's own timestamps")

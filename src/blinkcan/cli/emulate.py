@@ -1,4 +1,5 @@
-"""``blinkcan emulate DEVICE[@GENERATION][:NODE] ...``: run twins on a bus until Ctrl-C.
+"""``blinkcan emulate DEVICE[@GENERATION][/PROTOCOL][:NODE] ...``: run twins on a bus until
+Ctrl-C; each device in the protocol it names (``keypad/j1939:0x21``), else ``--protocol``.
 
 A frame from one of the twins' node ids that the emulator did not send (a boot-up, heartbeat or
 SDO reply; for a keypad in J1939 mode, any frame from its source address) means another device
@@ -39,6 +40,7 @@ from blinkcan.cli.typed_commands import typed_commands
 from blinkcan.decode import Decoder
 from blinkcan.decode.j1939 import j1939_node
 from blinkcan.decode.nodes import DeviceSpec, NodeKey
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
 from blinkcan.devices.keypad_j1939 import NVM_PREFIX
 from blinkcan.devices.keypad_j1939 import command as j1939_command
 from blinkcan.devices.model import Model
@@ -48,6 +50,7 @@ from blinkcan.protocol.cob import HEARTBEAT, NODE_ID_MAX, SDO_RX, SDO_TX, split_
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.keypad import PROTOCOLS as TWIN_PROTOCOLS
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.nvm import NvmError
 from blinkcan.twin.registry import build_twin
@@ -65,35 +68,63 @@ def _check_applies(option: str, given: bool, chosen: list[Model], having: list[M
                                "for has it")
 
 
+def device_protocols() -> tuple[str, ...]:
+    """The protocols a device can run in: CANopen, every model's, and the modes the registry's
+    models have besides (the PKP-2600-SI's J1939, spec/pkp-2600-si-j1939.md)."""
+    modes = {f for m in models() for f in m.description().features} & set(TWIN_PROTOCOLS)
+    return ("canopen", *sorted(modes - {"canopen"}))
+
+
+def split_device(spec: str) -> tuple[str, str | None, str]:
+    """DEVICE[@GEN][/PROTOCOL][:NODE] -> (DEVICE[@GEN], the protocol it names or None, NODE
+    text): ``keypad@1.5/j1939:0x21``; a protocol no device runs is a usage error naming them."""
+    model_text, _, node_text = spec.partition(":")
+    model_text, slash, protocol = model_text.partition("/")
+    if slash and protocol not in device_protocols():
+        raise click.BadParameter(f"{spec!r}: protocol {protocol!r} is not one of "
+                                 f"{', '.join(device_protocols())}", param_hint="DEVICE")
+    return model_text, (protocol if slash else None), node_text
+
+
 def build_twins(devices: tuple[str, ...], node_id: int | None, nvm: str | None,
                 quirks: str, low_side: tuple[int, ...] = (),
                 protocol: str = "canopen") -> list[CanopenTwin]:
+    """The twins of DEVICE[@GEN][/PROTOCOL][:NODE]...: each in the protocol it names, or
+    ``protocol`` (--protocol) where it has that mode; checked before any bus opens."""
     if nvm is not None and len(devices) != 1:
         raise click.UsageError("--nvm names one file, for one device")
     if node_id is not None and len(devices) != 1:
         raise click.UsageError("--node-id is for one device; write DEVICE:NODE for several")
+    split = [split_device(spec) for spec in devices]
     try:
-        chosen = [parse_spec(spec.partition(":")[0])[0] for spec in devices]
+        chosen = [parse_spec(model_text)[0] for model_text, _, _ in split]
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="DEVICE") from None
     _check_applies("--low-side", bool(low_side),
                    [m for m in chosen if m.description().face.low_side_capable],
                    [m for m in models() if m.description().face.low_side_capable])
     # spec/pkp-2600-si-j1939.md: the PKP-2600-SI's J1939 mode; the other devices stay CANopen
-    _check_applies(f"--protocol {protocol}", protocol != "canopen",
-                   [m for m in chosen if protocol in m.description().features],
+    defaulted = [m for m, (_, named, _) in zip(chosen, split, strict=True) if named is None]
+    _check_applies(f"--protocol {protocol}", protocol != "canopen" and bool(defaulted),
+                   [m for m in defaulted if protocol in m.description().features],
                    [m for m in models() if protocol in m.description().features])
+    for spec, found, (_, named, _) in zip(devices, chosen, split, strict=True):
+        if named not in (None, "canopen") and named not in found.description().features:
+            having = ", ".join(m.description().title for m in models()
+                               if named in m.description().features)
+            raise click.UsageError(f"{spec}: {found.description().title} has no {named} mode "
+                                   f"({named}: {having} only)")
     twins: list[CanopenTwin] = []
-    for spec, found in zip(devices, chosen, strict=True):
-        model, _, node_text = spec.partition(":")
-        j1939 = protocol != "canopen" and protocol in found.description().features
+    for (model, named, node_text), found in zip(split, chosen, strict=True):
+        running = named if named is not None else protocol
+        j1939 = running != "canopen" and running in found.description().features
         node = (_j1939_address(node_text) if j1939 else parse_node_id(node_text)) \
             if node_text else node_id
         options: dict[str, object] = {}
         if low_side and found.description().face.low_side_capable:
             options["low_side"] = low_side
         if j1939:
-            options["protocol"] = protocol
+            options["protocol"] = running
             if node is not None:  # J1939: DEVICE:ADDR is the source address it claims (§16)
                 options["settings"] = {NVM_PREFIX + "source_address": node}
                 if node > NODE_ID_MAX:  # no CANopen node id: the model's default one
@@ -160,7 +191,7 @@ def _free_node_id(near: int, taken: set[int]) -> int:
 
 
 @click.command("emulate", epilog=f"DEVICE: {model_names()}.")
-@click.argument("devices", nargs=-1, required=True, metavar="DEVICE[@GEN][:NODE]...")
+@click.argument("devices", nargs=-1, required=True, metavar="DEVICE[@GEN][/PROTOCOL][:NODE]...")
 @click.option("--node-id", type=NODE_ID, default=None,
               help="Node id of a single device (0x15, 21, 15h).")
 @click.option("--nvm", default=None, type=click.Path(dir_okay=False),
@@ -175,11 +206,11 @@ def _free_node_id(near: int, taken: set[int]) -> int:
               help="Keybox pins built as low-side drivers, e.g. 2,5 (errata K22).")
 @click.option("--web", is_flag=False, flag_value="127.0.0.1:8080", default=None,
               metavar="[HOST:PORT]", help="Serve the front panel (default 127.0.0.1:8080).")
-@click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
+@click.option("--protocol", type=click.Choice(device_protocols()), default="canopen",
               show_default=True,
-              help="Keypads that have it start in this protocol unless --nvm stored another "
-                   "(the others stay CANopen; J1939: "
-                   "source address 21h unless DEVICE:ADDR names one, 250 kbit/s).")
+              help="Devices that name no /PROTOCOL and have this one start in it unless --nvm "
+                   "stored another (the others stay CANopen; J1939: source address "
+                   f"{J1939_DEFAULT_ADDRESS:02X}h unless DEVICE:ADDR names one, 250 kbit/s).")
 @click.option("-q", "--quiet", is_flag=True, help="Do not print the frames.")
 @ABSOLUTE
 @bus_options
@@ -188,7 +219,8 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
             quiet: bool, absolute: bool) -> None:
     """Run device twins on a CAN bus until Ctrl-C. DEVICE: a registered model or alias
     (keypad = pkp-2600-si, keybox, ...), optionally @GENERATION (keypad@1.5: the newer
-    firmware, manual rev 1.5). Commands typed on its input act on the devices as hands do
+    firmware, manual rev 1.5), optionally /PROTOCOL (keypad/j1939: in its J1939 mode; none
+    named: --protocol). Commands typed on its input act on the devices as hands do
     (press 3, 16h turn 1 +5, 0Ch blow-fuse 4, keybox power-cycle; help lists them).
 
     \b
@@ -196,6 +228,7 @@ def command(devices: tuple[str, ...], node_id: int | None, nvm: str | None, quir
     blinkcan emulate keypad@1.5 keybox:0x0D --low-side 2,5
     blinkcan emulate keypad:0x15 keypad:0x16 -i socketcan -c vcan0
     blinkcan emulate keypad --protocol j1939
+    blinkcan emulate keypad:0x15 keypad/j1939:0x21 keybox
     """
     console = output_console()
     web_address = None if web is None else panel_address(web)

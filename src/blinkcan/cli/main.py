@@ -54,7 +54,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
              "of 1000h, 1018h, 100Bh; keypads in J1939 mode by a software revision request and "
              "a request for address claimed, to all."),
     "monitor": ("blinkcan.cli.monitor:command", "Watch a bus live: events, keypad keys and "
-                "LEDs, Keybox outputs."),
+                "LEDs (CANopen or J1939 mode), Keybox outputs, and what else a device sends "
+                "(encoders, analog and digital inputs)."),
     "keypad": ("blinkcan.cli.control:keypad", "One-shot control of a keypad."),
     "keybox": ("blinkcan.cli.control:keybox", "One-shot control of a keybox."),
     "nmt": ("blinkcan.cli.nmt:command",

@@ -1,10 +1,10 @@
 """``blinkcan monitor``: live view of a bus, updated in place: the events (repeated heartbeats
 and unchanged periodic frames folded), each keypad's keys and LEDs (blinking and alternating as
 the keypad shows them), each Keybox's outputs (PWM pins with their duty). ``--file`` replays a
-log at its own pace (``--speed``) instead of a live bus. Without ``--device`` the keypad is
-assumed at 15h and the Keybox at 0Ch, and it says so. Times: seconds since the first frame,
-``--absolute`` the wall clock (cli/clock.py). Off a terminal (a pipe, a file) there is no
-picture: each event is one line, as ``decode`` writes it.
+log at its own pace (``--speed``) instead of a live bus. Without ``--device`` it assumes the
+devices ``decode`` does (cli/decode.py assumed_devices), and it says so. Times: seconds since
+the first frame, ``--absolute`` the wall clock (cli/clock.py). Off a terminal (a pipe, a file)
+there is no picture: each event is one line, as ``decode`` writes it.
 """
 
 from __future__ import annotations
@@ -23,7 +23,13 @@ from rich.text import Text
 from blinkcan.cli.bus_faults import BusFaults, receive
 from blinkcan.cli.bus_options import bus_options, cli_bus
 from blinkcan.cli.clock import ABSOLUTE, Clock
-from blinkcan.cli.decode import DEVICE_HELP, assumed_text, other_event, parse_devices
+from blinkcan.cli.decode import (
+    DEVICE_HELP,
+    AssumingHelp,
+    assumed_text,
+    other_event,
+    parse_devices,
+)
 from blinkcan.cli.extras import error_text
 from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.cli.seconds import Factor, Seconds
@@ -97,7 +103,7 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
     return max(0.0, started + (frame_time - first) / speed - now)
 
 
-@click.command("monitor")
+@click.command("monitor", cls=AssumingHelp)
 @click.option("--device", "devices", multiple=True, metavar="NODE=MODEL", help=DEVICE_HELP)
 @click.option("--file", "log_file", type=click.Path(dir_okay=False), default=None,
               help="Replay a log file instead of a live bus.")
@@ -112,9 +118,10 @@ def replay_wait(first: float, frame_time: float, started: float, now: float,
 @bus_options
 def command(devices: tuple[str, ...], log_file: str | None, speed: float,
             duration: float | None, rows: int, absolute: bool) -> None:
-    """Watch a bus live: events, keypad keys and LEDs, Keybox outputs. Ctrl-C stops. A bus
-    error is counted and the watching goes on; a bus that keeps failing ends it. Off a
-    terminal: one line per event."""
+    """Watch a bus live: events, keypad keys and LEDs (CANopen or J1939 mode), Keybox
+    outputs, and what else a device sends (encoders, analog and digital inputs). Without
+    --device it assumes {assumed}. Ctrl-C stops. A bus error is counted and the watching goes
+    on; a bus that keeps failing ends it. Off a terminal: one line per event."""
     known = parse_devices(devices)
     if not devices:
         click.echo(assumed_text(), err=True)

@@ -64,6 +64,9 @@ LOST = {
     "channel": ("their channel", "{suffix} has no channel"),
     "channel name": ("their channel name", "{suffix} numbers channels: only canN names keep, "
                                            f"the others are on {DEFAULT_CHANNEL}"),
+    "channel text": ("their channel name", "{suffix} holds a channel name only as text "
+                                           "without spaces or control characters: the others "
+                                           f"are on {DEFAULT_CHANNEL}"),
     "fd flag": ("the CAN FD flag", "{suffix} has no CAN FD flag; only frames over 8 bytes "
                                    "read back as CAN FD"),
     "brs": ("the bit rate switch", "{suffix} has no BRS flag"),
@@ -79,9 +82,34 @@ def channel_key(channel: object) -> str | None:
     """A channel as candump names it: 1 and "1" are "can1"; None stays None."""
     if channel is None:
         return None
-    if isinstance(channel, int) or (isinstance(channel, str) and channel.isdigit()):
+    if isinstance(channel, int) or (isinstance(channel, str) and channel.isascii()
+                                    and channel.isdigit()):
         return f"can{int(channel)}"
     return str(channel)
+
+
+def writable_name(channel: object) -> str | None:
+    """``channel``'s candump name where a line of text can hold it as it is: a number, or text
+    without spaces or control characters (candump -L's ``(time) name frame`` is split at
+    spaces, one frame a line); None for no channel and for any other (a name with a newline
+    would split its line, and could write a frame never on the bus; a datagram's dict)."""
+    if not isinstance(channel, (str, int)):
+        return None
+    key = channel_key(channel)
+    if not key or not key.isprintable() or any(character.isspace() for character in key):
+        return None
+    return key
+
+
+#: the longest channel name a loss line shows as it is
+SHOWN = 40
+
+
+def shown_channel(channel: object) -> str:
+    """``channel`` as a loss line names it: its candump name where that is safe text, else
+    its Python form (quotes and escapes: ``'a b\\nc'``), cut at :data:`SHOWN` characters."""
+    text = writable_name(channel) or repr(channel)
+    return text if len(text) <= SHOWN else text[:SHOWN - 3] + "..."
 
 
 #: BLF's header holds no date before 1990 (python-can's timestamp_to_systemtime): a log of
@@ -115,7 +143,7 @@ class Losses:
         self.counts: Counter[str] = Counter()
         self.examples: dict[str, list[str]] = {}
         self._first: float | None = None
-        self._channels: dict[object, tuple[str | None, str | None]] = {}
+        self._channels: dict[str | int, tuple[str | None, str | None]] = {}
 
     def lost(self, message: can.Message) -> list[str]:
         """What of ``message`` the format loses (see :data:`LOST`)."""
@@ -144,24 +172,31 @@ class Losses:
         return lost
 
     def _channel(self, channel: object) -> tuple[str | None, str | None]:
-        """(what the format loses of ``channel``, its candump name), once per channel."""
-        try:
-            return self._channels[channel]
-        except KeyError:
-            pass
-        key = channel_key(channel)
+        """(what the format loses of ``channel``, how a loss line names it; None: no
+        channel), once per channel (a channel that is neither text nor a number, a dict a
+        datagram carried, each time: it may be no dictionary key)."""
+        hashable = channel if isinstance(channel, (str, int)) else None
+        if hashable is not None and hashable in self._channels:
+            return self._channels[hashable]
         lost = None
-        if key is not None:
+        if channel is not None:
             if self.carries.channel == "none":
                 lost = "channel"
-            elif self.carries.channel == "number" and self.number(channel) is None:
-                lost = "channel name"
-        self._channels[channel] = lost, key
-        return lost, key
+            elif self.carries.channel == "number":
+                if self.number(channel) is None:
+                    lost = "channel name"
+            elif writable_name(channel) is None:
+                lost = "channel text"
+        named = None if channel is None else shown_channel(channel)
+        if hashable is not None:
+            self._channels[hashable] = lost, named
+        return lost, named
 
     def number(self, channel: object) -> int | None:
         """``channel``'s number in a numbered format (``can3``, ``"3"``, 3: 3); None for a
         name it cannot keep (written on :data:`DEFAULT_CHANNEL`)."""
+        if not isinstance(channel, (str, int)):
+            return None
         matched = _NUMBERED.fullmatch(channel_key(channel) or "")
         if matched is None:
             return None

@@ -50,8 +50,8 @@ from can.util import channel2int, len2dlc
 from blinkcan.formats.carried import (
     BLF_DATED_FROM,
     DEFAULT_CHANNEL,
-    channel_key,
     start_millisecond,
+    writable_name,
 )
 from blinkcan.formats.pcap import CAN_EFF_MASK, CAN_ERR_FLAG, CANFD_BRS, CANFD_ESI
 
@@ -59,14 +59,15 @@ from blinkcan.formats.pcap import CAN_EFF_MASK, CAN_ERR_FLAG, CANFD_BRS, CANFD_E
 class CandumpWriter(CanutilsLogWriter):
     """candump ``-L`` lines as can-utils writes them (see the module docstring); a frame
     with no channel on :data:`~blinkcan.formats.carried.DEFAULT_CHANNEL` (python-can's
-    default, ``vcan0``, named a channel no bus had)."""
+    default, ``vcan0``, named a channel no bus had), as is one whose name a line cannot hold
+    as it is (formats/carried.py's writable_name: a newline would split the line)."""
 
     def __init__(self, file: Any, channel: str = DEFAULT_CHANNEL, append: bool = False
                  ) -> None:
         super().__init__(file, channel=channel, append=append)
 
     def on_message_received(self, msg: can.Message) -> None:
-        channel = channel_key(msg.channel) or self.channel
+        channel = writable_name(msg.channel) or self.channel  # never a name's raw text
         stamp = f"({msg.timestamp:f}) {channel}"
         if msg.is_error_frame:  # linux/can/error.h: the class in the identifier, 8 data bytes
             ident = CAN_ERR_FLAG | (msg.arbitration_id & CAN_EFF_MASK)

@@ -455,10 +455,11 @@ class FrameWriter:
         self.live = live
         suffix = self.path.suffix.lower()
         _check_target(self.path, replace, live)
-        from blinkcan.formats.carried import CARRIES, Losses  # noqa: PLC0415
+        from blinkcan.formats.carried import CARRIES, Losses, writable_name  # noqa: PLC0415
         from blinkcan.runtime.canbus import to_message  # noqa: PLC0415
 
         self._to_message = to_message
+        self._writable_name = writable_name
         self._pcap: PcapWriter | None = None
         self._file: WholeRecords | None = None
         self._logger: can.io.generic.MessageWriter | None = None
@@ -466,6 +467,7 @@ class FrameWriter:
         self._cannot = carries.dropped if carries is not None else frozenset()
         self.losses = Losses(suffix)
         self._numbered = self.losses.carries.channel == "number"
+        self._named = self.losses.carries.channel == "name"
         self._unflushed = 0
         self.count = 0
         self.skipped: Counter[str] = Counter()
@@ -536,6 +538,10 @@ class FrameWriter:
             # a name's trailing digits: bench-12345678 as channel 12345678, past BLF's 16
             # bits), as the losses said
             message.channel = self.losses.number(message.channel)
+        elif self._named and message.channel is not None:
+            # a name a line cannot hold as it is (a newline, a dict) on the default channel,
+            # as the losses said: never its raw text
+            message.channel = self._writable_name(message.channel)
         if self._pcap is not None:
             self._pcap.write(message)
         else:
