@@ -125,7 +125,7 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
     known = parse_devices(devices)
     if not devices:
         click.echo(assumed_text(), err=True)
-    decoder = Decoder(known)
+    decoder = Decoder(known, assumed=not devices)
     view = BusView(decoder)
     log = EventLog(rows, decoder)
     console = output_console()
