@@ -53,8 +53,12 @@ def _bounded(main: Callable[[], Awaitable[Any]]) -> Any:
     return asyncio.run(bounded())
 
 
+@pytest.mark.parametrize(("timeout", "expected"), [(None, SIMULATED_FOREVER), (2.0, 2.0)],
+                         ids=["no timeout: as the blocking iterator waits",
+                              "a timeout is virtual seconds"])
 @pytest.mark.parametrize("name", ITERATORS)
-def test_an_iterator_with_no_timeout_ends_when_no_event_comes(name: str) -> None:
+def test_an_iterator_with_no_event_ends_after_its_timeout_in_virtual_time(
+        name: str, timeout: float | None, expected: float) -> None:
     twin, driver, iterate = ITERATORS[name]
     with Rig() as rig:
         rig.add(twin())
@@ -62,30 +66,13 @@ def test_an_iterator_with_no_timeout_ends_when_no_event_comes(name: str) -> None
         async def main() -> tuple[list[Any], float]:
             opened = await driver(rig).open()
             start = rig.now
-            events = [event async for event in iterate(opened, None)]
+            events = [event async for event in iterate(opened, timeout)]
             await opened.__aexit__(None, None, None)
             return events, rig.now - start
 
         events, waited = _bounded(main)
     assert events == []
-    assert waited == pytest.approx(SIMULATED_FOREVER)  # as the blocking iterator waits
-
-
-@pytest.mark.parametrize("name", ITERATORS)
-def test_an_iterator_timeout_is_virtual_seconds(name: str) -> None:
-    twin, driver, iterate = ITERATORS[name]
-    with Rig() as rig:
-        rig.add(twin())
-
-        async def main() -> tuple[list[Any], float]:
-            opened = await driver(rig).open()
-            start = rig.now
-            events = [event async for event in iterate(opened, 2.0)]
-            return events, rig.now - start
-
-        events, waited = _bounded(main)
-    assert events == []
-    assert waited == pytest.approx(2.0)
+    assert waited == pytest.approx(expected)
 
 
 def test_a_lost_heartbeat_reaches_an_async_for_in_virtual_time() -> None:

@@ -83,11 +83,8 @@ def message_columns(messages: Iterable[can.Message | UnreadableLine], block: int
             continue
         channel = None if message.channel is None else str(message.channel)
         if frame_kind(message) == "data":
-            columns.times.append(message.timestamp)
-            columns.channels.append(channel)
-            columns.ids.append(message.arbitration_id)
-            columns.extended.append(message.is_extended_id)
-            columns.data.append(bytes(message.data))
+            columns.add_frame(message.timestamp, channel, message.arbitration_id,
+                              message.is_extended_id, bytes(message.data))
         else:
             columns.add_other(message, channel)
         if len(columns) >= block:

@@ -40,14 +40,20 @@ class FrameColumns:
     def __len__(self) -> int:
         return len(self.times)
 
+    def add_frame(self, time: float, channel: str | None, can_id: int, extended: bool,
+                  data: bytes) -> None:
+        """A classic data frame, in the next row."""
+        self.times.append(time)
+        self.channels.append(channel)
+        self.ids.append(can_id)
+        self.extended.append(extended)
+        self.data.append(data)
+
     def add_other(self, message: can.Message, channel: str | None) -> None:
         """A frame that is not a classic data frame, as python-can read it."""
         self.others[len(self.times)] = message
-        self.times.append(message.timestamp)
-        self.channels.append(channel)
-        self.ids.append(message.arbitration_id)
-        self.extended.append(message.is_extended_id)
-        self.data.append(bytes(message.data))
+        self.add_frame(message.timestamp, channel, message.arbitration_id,
+                       message.is_extended_id, bytes(message.data))
 
 
     def add_unreadable(self, line: UnreadableLine) -> None:

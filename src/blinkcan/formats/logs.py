@@ -361,11 +361,7 @@ def _as_columns(items: Iterator[tuple[float, Frame | can.Message | UnreadableLin
     columns = FrameColumns()
     for timestamp, item in items:
         if isinstance(item, Frame):
-            columns.times.append(timestamp)
-            columns.channels.append(None)
-            columns.ids.append(item.can_id)
-            columns.extended.append(item.extended)
-            columns.data.append(item.data)
+            columns.add_frame(timestamp, None, item.can_id, item.extended, item.data)
         elif isinstance(item, UnreadableLine):
             columns.add_unreadable(item)
         else:
