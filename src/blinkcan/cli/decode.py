@@ -217,12 +217,13 @@ class _Output:
 
 def _json_lines(decoder: Decoder, file: str, output: _Output,
                 unreadable: UnreadableCount) -> None:
-    """A block of the log at a time: times written by one orjson call, another ECU's frame
-    (two thirds of a bus) a lookup of its line around time and data (Decoder.raw_json), one
-    write per block."""
+    """A block of the log at a time: times written by one orjson call; most frames' lines
+    written without a Frame or an Event: another ECU's frame (two thirds of a bus) a lookup
+    of its line around time and data (Decoder.raw_json), a device's PDO or heartbeat from its
+    data, a kept SDO or J1939 event's line (Decoder.json_rest); one write per block."""
     lines = output.lines
     add = lines.append
-    json_line, raw_json = decoder.json_line, decoder.raw_json
+    json_line, json_rest, raw_json = decoder.json_line, decoder.json_rest, decoder.raw_json
     new = tuple.__new__  # Frame.trusted without the call: the reader checked the frames
     for block in read_log_columns(file):
         times = block.times
@@ -233,10 +234,14 @@ def _json_lines(decoder: Decoder, file: str, output: _Output,
                     json_times(times), times, block.ids, block.data, block.extended,
                     strict=True):
                 parts = raw_json(can_id, extended)
-                if parts is None:
+                if parts is not None:
+                    add(f'{{"time":{stamp}{parts[0]}{data.hex()}{parts[1]}')
+                    continue
+                rest = json_rest(can_id, extended, data, time)
+                if rest is None:
                     add(json_line(new(Frame, (can_id, data, extended)), time))
                 else:
-                    add(f'{{"time":{stamp}{parts[0]}{data.hex()}{parts[1]}')
+                    add(f'{{"time":{stamp}{rest}')
         output.write()
 
 
