@@ -17,6 +17,12 @@ from blinkcan.devices.model import DeviceDescription, Model
 from blinkcan.devices.pdo import Direction
 
 ENTRY_POINT_GROUP = "blinkcan.models"
+#: the protocols a model may speak besides CANopen, each named by its description's features
+#: (devices/keypad.py: the PKP-2600-SI's J1939 mode, spec/pkp-2600-si-j1939.md)
+OTHER_PROTOCOLS = ("j1939",)
+#: how a device is named: a model or alias, a generation, a protocol (emulate's /PROTOCOL;
+#: other commands take it as --protocol or a j1939:ADDR node)
+SPELLING = "DEVICE[@GEN][/PROTOCOL]"
 
 #: the models blinkcan ships, in the order identity values are matched (first wins on a tie)
 BUILTIN_MODELS: tuple[str, ...] = (
@@ -83,19 +89,23 @@ def model(name: str) -> Model:
     try:
         return _by_name()[name.lower()]
     except (KeyError, AttributeError):
-        known = ", ".join(f"{m.name} ({', '.join(m.aliases)})" if m.aliases else m.name
-                          for m in models())
-        raise ValueError(f"unknown device {name!r}; known: {known} "
-                         "(optionally @generation)") from None
+        raise ValueError(f"unknown device {name!r}; known, as {SPELLING}: "
+                         f"{model_names(protocols=True)}") from None
 
 
-def model_names() -> str:
-    """"pkp-2600-si (keypad; generations 1.1, 1.5), keybox, ...": every registered model, for
-    help texts and error messages."""
+def model_names(protocols: bool = False) -> str:
+    """"pkp-2600-si (keypad, @1.1/@1.5), keybox, ...": every registered model with its
+    aliases and generations, for help texts and error messages; with ``protocols``, also the
+    protocols it speaks besides CANopen ("/j1939")."""
     def one(found: Model) -> str:
         extra = [*found.aliases]
         if len(found.generations) > 1:
             extra.append(f"@{'/@'.join(found.generations)}")
+        spoken = [protocol for protocol in OTHER_PROTOCOLS if any(
+            protocol in found.description(generation).features
+            for generation in found.generations)]
+        if protocols and spoken:
+            extra.append(f"/{'/'.join(spoken)}")
         return f"{found.name} ({', '.join(extra)})" if extra else found.name
 
     return ", ".join(one(found) for found in models())
