@@ -85,8 +85,7 @@ def test_no_marker(rig):
 
 #: each bad marker's test, and what its one line says
 SAID = {
-    "test_model_no_fixture": "unknown device 'nope'; known, as DEVICE[@GEN][/PROTOCOL]: "
-                             "pkp-2600-si",
+    "test_model_no_fixture": "unknown device 'nope'; known: pkp-2600-si",
     "test_model_rig_only": "unknown device 'nope'",
     "test_model_keybox_twin": "unknown device 'nope'",
     "test_model_not_a_keypad": "'keybox' is not a keypad",

@@ -89,26 +89,36 @@ def model(name: str) -> Model:
     try:
         return _by_name()[name.lower()]
     except (KeyError, AttributeError):
-        raise ValueError(f"unknown device {name!r}; known, as {SPELLING}: "
-                         f"{model_names(protocols=True)}") from None
+        known = ", ".join(f"{m.name} ({', '.join(m.aliases)})" if m.aliases else m.name
+                          for m in models())
+        raise ValueError(f"unknown device {name!r}; known: {known}; written {SPELLING}: "
+                         f"{', '.join(spellings())}") from None
 
 
-def model_names(protocols: bool = False) -> str:
-    """"pkp-2600-si (keypad, @1.1/@1.5), keybox, ...": every registered model with its
-    aliases and generations, for help texts and error messages; with ``protocols``, also the
-    protocols it speaks besides CANopen ("/j1939")."""
+def model_names() -> str:
+    """"pkp-2600-si (keypad; generations 1.1, 1.5), keybox, ...": every registered model, for
+    help texts and error messages."""
     def one(found: Model) -> str:
         extra = [*found.aliases]
         if len(found.generations) > 1:
             extra.append(f"@{'/@'.join(found.generations)}")
-        spoken = [protocol for protocol in OTHER_PROTOCOLS if any(
-            protocol in found.description(generation).features
-            for generation in found.generations)]
-        if protocols and spoken:
-            extra.append(f"/{'/'.join(spoken)}")
         return f"{found.name} ({', '.join(extra)})" if extra else found.name
 
     return ", ".join(one(found) for found in models())
+
+
+def spellings() -> list[str]:
+    """The names with a part after the model's, as :data:`SPELLING` writes them: each
+    generation of a model that has more than one ("pkp-2600-si@1.5") and each protocol a
+    model speaks besides CANopen ("pkp-2600-si/j1939", read from its descriptions' features)."""
+    found: list[str] = []
+    for each in models():
+        if len(each.generations) > 1:
+            found.extend(f"{each.name}@{generation}" for generation in each.generations)
+        found.extend(f"{each.name}/{protocol}" for protocol in OTHER_PROTOCOLS
+                     if any(protocol in each.description(generation).features
+                            for generation in each.generations))
+    return found
 
 
 def parse_spec(spec: str) -> tuple[Model, str]:
