@@ -119,14 +119,18 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
     twin = twins[0]
     decoder = Decoder(decoder_devices(twins))
     clock = Clock(start=time.monotonic())
-    frames = 0
+    frames = heard = 0
 
     def show(frame: Frame, sent: bool, now: float) -> None:
-        nonlocal frames
-        frames += 1
+        nonlocal frames, heard
         console.out(f"{clock(now):>7} {'<' if sent else '>'} {frame.can_id:03X} "
                     f"{frame.data.hex(' ').upper():<23} {decoder.text(frame, now)}",
                     highlight=False)
+        frames += 1
+        heard += not sent  # a frame of the host's, shown
+
+    def heard_since(count: int) -> Callable[[], bool]:
+        return lambda: heard > count
 
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     title = twin.description.title
@@ -145,16 +149,17 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                     for step, command in host_steps(driver, twin.description.face):
                         time.sleep(pause)
                         console.out(f"== {step}", highlight=False)
+                        before = heard
                         command()
                         host.run(lambda: None)  # what it sent is on the bus...
-                        _quiet(lambda: frames)  # ...and shown, before the next step's
+                        _shown(heard_since(before), lambda: frames)  # ...and shown
                     for step, action, values in scripted_steps(twin):
                         time.sleep(pause)
                         console.out(f"== {step}", highlight=False)
                         emulator.run(partial(_perform, action, twin, values))
                     time.sleep(pause)
                     emulator.run(lambda now: None)  # what the last step sent is shown
-                    _quiet(lambda: frames)  # and what the driver sent in answer
+                    _shown(lambda: True, lambda: frames)  # and the driver's answer
                     if web is not None:
                         console.out("the twin keeps running with the panel; Ctrl-C stops",
                                     highlight=False)
@@ -168,10 +173,15 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
     return 0
 
 
-def _quiet(count: Callable[[], int], quiet: float = 0.03, limit: float = 1.0) -> None:
-    """Until ``count()`` (frames shown) stood still for ``quiet`` seconds (at most
-    ``limit``): the emulator's reader thread shows the host's frames as it reads them."""
+def _shown(first: Callable[[], bool], count: Callable[[], int], quiet: float = 0.03,
+           limit: float = 5.0) -> None:
+    """Until ``first()`` holds (a frame of the host's shown: every command sends one), then
+    until ``count()`` (frames shown) stood still for ``quiet`` seconds; at most ``limit``
+    seconds in all. The emulator's reader thread shows the host's frames as it reads them,
+    so the next step's title comes after them."""
     end = time.monotonic() + limit
+    while not first() and time.monotonic() < end:
+        time.sleep(0.002)
     seen, since = count(), time.monotonic()
     while time.monotonic() < end and time.monotonic() - since < quiet:
         time.sleep(0.005)
