@@ -1,6 +1,7 @@
 """``decode --json``'s writers (Decoder.json_rest: a device's PDO or heartbeat line written
-from its data, without an Event) write exactly the line the Event's ``to_json`` makes, for
-any data of every registered model's layouts, at every generation (issue 22)."""
+from its data, without an Event) write exactly the line the Event's ``to_json`` makes, and
+``decode``'s (Decoder.text: a PDO's text without an Event) exactly ``str(event)``, for any
+data of every registered model's layouts, at every generation (issue 22)."""
 
 from __future__ import annotations
 
@@ -30,10 +31,12 @@ def test_written_lines_are_the_events_json(spec: str, data: st.DataObject) -> No
     frames = data.draw(st.lists(st.one_of(
         st.builds(Frame, st.sampled_from(ids), st.binary(max_size=8)),
         st.builds(Frame, st.just(HEARTBEAT + node), _HEARTBEATS)), min_size=1, max_size=40))
-    fast, plain = Decoder({node: spec}), Decoder({node: spec})
+    fast, text, plain = Decoder({node: spec}), Decoder({node: spec}), Decoder({node: spec})
     for n, item in enumerate(frames * 2):  # twice: a pure PDO's line kept by its data
         time = 1_700_000_000 + n / 1000
-        assert fast.json_line(item, time) == encode_json(plain.decode(item, time).to_json())
+        event = plain.decode(item, time)
+        assert fast.json_line(item, time) == encode_json(event.to_json())
+        assert text.text(item, time) == str(event)
 
 
 @pytest.mark.parametrize("spec", _SPECS)

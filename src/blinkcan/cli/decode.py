@@ -26,7 +26,6 @@ from blinkcan.formats.logs import (
     LogError,
     describe_frame,
     frame_kind,
-    read_log,
     read_log_columns,
 )
 from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
@@ -265,6 +264,9 @@ def _json_rows(decoder: Decoder, block: FrameColumns, add: Callable[[str], None]
 
 def _text_lines(decoder: Decoder, file: str, output: _Output, unreadable: UnreadableCount,
                 progress: Progress | None, absolute: bool) -> None:
+    """A block of the log at a time (read_log_columns: a candump log's plain blocks read
+    whole); another ECU's frame's text a lookup, a PDO's written without an Event
+    (Decoder.text)."""
     lines = output.lines
     add = lines.append
     task = progress.add_task("decode") if progress is not None else None
@@ -273,23 +275,29 @@ def _text_lines(decoder: Decoder, file: str, output: _Output, unreadable: Unread
     start: float | None = None
     idents = _IdentColumns()
     text_of = decoder.text
-    for timestamp, item in read_log(file):
-        if isinstance(item, Frame):
-            frame, event = item, text_of(item, timestamp)
-        elif isinstance(item, UnreadableLine):
-            unreadable.add(item)
-            add(_unreadable_text(item, start, absolute))
-            continue
-        else:
-            other = other_event(decoder, item)
-            frame, event = other.frame, str(other)
-        ident = idents[frame.can_id, frame.extended]
-        if absolute:
-            shown = iso_utc(timestamp)
-        else:
-            start = timestamp if start is None else start
-            shown = f"{timestamp - start:12.6f}"
-        add(f"{shown}  {ident}  {frame.data.hex(' ').upper():<23}  {event}")
+    new = tuple.__new__  # Frame.trusted without the call: the reader checked the frames
+    for block in read_log_columns(file):
+        others = block.others
+        for row, (timestamp, row_id, row_data, row_extended) in enumerate(zip(
+                block.times, block.ids, block.data, block.extended, strict=True)):
+            other = others.get(row) if others else None
+            if other is None:
+                can_id, data, extended = row_id, row_data, row_extended
+                event = text_of(new(Frame, (can_id, data, extended)), timestamp)
+            elif isinstance(other, UnreadableLine):
+                unreadable.add(other)
+                add(_unreadable_text(other, start, absolute))
+                continue
+            else:
+                decoded = other_event(decoder, other)
+                can_id, data, extended = decoded.frame
+                event = str(decoded)
+            if absolute:
+                shown = iso_utc(timestamp)
+            else:
+                start = timestamp if start is None else start
+                shown = f"{timestamp - start:12.6f}"
+            add(f"{shown}  {idents[can_id, extended]}  {data.hex(' ').upper():<23}  {event}")
         if len(lines) >= _BATCH:
             output.write()
             if progress is not None and task is not None:

@@ -255,6 +255,8 @@ class Decoder:
         #: without an Event (PDOs, heartbeats: most of the devices' frames); None from one for
         #: a frame it leaves to the Event (a PDO too short)
         self._writers: dict[int, _Writer] = {}
+        #: the same for the one-line text (:meth:`text`): PDOs
+        self._text_writers: dict[int, Callable[[bytes], str]] = {}
         #: per route: [cache hits, cache misses]; routes whose frames rarely repeat go uncached
         self._cache_stats: dict[tuple[int, bool], list[int]] = {}
         self._uncached: set[tuple[int, bool]] = set()
@@ -361,7 +363,8 @@ class Decoder:
         return served is not None and served[0][3] is event.fields
 
     def text(self, frame: Frame, time: float = 0.0) -> str:
-        """``str(decode(frame, time))``: another ECU's frame is a lookup."""
+        """``str(decode(frame, time))``: another ECU's frame is a lookup, a PDO's text is
+        written without an Event."""
         if frame[2]:
             text = self._foreign.get(frame[0])
             if text is not None:
@@ -370,6 +373,9 @@ class Decoder:
             raw = self._raw_standard.get(frame[0])
             if raw is not None:
                 return raw[3]
+            writer = self._text_writers.get(frame[0])
+            if writer is not None:  # a PDO: its text without the Event (Decoder._pdo_routes)
+                return writer(frame[1])
         return str(self.decode(frame, time))
 
     def json_line(self, frame: Frame, time: float = 0.0) -> str:
@@ -544,7 +550,8 @@ class Decoder:
                         self._pure.discard(key)
                         shift, mask = keyed
                         self._keyed[key] = (node, shift, mask & ((1 << device.face.keys) - 1))
-                    route, writer = self._pdo_routes(layout, node, device)
+                    route, writer, self._text_writers[can_id] = self._pdo_routes(
+                        layout, node, device)
                     if writer is not None:
                         self._writers[can_id] = writer
                     return route
@@ -568,6 +575,7 @@ class Decoder:
             self._pure.discard(key)
             self._keyed.pop(key, None)
             self._writers.pop(key[0], None)
+            self._text_writers.pop(key[0], None)
             self._cache_stats.pop(key, None)
             self._uncached.discard(key)
         self._json_bodies.clear()
@@ -641,12 +649,13 @@ class Decoder:
     # -- PDOs -------------------------------------------------------------------------------------
 
     def _pdo_routes(self, layout: PdoLayout, node: int, description: DeviceDescription
-                    ) -> tuple[Callable[[Frame, float], Event], _Writer | None]:
-        """The PDO's two renderings of one describer (decode/describers.py): its Event, and
-        its JSON line after the time written from the data (:meth:`json_rest`: the same text
-        as the Event's ``to_json``, without the Event and the dicts in between). No writer
-        (None) where a name of the layout would need JSON escapes (none does: the Event
-        writes them)."""
+                    ) -> tuple[Callable[[Frame, float], Event], _Writer | None,
+                               Callable[[bytes], str]]:
+        """The PDO's three renderings of one describer (decode/describers.py): its Event, its
+        JSON line after the time written from the data (:meth:`json_rest`: the same text as
+        the Event's ``to_json``, without the Event and the dicts in between), and its
+        one-line text (:meth:`text`, ``str(event)``). No JSON writer (None) where a name of
+        the layout would need JSON escapes (none does: the Event writes them)."""
         describe, describe_json = pdo_describers(layout, description, node, self._keys)
         device, name, min_length = description.kind, layout.name, layout.min_length
         too_short = f"{layout.label}: too short"
@@ -658,15 +667,23 @@ class Decoder:
             text, fields = describe(data)
             return Event(time, frame, Kind.PDO, text, node, device, {"pdo": name, **fields})
 
+        who = f"{device} {node:02X}h: "
+        short_text = who + too_short
+
+        def text_writer(data: bytes) -> str:
+            if len(data) < min_length:
+                return short_text
+            return who + describe_json(data)[0]
+
         names = [device, name, too_short, *(colour.label for colour in BacklightColour)]
         for signal in layout.signals:
             names += [signal.name, signal.label, signal.item or "", signal.unit]
         if not layout.signals or any(_encode_text(text) != f'"{text}"' for text in names):
-            return route, None
+            return route, None, text_writer
         head = f',"id":{layout.cob_id(node)},"extended":false,"data":"'
-        who = f'"node":{node},"device":"{device}","text":"{device} {node:02X}h: '
-        middle = f'","kind":"pdo",{who}'
-        short = f'","kind":"frame",{who}{too_short}"}}'
+        named = f'"node":{node},"device":"{device}","text":"{who}'
+        middle = f'","kind":"pdo",{named}'
+        short = f'","kind":"frame",{named}{too_short}"}}'
         after_text = f'","pdo":"{name}",'
         pure = keyed_signal(layout) is None
         written: dict[bytes, str] = {}  # a pure PDO's lines by data: periodic ones repeat
@@ -686,7 +703,7 @@ class Decoder:
                 written[data] = rest
             return rest
 
-        return route, writer
+        return route, writer, text_writer
 
     def _heartbeat_writer(self, can_id: int) -> _Writer:
         """A node's heartbeat lines after the time by data (a node sends a few states), made
