@@ -55,8 +55,8 @@ from blinkcan.host.device import (
     HealthEvent,
     NoDeviceError,
     WrongDeviceError,
+    check_watchdog,
     confirm_or_close,
-    milliseconds,
 )
 from blinkcan.host.events import EventSource
 from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
@@ -164,7 +164,7 @@ class Keypad(Device):
         self._model = registry_model(model or MODEL)
         self._model_given = model is not None
         if watchdog is not None:  # checked before anything is sent (the identity reads)
-            milliseconds("watchdog period", watchdog)
+            check_watchdog(watchdog)
         check_time("long_press", long_press, 0)
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
@@ -524,7 +524,7 @@ class Keypad(Device):
 
     def set_periodic_key_state(self, period: float) -> None:
         """Send the key state every ``period`` s as well as on change; 0 = only on change."""
-        self.write("tpdo1_event_timer", milliseconds("key state period", period))
+        self.write_period("tpdo1_event_timer", "key state period", period)
 
     def read(self, name: str) -> Value:
         """An object by its CANopen name (SDO); refused in J1939 mode, which has no SDO."""
