@@ -62,7 +62,7 @@ def test_a_period_that_is_not_seconds_is_refused_before_anything_is_sent(
     rig = drivers["rig"]
     rig.settle()
     before = len(rig.frames)
-    with pytest.raises(error, match="period|timeout"):
+    with pytest.raises(error, match=r"period|timeout"):
         CALLS[call](drivers, value)
     assert len(rig.frames) == before
 
@@ -85,7 +85,7 @@ def test_a_period_the_device_cannot_hold_is_refused_in_seconds(
     rig = drivers["rig"]
     rig.settle()
     before = len(rig.frames)
-    with pytest.raises(ValueError, match="period|timeout") as refused:
+    with pytest.raises(ValueError, match=r"period|timeout") as refused:
         CALLS[call](drivers, value)
     assert valid in str(refused.value)
     assert len(rig.frames) == before
@@ -114,6 +114,6 @@ def test_a_wait_no_timer_can_hold_is_refused_before_anything_is_sent(
         }
         rig.settle()
         before = len(rig.frames)
-        with pytest.raises(ValueError, match="timeout|wait"):
+        with pytest.raises(ValueError, match=r"timeout|wait"):
             calls[call]()
         assert len(rig.frames) == before
