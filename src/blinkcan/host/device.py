@@ -287,12 +287,14 @@ class Device:
     def nmt(self, command: NmtCommand) -> None:
         self.host.run(lambda: self._nmt_commanded(command))  # known before any reply
         self.host.send(nmt_frame(command, self.node_id))
+        self.nmt_command_sent(command)
 
     def _on_nmt_heard(self, frame: Frame, now: float) -> None:
         """Another master's NMT command to this node (or to all) explains what follows."""
         request = parse_nmt(frame, self.description.nmt_aliases)
         if request is not None and request.node_id in (0, self.node_id):
             self._nmt_commanded(request.command)
+            self.nmt_command_sent(request.command)
 
     def _nmt_commanded(self, command: NmtCommand) -> None:
         asked = _ASKED.get(command)
@@ -317,6 +319,11 @@ class Device:
     def nmt_command_seen(self, command: NmtCommand) -> None:
         """An NMT command was sent to the device (by this driver, or heard from another master
         on 000h): drivers update their picture."""
+
+    def nmt_command_sent(self, command: NmtCommand) -> None:
+        """An NMT command to the device is on the bus (this driver's, in its caller's thread
+        once sent; another master's, as heard): what the device acts on only from now (a PDO
+        after a start) may go."""
 
     def booted_up(self, now: float) -> None:
         """The confirmed device (re)booted: drivers restore what the application had set."""

@@ -65,9 +65,13 @@ from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import j1939_frame
+from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
+#: NMT commands after which a keypad ignores PDOs until the next start (CiA 301: RPDOs are
+#: acted on only in OPERATIONAL)
+_PDOS_IGNORED_AFTER = (NmtCommand.STOP, NmtCommand.ENTER_PRE_OPERATIONAL)
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
 #: PKP §44 / J1939 manual §27: the way back to CANopen, from the J1939 command table
 J1939_RETURN = j1939_frame(PGN_COMMAND, DEFAULT_HOST_ADDRESS,
@@ -160,6 +164,10 @@ class Keypad(Device):
                  protocol: str = "canopen", address: int = DEFAULT_ADDRESS) -> None:
         if protocol not in ("canopen", "j1939"):
             raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
+        #: True from an NMT stop or pre-operational (or such a state reported) to the next
+        #: start: the LED PDOs sent meanwhile were ignored, the picture goes again after it
+        #: (set before the bus handlers that change it are subscribed)
+        self._pdos_ignored = not start
         #: the registered model this driver runs (the PKP-2600-SI unless ``model`` names one)
         self._model = registry_model(model or MODEL)
         self._model_given = model is not None
@@ -675,6 +683,24 @@ class Keypad(Device):
 
     # -- recovery ---------------------------------------------------------------------------------
 
+    def nmt_command_seen(self, command: NmtCommand) -> None:
+        if command in _PDOS_IGNORED_AFTER:  # CiA 301: RPDOs only in OPERATIONAL
+            self._pdos_ignored = True
+
+    def state_reported(self, state: NmtState, now: float) -> None:
+        if state is not NmtState.OPERATIONAL:
+            self._pdos_ignored = True
+        else:  # started by a command this driver did not hear (its own were): show it all
+            self.nmt_command_sent(NmtCommand.START)
+
+    def nmt_command_sent(self, command: NmtCommand) -> None:
+        """After a start, the picture the keypad ignored while stopped or pre-operational
+        (the LED PDOs sent meanwhile were dropped) is sent again, as after a reboot."""
+        if command is NmtCommand.START and self._pdos_ignored:
+            self._pdos_ignored = False
+            if self.restore and self.confirmed:
+                self.send_picture_again()
+
     def booted_up(self, now: float) -> None:
         for timer in self._long_timers.values():
             timer.cancel()
@@ -686,12 +712,20 @@ class Keypad(Device):
         self._recover()  # rev 1.5 §26 note 2: the keypad switched its LEDs off
 
     def _recover(self) -> None:
+        self._pdos_ignored = not self.auto_start  # the start below; else the application's
         if self.auto_start:
             self.start()
         with self._picture_lock:
             if not self.restore:
                 self._sent = None
                 return
+        self.send_picture_again()
+
+    def send_picture_again(self) -> None:
+        """Send the whole picture the keypad lost or ignored: LEDs, indicator brightness,
+        backlight (its colour by SDO, in a worker). A driver with more to show (ring LEDs)
+        extends it."""
+        with self._picture_lock:
             self._send_changes(force=True)  # errata field report: a rebooted keypad forgot its LEDs
             if self._indicator is not None:
                 self.host.send(self.pdo_frame("indicator_brightness",

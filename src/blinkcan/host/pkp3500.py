@@ -197,10 +197,12 @@ class Pkp3500Keypad(Keypad):
         check_range("brightness", level, 0, LEVEL_MAX)
         self.write("indicator_brightness", level)
 
-    def booted_up(self, now: float) -> None:
-        super().booted_up(now)
+    def send_picture_again(self) -> None:
+        """The key LEDs and levels, and the ring LEDs (after a reboot, a watchdog trip (MT
+        §32: rings off too) or a start after a stop)."""
+        super().send_picture_again()
         with self._rings_lock:
-            if self.restore and self._rings is not None:
+            if self._rings is not None:
                 self.host.send(self.pdo_frame("ring_leds", {"rings": self._rings}))
 
 
