@@ -288,8 +288,10 @@ def test_a_line_act_cannot_send_as_it_is_is_one_error_line(
         code, out, errors = _act(*words)
     assert code in (1, 2)
     assert out == ""
-    assert errors.startswith("Error: ") and errors.count("\n") == 1, errors
+    assert errors.startswith("Error: "), errors
+    assert errors.count("\n") == 1, errors
     assert said in errors
-    assert "unexpected" not in errors and "cannot reach" not in errors
+    assert "unexpected" not in errors
+    assert "cannot reach" not in errors
     assert not any(key["pressed"]
                    for key in live_emulator.snapshot(live_emulator.twins[0])["keys"])

@@ -73,3 +73,23 @@ def test_ring_leds_set_while_stopped_are_shown_after_the_start(case: Case) -> No
         rig.advance(0.2)
         assert keypad.read_rings() == [1, 2, 3]  # what the keypad shows (SDO 2000h, MT §20c)
         keypad.close()
+
+
+@pytest.mark.parametrize("case", KEYPADS, ids=str)
+def test_a_driver_that_sent_nothing_meanwhile_sends_nothing_after_the_start(case: Case) -> None:
+    """What another program lit stays lit: a driver (``blinkcan keypad led``: start=False,
+    then a start, then the LEDs read) re-sends nothing it did not send while PDOs were
+    ignored (its empty picture would switch every LED off)."""
+    key = case.description.face.led_keys[0]
+    with Rig() as rig:
+        twin = rig.add(build_twin(case.spec, quirks=case.quirks,
+                                  settings={"startup_led_show": 0}))
+        Keypad(rig.bus, 0x15, model=case.model.name).set_led(key, "blue")
+        pre_operational = Frame(0x000, bytes((int(NmtCommand.ENTER_PRE_OPERATIONAL), 0x15)))
+        rig.act(lambda now: [pre_operational])  # SDO still answered: the driver confirms
+        rig.advance(0.2)
+        other = Keypad(rig.bus, 0x15, model=case.model.name, start=False)
+        other.start()
+        rig.advance(0.2)
+        assert _lit(rig, twin, key) == "blue"
+        other.close()

@@ -168,6 +168,7 @@ class Keypad(Device):
         #: start: the LED PDOs sent meanwhile were ignored, the picture goes again after it
         #: (set before the bus handlers that change it are subscribed)
         self._pdos_ignored = not start
+        self._missed = False  # a picture PDO went while they were ignored
         #: the registered model this driver runs (the PKP-2600-SI unless ``model`` names one)
         self._model = registry_model(model or MODEL)
         self._model_given = model is not None
@@ -456,9 +457,9 @@ class Keypad(Device):
             self.pdo_frame("led_blink", _masks(self._blink))
         sent = self._sent
         if force or sent is None or sent[0] != on:
-            self.host.send(on)
+            self.send_shown(on)
         if force or sent is None or sent[1] != blink:
-            self.host.send(blink)
+            self.send_shown(blink)
         self._sent = (on, blink)
 
     # -- brightness and backlight -----------------------------------------------------------------
@@ -471,7 +472,7 @@ class Keypad(Device):
             if self.j1939 is not None:
                 self.j1939.send("led_brightness", level)
                 return
-            self.host.send(self.pdo_frame("indicator_brightness", {"level": level}))
+            self.send_shown(self.pdo_frame("indicator_brightness", {"level": level}))
 
     def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
         """Backlight colour (by name, PKP §18c) and level 0..63 (0 = off, PKP §14)."""
@@ -488,7 +489,7 @@ class Keypad(Device):
                     if self.j1939 is not None:
                         self.j1939.send("backlight_level", level)
                     else:
-                        self.host.send(self._backlight_frame(level))
+                        self.send_shown(self._backlight_frame(level))
 
     def _restore_backlight(self) -> None:
         """The backlight as it is when this runs (after any backlight command in flight)."""
@@ -497,7 +498,7 @@ class Keypad(Device):
                 self.write("backlight_colour", self._backlight_colour)
             with self._picture_lock:
                 if self._backlight_level is not None:
-                    self.host.send(self._backlight_frame(self._backlight_level))
+                    self.send_shown(self._backlight_frame(self._backlight_level))
 
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
@@ -694,12 +695,19 @@ class Keypad(Device):
             self.nmt_command_sent(NmtCommand.START)
 
     def nmt_command_sent(self, command: NmtCommand) -> None:
-        """After a start, the picture the keypad ignored while stopped or pre-operational
-        (the LED PDOs sent meanwhile were dropped) is sent again, as after a reboot."""
+        """After a start, the picture is sent again if part of it went while the keypad
+        was stopped or pre-operational (it dropped those PDOs), as after a reboot; a picture
+        this driver never sent is not (it would switch off what others lit)."""
         if command is NmtCommand.START and self._pdos_ignored:
-            self._pdos_ignored = False
-            if self.restore and self.confirmed:
-                self.send_picture_again()
+            missed, self._pdos_ignored, self._missed = self._missed, False, False
+            if missed and self.restore and self.confirmed:
+                self.send_picture_again(leds_unsent=False)
+
+    def send_shown(self, frame: Frame) -> None:
+        """Send a PDO of the picture (LEDs, levels, rings), noting one the keypad ignores."""
+        self.host.send(frame)
+        if self._pdos_ignored:
+            self._missed = True
 
     def booted_up(self, now: float) -> None:
         for timer in self._long_timers.values():
@@ -712,7 +720,8 @@ class Keypad(Device):
         self._recover()  # rev 1.5 §26 note 2: the keypad switched its LEDs off
 
     def _recover(self) -> None:
-        self._pdos_ignored = not self.auto_start  # the start below; else the application's
+        # the start below, else the application's, after which what went meanwhile goes again
+        self._pdos_ignored, self._missed = not self.auto_start, False
         if self.auto_start:
             self.start()
         with self._picture_lock:
@@ -721,16 +730,17 @@ class Keypad(Device):
                 return
         self.send_picture_again()
 
-    def send_picture_again(self) -> None:
-        """Send the whole picture the keypad lost or ignored: LEDs, indicator brightness,
-        backlight (its colour by SDO, in a worker). A driver with more to show (ring LEDs)
-        extends it."""
+    def send_picture_again(self, leds_unsent: bool = True) -> None:
+        """Send the whole picture the keypad lost or ignored: LEDs (also while this driver
+        has sent none, with ``leds_unsent``: all off), indicator brightness, backlight (its
+        colour by SDO, in a worker). A driver with more to show (ring LEDs) extends it."""
         with self._picture_lock:
-            self._send_changes(force=True)  # errata field report: a rebooted keypad forgot its LEDs
+            if leds_unsent or self._sent is not None:
+                self._send_changes(force=True)  # errata field report: a rebooted keypad forgot
             if self._indicator is not None:
-                self.host.send(self.pdo_frame("indicator_brightness",
+                self.send_shown(self.pdo_frame("indicator_brightness",
                                                {"level": self._indicator}))
             if self._backlight_colour is not None:
                 self.host.spawn(self._restore_backlight)  # the colour goes by SDO: off here
             elif self._backlight_level is not None:
-                self.host.send(self._backlight_frame(self._backlight_level))
+                self.send_shown(self._backlight_frame(self._backlight_level))

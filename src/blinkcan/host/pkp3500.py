@@ -158,7 +158,7 @@ class Pkp3500Keypad(Keypad):
     def _send_rings(self, word: int) -> None:
         with self._rings_lock:
             self._rings = word
-            self.host.send(self.pdo_frame("ring_leds", {"rings": word}))
+            self.send_shown(self.pdo_frame("ring_leds", {"rings": word}))
 
     # -- inputs (MT §14, §23, §24) -----------------------------------------------------------------
 
@@ -197,13 +197,13 @@ class Pkp3500Keypad(Keypad):
         check_range("brightness", level, 0, LEVEL_MAX)
         self.write("indicator_brightness", level)
 
-    def send_picture_again(self) -> None:
+    def send_picture_again(self, leds_unsent: bool = True) -> None:
         """The key LEDs and levels, and the ring LEDs (after a reboot, a watchdog trip (MT
         §32: rings off too) or a start after a stop)."""
-        super().send_picture_again()
+        super().send_picture_again(leds_unsent)
         with self._rings_lock:
             if self._rings is not None:
-                self.host.send(self.pdo_frame("ring_leds", {"rings": self._rings}))
+                self.send_shown(self.pdo_frame("ring_leds", {"rings": self._rings}))
 
 
 class AsyncPkp3500Keypad(AsyncDriver[Pkp3500Keypad]):
