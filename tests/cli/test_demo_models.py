@@ -1,13 +1,17 @@
 """``blinkcan demo --model NAME``: a short scripted scenario for every registered model (and
-generation, and protocol it speaks): the host finds it, starts it, and a hand does once each
-thing its face has. The default demo stays the keypad-and-Keybox controller (tests/cli)."""
+generation, and protocol it speaks): the host finds it, starts it, shows what the model shows
+(LEDs, ring LEDs, outputs on and PWM), and a hand does once each thing its face has; a fuse
+blows on an output that is on, so the fault shows. The default demo stays the keypad-and-Keybox
+controller (tests/cli)."""
 
 from __future__ import annotations
+
+from unittest import mock
 
 import pytest
 from click.testing import CliRunner
 
-from blinkcan.cli.demo_model import scripted_steps
+from blinkcan.cli.demo_model import host_steps, scripted_steps
 from blinkcan.cli.main import cli
 from blinkcan.devices.registry import models
 from blinkcan.twin.registry import build_twin
@@ -29,11 +33,26 @@ def test_the_demo_of_each_model_runs_its_scenario(spec: str, protocol: str) -> N
         steps = [title for title, _, _ in scripted_steps(twin)]
     finally:
         twin.close()
+    face = description.face
+    commands = [title for title, _ in host_steps(mock.Mock(), face)]
     lines = result.output.splitlines()
     assert f"== {description.title} at node {twin.node_id:02X}h ({protocol}) is powered on" \
         in lines
     for step in steps:
         assert f"== {step}" in lines
+    # what the model shows: each command of the host, and a frame the host sent for it
+    assert bool(commands) == bool(face.led_keys or face.pins), commands
+    for command in commands:
+        after = lines[lines.index(f"== {command}") + 1:]
+        shown = after[:next((n for n, line in enumerate(after) if line.startswith("==")),
+                            len(after))]
+        assert any(" > " in line for line in shown), (command, result.output)
+    if face.led_keys:
+        assert any(f"the host lights key {face.led_keys[0]}'s LED" in c for c in commands)
+    if face.pins:
+        assert f"the host switches output {face.pin_numbers[0]} on" in commands
+        assert any(line.endswith(f"outputs in FAULT: {face.pin_numbers[0]}")
+                   for line in lines), result.output  # the fuse blew on an output that is on
     assert any(step.startswith("press a key") for step in steps) == \
         any("key 1 pressed" in line for line in lines)
     if protocol == "canopen":

@@ -7,14 +7,19 @@ import logging
 import socket
 import time
 import uuid
+import warnings
 from collections.abc import Iterator
 
 import can
 import pytest
 
 pytest.importorskip("starlette", reason="the web extra is not installed")
-pytest.importorskip("httpx", reason="httpx is not installed")
-from starlette.testclient import TestClient
+pytest.importorskip("httpx2", reason="httpx2 (the dev extra) is not installed")
+with warnings.catch_warnings():
+    # starlette's test client on the old httpx warns that it is deprecated: the dev extra
+    # installs httpx2, which it takes first; a warning here means that is no longer so
+    warnings.simplefilter("error")
+    from starlette.testclient import TestClient
 
 from blinkcan.runtime import Emulator
 from blinkcan.twin import KeyboxTwin, KeypadTwin

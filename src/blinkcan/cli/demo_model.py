@@ -1,16 +1,20 @@
 """``blinkcan demo --model NAME``: a short scripted scenario for one registered model.
 
 The model's twin runs in an Emulator on a virtual bus; a host starts it (NMT, when it speaks
-CANopen), then a hand does to it, once each, everything its face has (twin/actions.py: press
-and release a key, turn a knob, set an input, blow and replace a fuse, switch the power off
-and on), so a new model's face brings its scenario with it. Every frame is a line: seconds
-since the start, the direction, the frame and its meaning. The emulator runs in real time;
+CANopen), then, through the model's own driver (the registry's), commands what its face shows:
+an LED steady and one blinking, a knob's ring LEDs, an output switched on and one driven with
+PWM (:func:`host_steps`). Then a hand does to it, once each, everything its face has
+(twin/actions.py: press and release a key, turn a knob, set an input, blow and replace a fuse,
+switch the power off and on): the fuse it blows is the output's that is on, so the fault
+shows. A new model's face brings its scenario with it. Every frame is a line: seconds since
+the start, the direction, the frame and its meaning. The emulator runs in real time;
 ``pause`` is the time between the steps.
 """
 
 from __future__ import annotations
 
 import contextlib
+import inspect
 import threading
 import time
 import uuid
@@ -24,8 +28,10 @@ from rich.console import Console
 from blinkcan.cli.clock import Clock
 from blinkcan.cli.emulate import build_twins, decoder_devices, panel, panel_address
 from blinkcan.decode import Decoder
+from blinkcan.devices.model import Face
 from blinkcan.host import HostBus
 from blinkcan.host.j1939_keypad import scan_j1939
+from blinkcan.host.registry import driver_class
 from blinkcan.host.scan import scan
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, nmt_frame
@@ -59,6 +65,51 @@ def scripted_steps(twin: CanopenTwin) -> list[tuple[str, Action, dict[str, Any]]
     return steps
 
 
+def host_steps(driver: Any, face: Face) -> list[tuple[str, Callable[[], object]]]:
+    """(title, command) for what a controller shows on the model, read from its face: the
+    first LED key lit steadily and the next one blinking, a knob's ring LEDs, the first output
+    switched on (the pin whose fuse the hand then blows) and the first PWM output at half
+    duty; ``driver`` is the model's driver, which sends each command."""
+    steps: list[tuple[str, Callable[[], object]]] = []
+    colours = face.led_colours
+    if face.led_keys and colours:
+        key, steady = face.led_keys[0], colours[min(1, len(colours) - 1)]
+        steps.append((f"the host lights key {key}'s LED {steady}",
+                      partial(driver.set_led, key, steady)))
+        if len(face.led_keys) > 1:
+            other, blink = face.led_keys[1], colours[0]
+            steps.append((f"the host makes key {other}'s LED blink {blink}",
+                          partial(driver.set_led, other, "off", blink=blink)))
+    for encoder in face.encoders:
+        if encoder.ring_leds:
+            leds = encoder.ring_leds[:4]
+            steps.append((f"the host lights ring LEDs {leds[0]}..{leds[-1]} of knob "
+                          f"{encoder.number}", partial(driver.set_ring, encoder.number, leds)))
+    if face.pins:
+        pin = face.pin_numbers[0]
+        steps.append((f"the host switches output {pin} on", partial(driver.on, pin)))
+    if face.pwm_pins and face.pwm_duty_max:
+        pin, duty = face.pwm_pins[0], face.pwm_duty_max // 2
+        steps.append((f"the host drives output {pin} with PWM, duty {duty} of "
+                      f"{face.pwm_duty_max}", partial(driver.set_pwm, (pin,), duty)))
+    return steps
+
+
+def _driver(twin: CanopenTwin, host: HostBus, protocol: str) -> Any:
+    """The model's driver on ``host``, not asking again what the scan found (nor starting
+    the device: the demo shows that step itself)."""
+    cls = driver_class(twin.description.model)
+    options: dict[str, Any] = {"verify": False, "start": False}
+    parameters = inspect.signature(cls).parameters
+    if "model" in parameters:
+        options["model"] = twin.description.model
+    if "generation" in parameters:  # the LED objects differ by generation (PKP rev 1.5)
+        options["generation"] = twin.description.generation
+    if protocol != "canopen":
+        options["protocol"] = protocol
+    return cls(host, twin.node_id, **options)
+
+
 def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                    pause: float = 0.6, web: str | None = None,
                    wait: Callable[[], None] | None = None) -> int:
@@ -68,14 +119,18 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
     twin = twins[0]
     decoder = Decoder(decoder_devices(twins))
     clock = Clock(start=time.monotonic())
-    frames = 0
+    frames = heard = 0
 
     def show(frame: Frame, sent: bool, now: float) -> None:
-        nonlocal frames
-        frames += 1
+        nonlocal frames, heard
         console.out(f"{clock(now):>7} {'<' if sent else '>'} {frame.can_id:03X} "
                     f"{frame.data.hex(' ').upper():<23} {decoder.text(frame, now)}",
                     highlight=False)
+        frames += 1
+        heard += not sent  # a frame of the host's, shown
+
+    def heard_since(count: int) -> Callable[[], bool]:
+        return lambda: heard > count
 
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     title = twin.description.title
@@ -89,21 +144,49 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                         highlight=False)
             with emulator, panel(emulator, address, console):
                 _started(console, emulator, twin, host, protocol)
-                for step, action, values in scripted_steps(twin):
+                driver = _driver(twin, host, protocol)  # it restores what it showed
+                try:  # after the power cycle, as a controller does
+                    for step, command in host_steps(driver, twin.description.face):
+                        time.sleep(pause)
+                        console.out(f"== {step}", highlight=False)
+                        before = heard
+                        command()
+                        host.run(lambda: None)  # what it sent is on the bus...
+                        _shown(heard_since(before), lambda: frames)  # ...and shown
+                    for step, action, values in scripted_steps(twin):
+                        time.sleep(pause)
+                        console.out(f"== {step}", highlight=False)
+                        emulator.run(partial(_perform, action, twin, values))
                     time.sleep(pause)
-                    console.out(f"== {step}", highlight=False)
-                    emulator.run(partial(_perform, action, twin, values))
-                time.sleep(pause)
-                emulator.run(lambda now: None)  # what the last step sent is shown
-                if web is not None:
-                    console.out("the twin keeps running with the panel; Ctrl-C stops",
-                                highlight=False)
-                    (wait or until_interrupted)()
+                    emulator.run(lambda now: None)  # what the last step sent is shown
+                    _shown(lambda: True, lambda: frames)  # and the driver's answer
+                    if web is not None:
+                        console.out("the twin keeps running with the panel; Ctrl-C stops",
+                                    highlight=False)
+                        (wait or until_interrupted)()
+                finally:
+                    driver.close()
     finally:
         for each in twins:
             each.close()
     console.out(f"\n{frames} frames on the bus ({title})", highlight=False)
     return 0
+
+
+def _shown(first: Callable[[], bool], count: Callable[[], int], quiet: float = 0.03,
+           limit: float = 5.0) -> None:
+    """Until ``first()`` holds (a frame of the host's shown: every command sends one), then
+    until ``count()`` (frames shown) stood still for ``quiet`` seconds; at most ``limit``
+    seconds in all. The emulator's reader thread shows the host's frames as it reads them,
+    so the next step's title comes after them."""
+    end = time.monotonic() + limit
+    while not first() and time.monotonic() < end:
+        time.sleep(0.002)
+    seen, since = count(), time.monotonic()
+    while time.monotonic() < end and time.monotonic() - since < quiet:
+        time.sleep(0.005)
+        if count() != seen:
+            seen, since = count(), time.monotonic()
 
 
 def _started(console: Console, emulator: Emulator, twin: CanopenTwin, host: HostBus,

@@ -21,7 +21,7 @@ from rich.table import Table
 from rich.text import Text
 
 from blinkcan.cli.bus_faults import BusFaults, receive
-from blinkcan.cli.bus_options import bus_options, cli_bus
+from blinkcan.cli.bus_options import bus_options, cli_bus, given_bus_options
 from blinkcan.cli.clock import ABSOLUTE, Clock
 from blinkcan.cli.decode import (
     DEVICE_HELP,
@@ -122,6 +122,12 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
     outputs, and what else a device sends (encoders, analog and digital inputs). Without
     --device it assumes {assumed}. Ctrl-C stops. A bus error is counted and the watching goes
     on; a bus that keeps failing ends it. Off a terminal: one line per event."""
+    if log_file is not None and (given := given_bus_options(click.get_current_context())):
+        # a log opens no bus: an option taken in silence would let the user believe they
+        # watched the bus it names (cli/main.py refuses them the same way for decode)
+        raise click.UsageError(f"blinkcan monitor --file reads a log and opens no bus: "
+                               f"{', '.join(given)} do{'es' if len(given) == 1 else ''} "
+                               "not apply")
     known = parse_devices(devices)
     if not devices:
         click.echo(assumed_text(), err=True)

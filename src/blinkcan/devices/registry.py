@@ -17,6 +17,12 @@ from blinkcan.devices.model import DeviceDescription, Model
 from blinkcan.devices.pdo import Direction
 
 ENTRY_POINT_GROUP = "blinkcan.models"
+#: the protocols a model may speak besides CANopen, each named by its description's features
+#: (devices/keypad.py: the PKP-2600-SI's J1939 mode, spec/pkp-2600-si-j1939.md)
+OTHER_PROTOCOLS = ("j1939",)
+#: how a device is named: a model or alias, a generation, a protocol (emulate's /PROTOCOL;
+#: other commands take it as --protocol or a j1939:ADDR node)
+SPELLING = "DEVICE[@GEN][/PROTOCOL]"
 
 #: the models blinkcan ships, in the order identity values are matched (first wins on a tie)
 BUILTIN_MODELS: tuple[str, ...] = (
@@ -85,8 +91,8 @@ def model(name: str) -> Model:
     except (KeyError, AttributeError):
         known = ", ".join(f"{m.name} ({', '.join(m.aliases)})" if m.aliases else m.name
                           for m in models())
-        raise ValueError(f"unknown device {name!r}; known: {known} "
-                         "(optionally @generation)") from None
+        raise ValueError(f"unknown device {name!r}; known: {known}; written {SPELLING}: "
+                         f"{', '.join(spellings())}") from None
 
 
 def model_names() -> str:
@@ -99,6 +105,20 @@ def model_names() -> str:
         return f"{found.name} ({', '.join(extra)})" if extra else found.name
 
     return ", ".join(one(found) for found in models())
+
+
+def spellings() -> list[str]:
+    """The names with a part after the model's, as :data:`SPELLING` writes them: each
+    generation of a model that has more than one ("pkp-2600-si@1.5") and each protocol a
+    model speaks besides CANopen ("pkp-2600-si/j1939", read from its descriptions' features)."""
+    found: list[str] = []
+    for each in models():
+        if len(each.generations) > 1:
+            found.extend(f"{each.name}@{generation}" for generation in each.generations)
+        found.extend(f"{each.name}/{protocol}" for protocol in OTHER_PROTOCOLS
+                     if any(protocol in each.description(generation).features
+                            for generation in each.generations))
+    return found
 
 
 def parse_spec(spec: str) -> tuple[Model, str]:

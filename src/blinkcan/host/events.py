@@ -2,8 +2,10 @@
 
 A callback that raises is logged and the others still get the event; under simulated time
 (``blinkcan.testing``) the exception is then raised from the call that ran the simulation.
-``close()`` ends every iterator. On a simulated bus an iterator waiting for its next event runs
-the simulation.
+``close()`` ends every iterator. On a simulated bus (a ``Rig``) an iterator waiting for its next
+event runs the simulation, and one with no timeout ends after :data:`SIMULATED_FOREVER` virtual
+seconds without an event: nothing else would ever end it (the thread that waits is the one that
+runs the simulation), and a busy rig's hour of traffic took most of a test's wall-time limit.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Generic, TypeVar
 
 from blinkcan.protocol.cob import check_time
 from blinkcan.runtime.scheduler import Scheduler
+from blinkcan.runtime.virtual_waits import RECV_FOREVER
 
 log = logging.getLogger(__name__)
 E = TypeVar("E")
@@ -23,8 +26,10 @@ _CLOSED = object()
 
 
 #: virtual seconds an iterator with no timeout waits at most for its next event on a simulated
-#: bus: a simulated wait always ends (nothing else would ever move the clock)
-SIMULATED_FOREVER = 3600.0
+#: bus: a simulated wait always ends (nothing else would ever move the clock). The bound of every
+#: wait with no timeout on a rig, ``rig.bus.recv()`` and cantools' ``Tester.expect`` too: one
+#: number to know (README, Testing); a longer wait names its timeout
+SIMULATED_FOREVER = RECV_FOREVER
 
 
 class _Holds:
@@ -95,8 +100,9 @@ class EventSource(Generic[E]):
 
     def iterate(self, timeout: float | None = None) -> Iterator[E]:
         """Events from the moment of this call (not of the first ``next``); the iterator ends
-        after ``timeout`` seconds without one (None: never; else finite, >= 0: ValueError at
-        this call) and when the source closes."""
+        after ``timeout`` seconds without one (None: never on a real bus, after
+        :data:`SIMULATED_FOREVER` virtual seconds on a simulated one; else finite, >= 0:
+        ValueError at this call) and when the source closes."""
         if timeout is not None:
             check_time("timeout", timeout, 0)
         waiting: queue.SimpleQueue[E | object] = queue.SimpleQueue()

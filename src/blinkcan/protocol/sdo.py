@@ -150,11 +150,14 @@ def parse_sdo(data: bytes) -> SdoFrame:
 
 def multiplexer(index: int, subindex: int) -> bytes:
     """The three bytes that name an object entry in an SDO frame: index LSB first, sub-index."""
-    if not 0 <= index <= 0xFFFF:
-        raise ValueError(f"object index {index:#x} outside 0..0xFFFF")
-    if not 0 <= subindex <= 0xFF:
-        raise ValueError(f"sub-index {subindex:#x} outside 0..0xFF")
-    return _MULTIPLEXER.pack(index, subindex)
+    try:  # the packing checks the ranges (every SDO request comes this way)
+        return _MULTIPLEXER.pack(index, subindex)
+    except struct.error:
+        if not 0 <= index <= 0xFFFF:
+            raise ValueError(f"object index {index:#x} outside 0..0xFFFF") from None
+        if not 0 <= subindex <= 0xFF:
+            raise ValueError(f"sub-index {subindex:#x} outside 0..0xFF") from None
+        raise
 
 
 def split_multiplexer(mux: bytes) -> tuple[int, int]:

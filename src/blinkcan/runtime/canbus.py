@@ -5,6 +5,7 @@ from __future__ import annotations
 import collections
 import logging
 import math
+import operator
 import threading
 import time
 from collections.abc import Callable
@@ -87,8 +88,10 @@ class OwnFrames:
         self.active = echoes_own_frames(bus)
         self.window = window
         #: frame -> the times it was sent, oldest first, echo not yet seen (the reader only
-        #: pops from a deque; only senders, under the lock, add and remove keys)
-        self._pending: dict[Frame, collections.deque[float]] = {}
+        #: pops from a deque; only senders, under the lock, add and remove keys). A reader may
+        #: look a received frame up here first: :meth:`is_echo` can be true only where it
+        #: finds a non-empty deque
+        self.pending: dict[Frame, collections.deque[float]] = {}
         self._sweep_at = -math.inf
         self._lock = threading.Lock()
 
@@ -96,9 +99,9 @@ class OwnFrames:
         if not self.active:
             return
         with self._lock:
-            times = self._pending.get(frame)
+            times = self.pending.get(frame)
             if times is None:
-                self._pending[frame] = collections.deque((now,))
+                self.pending[frame] = collections.deque((now,))
             else:
                 times.append(now)
             if now >= self._sweep_at:
@@ -107,7 +110,7 @@ class OwnFrames:
     def is_echo(self, frame: Frame, now: float) -> bool:
         if not self.active:
             return False
-        times = self._pending.get(frame)
+        times = self.pending.get(frame)
         if not times:  # never sent (it is there before its echo can come back)
             return False
         window = self.window
@@ -124,7 +127,7 @@ class OwnFrames:
         """Forget the frames whose every echo is in or older than the window's past."""
         self._sweep_at = now + self.window
         window = self.window
-        pending = self._pending
+        pending = self.pending
         for frame, times in list(pending.items()):
             try:
                 if now - times[-1] > window:
@@ -161,6 +164,11 @@ def is_undecodable(error: Exception) -> bool:
 class _Reading(can.Listener):
     """The listener a :class:`BusReader` puts on the notifier: frames go straight to the
     reader's listener (no extra call while the bus works), errors to the reader."""
+
+    #: the notifier calls a listener per frame: this hands it the present
+    #: ``on_message_received`` (C-level getter, so no Python frame between the notifier and
+    #: the reader's listener, as ``can.Listener.__call__`` would add on every frame)
+    __call__ = property(operator.attrgetter("on_message_received"))
 
     def __init__(self, reader: BusReader) -> None:
         self.reader = reader

@@ -25,6 +25,13 @@ _new_object = object.__new__
 _MESSAGE_FIELDS = frozenset({
     "arbitration_id", "bitrate_switch", "channel", "data", "dlc", "error_state_indicator",
     "is_error_frame", "is_extended_id", "is_fd", "is_remote_frame", "is_rx", "timestamp"})
+#: python-can buses whose ``send`` is done with the Message when it returns (udp_multicast
+#: packs it, virtual deep-copies it) and takes the send time from its own clock (udp_multicast:
+#: the receiver's socket stamps it; virtual: unless ``preserve_timestamps``)
+_SEND_COPIES = frozenset({"UdpMulticastBus", "VirtualBus"})
+#: distinct frames whose Message a reusing port keeps (a device answers the same few requests
+#: with the same few replies; a master polls the same few requests). Cleared when full.
+_MESSAGES_KEPT = 256
 
 
 def _message(frame: Frame, timestamp: float) -> can.Message:
@@ -54,6 +61,15 @@ def _message_maker() -> Callable[[Frame, float], can.Message]:
     return _message if fields == _MESSAGE_FIELDS else to_message
 
 
+def reuses_messages(bus: can.BusABC) -> bool:
+    """Whether a Message may be sent again on ``bus``: python-can's own udp_multicast and
+    virtual buses are done with it when ``send`` returns and stamp the time themselves (a
+    virtual bus that preserves timestamps excepted). Any other bus gets a new Message per
+    frame (it may queue it, or keep it as sent)."""
+    return (type(bus).__name__ in _SEND_COPIES and type(bus).__module__.startswith("can.")
+            and not getattr(bus, "preserve_timestamps", False))
+
+
 class _PortListener(can.Listener):
     """What the port's reader feeds: a message becomes a frame, an echo of the port's own is
     dropped, every handler gets the rest."""
@@ -61,9 +77,11 @@ class _PortListener(can.Listener):
     def __init__(self, port: CanBusPort) -> None:
         self.port = port
         self.clock = port.clock
-        #: the echo check of a bus that echoes its own frames (udp_multicast), else None:
-        #: bound once, every frame received asks
-        self.is_echo = port.own.is_echo if port.own.active else None
+        #: the frames sent whose echo may still come, on a bus that echoes its own frames
+        #: (udp_multicast), else None; and the echo check, asked where a frame is among them.
+        #: Bound once: every frame received looks
+        self.pending = port.own.pending if port.own.active else None
+        self.is_echo = port.own.is_echo
 
     def on_message_received(self, msg: can.Message) -> None:
         # runtime.canbus.to_frame, inlined (every frame received comes this way): data frames
@@ -73,8 +91,8 @@ class _PortListener(can.Listener):
             return
         frame = _new_tuple(Frame, (msg.arbitration_id, bytes(data), msg.is_extended_id))
         now = self.clock()
-        is_echo = self.is_echo
-        if is_echo is not None and is_echo(frame, now):
+        pending = self.pending
+        if pending is not None and pending.get(frame) and self.is_echo(frame, now):
             return
         port = self.port
         try:
@@ -104,6 +122,11 @@ class CanBusPort:
         self._reader: BusReader | None = None
         self._listener = _PortListener(self)
         self._message = _message_maker()
+        #: frame -> the Message sent for it, where the bus is done with a Message when its
+        #: send returns (:func:`reuses_messages`): one Message per distinct frame, not per send
+        self._messages: dict[Frame, can.Message] = {}
+        if reuses_messages(bus):
+            self.send = self._send_kept  # type: ignore[method-assign]
 
     def send(self, frame: Frame) -> None:
         now = self.clock()
@@ -111,6 +134,23 @@ class CanBusPort:
         if sent is not None:
             sent(frame, now)
         self.bus.send(self._message(frame, now))
+
+    def _send_kept(self, frame: Frame) -> None:
+        """:meth:`send`, reusing the Message of an equal frame sent before (every SDO request
+        and reply comes this way: building a Message costs more than the rest of a send)."""
+        now = self.clock()
+        sent = self._sent
+        if sent is not None:
+            sent(frame, now)
+        messages = self._messages
+        message = messages.get(frame)
+        if message is None:
+            if len(messages) >= _MESSAGES_KEPT:
+                messages.clear()
+            message = messages[frame] = self._message(frame, now)
+        else:
+            message.timestamp = now
+        self.bus.send(message)
 
     def listen(self, handler: FrameHandler, on_closed: Callable[[], object] | None = None
                ) -> Callable[[], None]:

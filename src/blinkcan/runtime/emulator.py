@@ -108,6 +108,8 @@ class Emulator:
         self.bus: can.BusABC | None = taken.bus
         self._owns_port = taken.owned
         self.port: Port = taken.port
+        #: the port's send, bound once (every frame a twin sends goes this way)
+        self._send = self.port.send
         self.twins: list[CanopenTwin] = list(twins)
         self.response_delay = response_delay
         self.stats = EmulatorStats(reading=self.port.reading)
@@ -122,7 +124,10 @@ class Emulator:
         #: replies held back by ``response_delay``: their timers, by number
         self._delayed: dict[int, Timer] = {}
         self._seq = itertools.count()
+        #: standard COB-ID -> the twins that listen to it (rebuilt when any twin's routes
+        #: change: ``_index_dirty``), and the COB-IDs that one twin alone listens to -> that twin
         self._index: dict[int, tuple[int, ...]] = {}
+        self._sole: dict[int, tuple[int, CanopenTwin]] = {}
         self._routes_seen: list[object] = [None] * len(self.twins)
         self._index_dirty = True
         self._stuck_reported: set[int] = set()
@@ -234,13 +239,36 @@ class Emulator:
         return []
 
     def _received(self, frame: Frame, now: float) -> None:
-        """A frame from the port, on the loop (``scheduler.deliver``): to the twins."""
+        """A frame from the port, on the loop (``scheduler.deliver``): to the twins. A
+        standard COB-ID that one twin alone listens to goes straight to that twin (every SDO
+        request comes this way); the rest, and every frame while replies are delayed, go
+        through :meth:`_deliver`. The twin's own hooks see the frame either way: they are
+        its routes (``twin.receive``)."""
         if not self._running:
             return
         self.stats.frames_received += 1
         if self.on_frame is not None:
             self.on_frame(frame, False, now)
-        self._deliver(frame, None, now)
+        if self._index_dirty:
+            self._refresh_index()
+        sole = self._sole.get(frame.can_id)
+        if sole is None or frame.extended or self.response_delay:
+            self._deliver(frame, None, now)
+            return
+        # self._deliver's loop for one twin, inlined
+        i, twin = sole
+        try:
+            replies = twin.receive(frame, now)
+        except Exception as error:
+            self._twin_failed(i, error)
+            replies = []
+        if twin.listening is not self._routes_seen[i]:
+            self._index_dirty = True
+        deadline = twin.next_deadline()
+        if deadline != self._deadline[i]:
+            self._plan(i, deadline)
+        if replies:
+            self._emit(i, replies, now)
 
     def _perform(self, action: Callable[[float], T]) -> T:
         now = self._clock()
@@ -315,9 +343,11 @@ class Emulator:
             for can_id in twin.listening:
                 index.setdefault(can_id, []).append(i)
         self._index = {can_id: tuple(ids) for can_id, ids in index.items()}
+        self._sole = {can_id: (ids[0], self.twins[ids[0]]) for can_id, ids in index.items()
+                      if len(ids) == 1}
 
     def _emit(self, source: int, frames: list[Frame], now: float) -> None:
-        send = self.port.send
+        send = self._send
         for frame in frames:
             try:
                 send(frame)

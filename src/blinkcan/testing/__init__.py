@@ -7,6 +7,7 @@ with a recorded trace; the pytest plugin (installed with blinkcan) gives fixture
 
 from blinkcan.runtime.simbus import TimedFrame
 from blinkcan.testing.golden import assert_matches_trace, record_trace
-from blinkcan.testing.rig import Rig, frames_of
+from blinkcan.testing.rig import Rig, WrongThreadError, frames_of
 
-__all__ = ["Rig", "TimedFrame", "assert_matches_trace", "frames_of", "record_trace"]
+__all__ = ["Rig", "TimedFrame", "WrongThreadError", "assert_matches_trace", "frames_of",
+           "record_trace"]

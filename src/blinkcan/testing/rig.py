@@ -17,6 +17,11 @@ Fault injection is here in one place: power, fuses, inputs, keys, heartbeats, fr
 delayed, an SDO server too busy to answer, a bus that goes away. Every fault and input call
 takes the twin, or the node id a twin on this rig answers at; anything else is a TypeError.
 
+The simulation runs in one thread, the one that made the Rig: ``rig.bus.recv()`` from another
+thread (a reader thread, as on a real bus) is refused with :class:`WrongThreadError`, since it
+would run the simulation and move the clock under that thread. Put a ``can.Notifier`` on
+``rig.bus`` instead: the rig hands its listeners every frame, in order, in the rig's thread.
+
 An exception raised in your handlers (a driver's ``on_key``/``subscribe`` callbacks) or in work
 handed to ``host.spawn`` is raised again, with its traceback, from the rig or driver call that
 ran the simulation when it happened; one still pending is raised by :meth:`Rig.close`. Every
@@ -25,9 +30,13 @@ time argument must be a finite number of seconds (ValueError otherwise).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
+import can
+
+from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.emulator import Emulator
@@ -38,6 +47,32 @@ from blinkcan.twin.base import CanopenTwin
 
 T = TypeVar("T")
 W = TypeVar("W", bound=CanopenTwin)
+
+
+class WrongThreadError(BlinkcanError, RuntimeError):
+    """A call that runs a rig's simulation came from another thread than the rig's."""
+
+
+class RigBus(SimulatedBus):
+    """``rig.bus``: the controller's endpoint, whose ``recv()`` runs the simulation and so is
+    the rig's thread's only (a ``can.Notifier``'s own thread still parks in it, see
+    ``runtime.simbus``)."""
+
+    def __init__(self, network: SimulatedNetwork, channel: str,
+                 owner: threading.Thread) -> None:
+        super().__init__(network, channel)
+        self.owner = owner
+
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        me = threading.current_thread()
+        # python-can names a notifier's thread after the bus: the simulation parks it
+        if me is not self.owner and not me.name.endswith(f'for bus "{self.channel_info}"'):
+            raise WrongThreadError(
+                f"rig.bus.recv() from thread {me.name!r}: it runs the rig's simulation, which "
+                f"is the thread's that made the Rig ({self.owner.name!r}), and would move its "
+                "clock under it. Call recv() in that thread, or put a can.Notifier(rig.bus, "
+                "[listener]) on the bus: the rig hands the listener every frame, in order")
+        return super().recv(timeout)
 
 
 class Rig:
@@ -61,7 +96,7 @@ class Rig:
                                  power_up_spread=0.0)
         self.emulator.start()
         #: the controller's bus: any python-can code and blinkcan driver takes it
-        self.bus = SimulatedBus(self.network, "controller")
+        self.bus: SimulatedBus = RigBus(self.network, "controller", threading.current_thread())
         self._closed = False
 
     # -- time -------------------------------------------------------------------------------

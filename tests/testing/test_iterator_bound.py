@@ -1,0 +1,95 @@
+"""A driver's event iterator with no timeout, on a Rig, ends after :data:`RECV_FOREVER` virtual
+seconds with no event: the same bound as ``rig.bus.recv()`` and ``Tester.expect`` with no
+timeout (README, Testing). It waited 3600 virtual seconds, so ``list(keypad.events())`` on a
+busy rig ran for an hour of traffic (44 s of wall time under load, near the rig fixture's 60 s
+limit). Checked for every iterator of every registered model, generation and protocol, on a
+busy rig (a heartbeat every 10 ms, the driver watching it)."""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+
+from blinkcan.host.registry import driver_class
+from blinkcan.runtime.virtual_waits import RECV_FOREVER
+from blinkcan.testing import Rig
+from blinkcan.twin.registry import build_twin
+from tests.conformance.cases import CASES, Case
+
+
+def _iterators(case: Case) -> Iterator[object]:
+    """(case, iterator name) for every iterator (``*events``) of the case's driver class;
+    the quirk profile changes nothing here: the firmware one."""
+    cls = driver_class(case.model.name)
+    for name, _ in inspect.getmembers(cls, callable):
+        if name.endswith("events") and not name.startswith("_"):
+            yield pytest.param(case, name, id=f"{case.spec}-{case.protocol}-{name}")
+
+
+ITERATORS = [param for case in CASES if case.quirks == "firmware" for param in _iterators(case)]
+
+
+def _busy_rig(case: Case) -> tuple[Rig, Any]:
+    """A rig with the case's twin (a heartbeat every 10 ms in CANopen) and its driver, which
+    watches that heartbeat."""
+    rig = Rig()
+    options: dict[str, Any] = {}
+    if case.canopen:
+        options["settings"] = {"producer_heartbeat_time": 10}
+    else:
+        options["protocol"] = case.protocol
+    twin = rig.add(build_twin(case.spec, **options))
+    cls = driver_class(case.model.name)
+    arguments: dict[str, Any] = {}
+    parameters = inspect.signature(cls).parameters
+    if "model" in parameters:
+        arguments["model"] = case.model.name
+    if not case.canopen:
+        arguments["protocol"] = case.protocol
+    driver = cls(rig.bus, twin.node_id, **arguments)
+    if case.canopen:
+        driver.monitor_heartbeat(0.05)
+    rig.advance(0.1)
+    return rig, driver
+
+
+@pytest.mark.parametrize(("case", "name"), ITERATORS)
+def test_an_iterator_without_timeout_ends_after_the_bound_with_no_event(case: Case,
+                                                                       name: str) -> None:
+    rig, driver = _busy_rig(case)
+    with rig:
+        iterate: Callable[[], Iterator[object]] = getattr(driver, name)
+        start = rig.now
+        assert list(iterate()) == []
+        assert rig.now - start == pytest.approx(RECV_FOREVER)
+        driver.close()
+
+
+def test_each_event_starts_the_bound_again() -> None:
+    """The bound is the quiet time: an iterator sees every event, then ends RECV_FOREVER
+    virtual seconds after the last one."""
+    rig, keypad = _busy_rig(next(case for case in CASES if case.canopen
+                                 and case.model.name == "pkp-2600-si"))
+    with rig:
+        twin = rig.twins[0]
+        start = rig.now
+        rig.scheduler.call_at(start + 0.5 * RECV_FOREVER, lambda: rig.press(twin, 3))
+        rig.scheduler.call_at(start + 1.5 * RECV_FOREVER, lambda: rig.release(twin, 3))
+        events = list(keypad.events())
+        assert [(event.key, event.action) for event in events] == [(3, "press"), (3, "long press"),
+                                                                  (3, "release")]
+        assert rig.now - start == pytest.approx(2.5 * RECV_FOREVER)
+        keypad.close()
+
+
+def test_closing_the_driver_ends_the_iterator_at_once() -> None:
+    rig, keypad = _busy_rig(next(case for case in CASES if case.canopen
+                                 and case.model.name == "pkp-2600-si"))
+    with rig:
+        start = rig.now
+        rig.scheduler.call_at(start + 1.0, keypad.close)
+        assert list(keypad.events()) == []
+        assert rig.now - start == pytest.approx(1.0)
