@@ -66,12 +66,12 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
 
 def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
             devices: dict[NodeKey, str]) -> None:
-    from blinkcan.fleet.run import decode_files, log_files  # noqa: PLC0415 (the extra)
+    from blinkcan.fleet.run import decode_files, find_sources  # noqa: PLC0415 (the extra)
 
-    total = len(log_files(files))
+    total = len(find_sources(files, out).names)
     start = time.monotonic()
     frames = 0
-    counts = {"decoded": 0, "skipped": 0, "failed": 0}
+    counts = {"decoded": 0, "skipped": 0, "failed": 0, "same": 0}
     again = 0  # decoded again: files of theirs were gone from the dataset
     progress = _progress_bar(total) if sys.stderr.isatty() else None
     running: contextlib.AbstractContextManager[object] = progress if progress is not None else \
@@ -103,6 +103,9 @@ def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
                 f"gone from the dataset: {', '.join(result.missing)}")
         if result.status == "failed":
             say(f"cannot decode {result.source}: {result.error}")
+        elif result.status == "same":
+            say(f"{result.source}: the same file as {result.same_as} (a link): decoded once, "
+                "under that name")
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
             frames += result.frames
         if result.unreadable:
@@ -121,8 +124,12 @@ def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
     decoded = counts["decoded"]
     restored = f", {again} of them again as files of theirs were gone from the dataset" \
         if again else ""
+    linked = counts["same"]
+    files_of = "a file" if linked == 1 else "files"
+    same = f", {linked} other name{'' if linked == 1 else 's'} of {files_of} listed (links) " \
+        "not decoded twice" if linked else ""
     click.echo(f"{decoded} file{'' if decoded == 1 else 's'} decoded to {out} ({frames:,} "
-               f"frames in {elapsed:.1f} s){restored}{skipped}", err=True)
+               f"frames in {elapsed:.1f} s){restored}{skipped}{same}", err=True)
     if counts["failed"]:
         raise click.ClickException(f"{counts['failed']} of {total} files could not be decoded "
                                    "(named above); the others are in the dataset")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -22,25 +23,84 @@ if TYPE_CHECKING:
 PARENT_CHECK = 0.5
 
 
-def log_files(paths: Iterable[str | os.PathLike[str]], out: str | None = None) -> list[str]:
-    """The files to decode, each once, in order: a folder stands for the files under it
-    (hidden ones and ``_`` names, such as a dataset's own, left out, and the dataset ``out``
-    itself when it is a folder among them: ``decode logs --parquet logs/lake`` run again
-    must not read the dataset as logs)."""
-    dataset = None if out is None or "://" in out else Path(os.path.abspath(out))
-    found: dict[str, None] = {}
+@dataclass(frozen=True)
+class Sources:
+    """The files a run decodes: ``files`` each real file once, in order; ``same`` every other
+    name of one of them (a hard link, a symbolic link, a name given twice) -> the name it is
+    decoded under."""
+
+    files: list[str]
+    same: dict[str, str]
+    #: every name, each once, in order
+    names: list[str]
+
+
+def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None) -> Sources:
+    """The files to decode, each once, in order: a folder stands for the files under it, in
+    name order (hidden ones and ``_`` names, such as a dataset's own, left out, and the dataset
+    ``out`` itself when it is among them: ``decode logs --parquet logs/lake`` run again must not
+    read the dataset as logs). Links are followed: a linked folder is read (once, however many
+    links lead to it; a link to a folder being read is a loop, not read again), and a file
+    reached by several names is decoded under the first (``Sources.same`` names the others).
+    A name that is no readable file (a dangling link, a pipe) is kept: its task names it."""
+    dataset = None if out is None or "://" in out else os.path.abspath(out)
+    real_dataset = None if dataset is None else os.path.realpath(dataset)
+    names: list[str] = []
+    walked: set[tuple[int, int]] = set()
     for path in paths:
-        source = Path(path)
-        if source.is_dir():
-            for inner in sorted(source.rglob("*")):
-                parts = inner.relative_to(source).parts
-                if inner.is_file() and not any(p.startswith((".", "_")) for p in parts) \
-                        and not (dataset is not None
-                                 and Path(os.path.abspath(inner)).is_relative_to(dataset)):
-                    found.setdefault(os.path.abspath(inner))
+        source = os.path.abspath(os.fspath(path))
+        if os.path.isdir(source):
+            names.extend(_walk(source, (dataset, real_dataset), walked))
         else:
-            found.setdefault(os.path.abspath(source))
-    return list(found)
+            names.append(source)
+    files: dict[object, str] = {}
+    same: dict[str, str] = {}
+    for name in names:
+        try:
+            found = os.stat(name)
+            identity: object = (found.st_dev, found.st_ino)
+        except OSError:  # a dangling link, a loop: its task says why it cannot be read
+            identity = name
+        first = files.setdefault(identity, name)
+        if first != name:
+            same.setdefault(name, first)
+    return Sources(list(files.values()), same, list(dict.fromkeys(names)))
+
+
+def _walk(folder: str, dataset: tuple[str | None, str | None],
+          walked: set[tuple[int, int]]) -> list[str]:
+    """The names under ``folder`` in name order, depth first (so the order of sorted paths);
+    each real folder read once; the dataset left out by its name and by where links lead."""
+    if _in_dataset(folder, dataset):
+        return []
+    real = os.path.realpath(folder)
+    found = os.stat(folder)
+    if (found.st_dev, found.st_ino) in walked:
+        return []
+    walked.add((found.st_dev, found.st_ino))
+    names: list[str] = []
+    for name in sorted(os.listdir(folder)):
+        if name.startswith((".", "_")):
+            continue
+        inner = os.path.join(folder, name)
+        if _in_dataset(inner, dataset):
+            continue
+        if not os.path.isdir(inner):
+            names.append(inner)
+        elif not Path(real).is_relative_to(os.path.realpath(inner)):  # a link back: a loop
+            names.extend(_walk(inner, dataset, walked))
+    return names
+
+
+def _in_dataset(name: str, dataset: tuple[str | None, str | None]) -> bool:
+    """``name`` is in the dataset, or leads there (a link: the dataset may not exist yet)."""
+    return any(d is not None and Path(f).is_relative_to(d)
+               for f, d in ((name, dataset[0]), (os.path.realpath(name), dataset[1])))
+
+
+def log_files(paths: Iterable[str | os.PathLike[str]], out: str | None = None) -> list[str]:
+    """The files to decode, each real file once, in order (:func:`find_sources`)."""
+    return find_sources(paths, out).files
 
 
 def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any = None,
@@ -53,14 +113,20 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
     any fsspec URL (``s3://bucket/lake``, ``memory://lake``). With ``client`` (a
     ``dask.distributed.Client``) one task per file runs on its workers (they must see the
     files and ``out``); else ``jobs`` local processes (default 1: this process). Returns one
-    result per file, in order; a file that cannot be read is a "failed" result, the others
-    go on. ``on_result`` hears each result as it comes, ``on_frames`` frame counts (in this
-    process only). ``devices`` maps node ids to models (``{0x15: "keypad@1.5"}``) and J1939
-    addresses too (``{"j1939:0x30": "keypad"}``); ValueError for one that names no device."""
+    result per name, in order; a file that cannot be read is a "failed" result, the others
+    go on; another name of a file already listed (a link) is a "same" result. ``on_result``
+    hears each result as it comes, ``on_frames`` frame counts (in this process only).
+    ``devices`` maps node ids to models (``{0x15: "keypad@1.5"}``) and J1939 addresses too
+    (``{"j1939:0x30": "keypad"}``); ValueError for one that names no device."""
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be 1 or more, not {jobs}")
     split_devices(devices)  # checked here, not once per file on the workers
-    sources = log_files(paths, out)
+    found = find_sources(paths, out)
+    sources = found.files
+    same = {name: FileResult(name, "same", same_as=first) for name, first in found.same.items()}
+    if on_result is not None:
+        for result in same.values():
+            on_result(result)
     task = partial(decode_file, out=out, force=force, devices=dict(devices or {}),
                    rows_per_group=rows_per_group)
     if client is not None:
@@ -73,7 +139,8 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
                 on_result(result)
     else:
         results = _on_processes(min(jobs, len(sources)), sources, task, on_result)
-    return [results[source] for source in sources]
+    results.update(same)
+    return [results[name] for name in found.names]
 
 
 def _on_processes(jobs: int, sources: list[str], task: Callable[..., FileResult],

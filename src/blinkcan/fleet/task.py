@@ -57,7 +57,8 @@ DEFAULT_DEVICES = ("keypad", "keybox")
 @dataclass(frozen=True)
 class FileResult:
     """What became of one source file: ``status`` is "decoded", "skipped" (already decoded
-    by this blinkcan version) or "failed" (``error`` says why)."""
+    by this blinkcan version), "failed" (``error`` says why) or "same" (another name of a
+    file the run decodes: a hard or symbolic link; ``same_as`` names it)."""
 
     source: str
     status: str
@@ -75,6 +76,8 @@ class FileResult:
     #: outputs of an earlier decoding that were gone from the dataset (deleted since): the
     #: file was decoded again for them
     missing: tuple[str, ...] = ()
+    #: for "same": the name the file is decoded under
+    same_as: str | None = None
 
 
 def source_key(source: str) -> str:
