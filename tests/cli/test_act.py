@@ -273,3 +273,25 @@ def test_a_stop_while_the_socket_is_being_set_up_removes_it(
         pass
     monkeypatch.undo()
     assert list(private_dir.iterdir()) == []
+
+
+@pytest.mark.parametrize(("words", "said"), [
+    (("15h", "press", "\udcff"), "key must be 1..12"),   # argv's escape of a byte not UTF-8
+    (("15h press 3\n15h press 4",), "one command line"),  # two lines: a script is emulate's
+    (("x" * (MAX_LINE + 1),), f"at most {MAX_LINE} bytes"),
+])
+def test_a_line_act_cannot_send_as_it_is_is_one_error_line(
+        private_dir: Path, live_emulator: Emulator, words: tuple[str, ...], said: str) -> None:
+    """A byte that is not UTF-8 was "unexpected UnicodeEncodeError"; a newline or a line too
+    long was "cannot reach the emulator", which was running."""
+    with command_socket(TypedCommands(live_emulator), Console(file=io.StringIO())):
+        code, out, errors = _act(*words)
+    assert code in (1, 2)
+    assert out == ""
+    assert errors.startswith("Error: "), errors
+    assert errors.count("\n") == 1, errors
+    assert said in errors
+    assert "unexpected" not in errors
+    assert "cannot reach" not in errors
+    assert not any(key["pressed"]
+                   for key in live_emulator.snapshot(live_emulator.twins[0])["keys"])

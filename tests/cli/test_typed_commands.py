@@ -170,6 +170,9 @@ def three_devices() -> Iterator[tuple[Rig, TypedCommands, list[CanopenTwin]]]:
     ("power-cycle 0C", ["the device goes first: 0C power-cycle"]),
     ("15h tap 3 -1", ["SECONDS must be a number >= 0"]),
     ("15h tap 3 inf", ["SECONDS must be a number >= 0"]),
+    ("15h tap 3 1e308", ["SECONDS must be", "0..31622400"]),      # no timer reaches it
+    ("keybox power-cycle 1e300", ["SECONDS must be", "0..31622400"]),  # not left off
+    ("wait 1e300", ["SECONDS must be", "0..31622400"]),
     ("wait", ["usage: wait SECONDS"]),
     ("16h", ["what should", "turn"]),
     ("help 77h", ["unknown command or device '77h'"]),

@@ -4,6 +4,7 @@ it, and the binding follows the twins (added, rebooted, renumbered, powered off)
 
 from __future__ import annotations
 
+import random
 import time
 import uuid
 from collections.abc import Iterator
@@ -166,3 +167,49 @@ def test_equal_frames_sent_twice_arrive_twice_each_with_its_time(channel: str,
     finally:
         bus.shutdown()
         reusing.shutdown()
+
+
+def _echoing_bus() -> can.BusABC:
+    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    try:
+        return can.Bus(interface="udp_multicast", channel=channel,
+                       port=random.randint(40000, 60000), hop_limit=0)
+    except (OSError, ImportError, can.CanError) as error:
+        pytest.skip(f"udp_multicast unavailable here ({error})")
+
+
+@pytest.mark.multiprocess
+def test_an_echoing_port_drops_each_echo_once_and_never_an_old_sendings_equal() -> None:
+    """The port's reader checks the echo of its own frames itself (OwnFrames.is_echo's usual
+    case inlined): each sending's echo is dropped once, within the window; an equal frame
+    after the window, or once every echo came, is another node's and reaches the handlers."""
+    bus = _echoing_bus()
+    try:
+        now = [0.0]
+        port = CanBusPort(bus, clock=lambda: now[0])
+        heard: list[tuple[Frame, float]] = []
+        detach = port.listen(lambda frame, at: heard.append((frame, at)))
+        bus.send = lambda msg, timeout=None: None  # type: ignore[method-assign]  # no real echo
+        feed = port._listener.on_message_received
+        frame = Frame(0x595, bytes.fromhex("4300100009000000"))
+
+        def arrives(at: float) -> None:
+            now[0] = at
+            feed(to_message(frame))
+
+        port.send(frame)
+        port.send(frame)
+        arrives(0.5)  # the first sending's echo
+        arrives(0.6)  # the second's
+        arrives(0.7)  # another node's equal frame
+        assert heard == [(frame, 0.7)]
+        port.send(frame)  # at 0.7, its echo never comes
+        port.send(frame)
+        arrives(2.8)  # past the window for both: another node's
+        now[0] = 2.85
+        port.send(frame)
+        arrives(2.9)  # within the window of the last sending: its echo
+        assert heard == [(frame, 0.7), (frame, 2.8)]
+        detach()
+    finally:
+        bus.shutdown()

@@ -9,6 +9,7 @@ from collections.abc import Mapping
 import click
 
 from blinkcan.cli.command_socket import SocketError, emulators, send
+from blinkcan.cli.typed_commands import MAX_LINE
 from blinkcan.cli.whole import Whole
 
 #: the largest process id Linux gives (PID_MAX_LIMIT, 2**22)
@@ -28,6 +29,7 @@ def command(words: tuple[str, ...], pid: int | None) -> None:
     blinkcan act 15h tap 3
     blinkcan act --to 4242 0Ch blow-fuse 4
     """
+    line = _line(words)
     try:
         running = emulators()
         if pid is not None and pid not in running:
@@ -42,7 +44,7 @@ def command(words: tuple[str, ...], pid: int | None) -> None:
             raise click.UsageError(f"{len(running)} emulators run ({described}); pick one "
                                    "with --to PID")
         path = running[pid] if pid is not None else next(iter(running.values()))
-        answer = send(path, " ".join(words))
+        answer = send(path, line)
     except (SocketError, OSError) as error:
         raise click.ClickException(f"cannot reach the emulator: {error}") from None
     failed = False
@@ -51,6 +53,19 @@ def command(words: tuple[str, ...], pid: int | None) -> None:
         click.echo(line, err=line.startswith("Error: "))
     if failed:
         raise SystemExit(1)
+
+
+def _line(words: tuple[str, ...]) -> str:
+    """The one line ``words`` make, checked before any emulator is asked (a usage error
+    otherwise); a byte of the command line that is not UTF-8 (kept by Python as a surrogate)
+    becomes U+FFFD, so the emulator names it as a bad argument."""
+    line = " ".join(words).encode(errors="surrogateescape").decode(errors="replace")
+    if "\n" in line or "\r" in line:
+        raise click.UsageError("act sends one command line; several go down emulate's input "
+                               "(printf '...\\n...' | blinkcan emulate ...) or as several acts")
+    if len(line.encode()) > MAX_LINE:
+        raise click.UsageError(f"one command line of at most {MAX_LINE} bytes")
+    return line
 
 
 def _pids(running: Mapping[int, object]) -> str:

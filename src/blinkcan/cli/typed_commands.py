@@ -29,6 +29,7 @@ import click
 from rich.console import Console
 
 from blinkcan.cli.bus_options import parse_int
+from blinkcan.cli.seconds import A_YEAR
 from blinkcan.devices.model import Face
 from blinkcan.devices.registry import model
 from blinkcan.errors import BlinkcanError
@@ -138,10 +139,15 @@ def _number(argument: Argument, face: Face, text: str) -> int | float:
 
 
 def _seconds(text: str) -> float:
+    """A typed pause: 0..a year (a longer one is a typo, and no timer reaches 1e300 s: the
+    emulator's sleep overflowed after ``tap`` had pressed or ``power-cycle`` switched off)."""
     try:
-        return check_time("SECONDS", float(text), 0)
+        seconds = check_time("SECONDS", float(text), 0)
     except ValueError:
         raise CommandError(f"SECONDS must be a number >= 0, not {text!r}") from None
+    if seconds > A_YEAR:
+        raise CommandError(f"SECONDS must be 0..{A_YEAR:.10g}, not {text!r}")
+    return seconds
 
 
 class TypedCommands:

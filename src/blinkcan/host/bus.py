@@ -23,6 +23,7 @@ waiting SDO calls at once; frames this program sent are never taken for received
 from __future__ import annotations
 
 import logging
+import operator
 import threading
 import time
 from collections.abc import Callable, Hashable
@@ -159,10 +160,10 @@ class HostBus:
     def on_own_thread(self) -> bool:
         return self.scheduler.in_loop
 
-    @property
-    def in_handler(self) -> bool:
-        """True inside a handler or timer, where nothing may block."""
-        return self.scheduler.in_loop
+    #: True inside a handler or timer, where nothing may block (the scheduler's ``in_loop``,
+    #: read by a C-level getter: every SDO request asks)
+    in_handler = property(operator.attrgetter("scheduler.in_loop"),
+                          doc="True inside a handler or timer, where nothing may block.")
 
     @property
     def closed(self) -> bool:

@@ -38,8 +38,9 @@ thread; applications do not call them): :meth:`Device.nmt_command_seen`,
 
 from __future__ import annotations
 
+import math
 import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,7 +48,7 @@ import can
 
 from blinkcan.devices.common import RESTORE_SIGNATURE
 from blinkcan.devices.model import DeviceDescription
-from blinkcan.devices.objects import ObjectEntry, Value
+from blinkcan.devices.objects import ObjectEntry, Ranges, Value
 from blinkcan.devices.registry import identify
 from blinkcan.host.bus import Handler, HostBus, Timer
 from blinkcan.host.events import EventSource
@@ -76,10 +77,50 @@ def unreversed(version: str) -> str:
     return version
 
 
+#: the longest a driver call waits for a device (an SDO reply, a J1939 answer): longer is a
+#: typo, and 1e300 s overflowed the platform's timers at the first wait
+LONGEST_WAIT_S = 24 * 3600.0
+
+
+def check_wait(what: str, seconds: float) -> float:
+    """``seconds`` if it is a time to wait, 0..:data:`LONGEST_WAIT_S`; else TypeError /
+    ValueError naming ``what`` and the range, before anything is sent."""
+    check_time(what, seconds, 0)
+    if seconds > LONGEST_WAIT_S:
+        raise ValueError(f"{what} must be 0..{LONGEST_WAIT_S:g} seconds, not {seconds!r}")
+    return seconds
+
+
+def in_units(what: str, period: float, unit_s: float) -> int | None:
+    """``period`` seconds as a whole number of ``unit_s`` units, once checked as a number of
+    seconds (finite, not a bool: ``what`` names it in the TypeError/ValueError); None for a
+    period no integer of units holds (1e308 s in milliseconds is infinite)."""
+    units = check_time(what, period) / unit_s
+    return round(units) if math.isfinite(units) else None
+
+
 def milliseconds(what: str, period: float) -> int:
     """``period`` seconds as whole milliseconds, once checked as a number of seconds (finite,
-    not a bool: ``what`` names it in the TypeError/ValueError)."""
-    return round(check_time(what, period) * 1000)
+    not a bool: ``what`` names it in the TypeError/ValueError; one too long for any timer is a
+    ValueError too)."""
+    ms = in_units(what, period, 0.001)
+    if ms is None:
+        raise ValueError(f"{what} must be a number of seconds a timer holds, not {period!r}")
+    return ms
+
+
+def check_watchdog(period: float) -> int:
+    """The host heartbeat ``period`` of a watchdog, in ms, if the device can watch it (its
+    consumer time, twice the period, fits 1016h: KBX §28 note 1); else TypeError/ValueError,
+    before anything is sent."""
+    return check_range("watchdog period in ms", milliseconds("watchdog period", period), 10,
+                       0xFEFF // 2)
+
+
+def seconds_spans(spans: Iterable[tuple[int, int]], unit_s: float) -> str:
+    """Valid counts of ``unit_s`` units as seconds: "0 or 0.01..65.279"."""
+    return " or ".join(f"{lo * unit_s:g}" if lo == hi else f"{lo * unit_s:g}..{hi * unit_s:g}"
+                       for lo, hi in spans)
 
 
 @dataclass(frozen=True)
@@ -145,7 +186,7 @@ class Device:
                  *, sdo_timeout: float = 0.5, sdo_retries: int = 1) -> None:
         """Set up; a subclass calls :meth:`confirm` (unless told not to) before any command."""
         self.node_id = check_node_id(node_id)
-        check_time("sdo_timeout", sdo_timeout, 0)  # before anything is sent
+        check_wait("sdo_timeout", sdo_timeout)  # before anything is sent
         self.description = description
         self.host = HostBus.attach(bus)  # shared by every driver on this bus
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
@@ -228,17 +269,32 @@ class Device:
         entry = self.check(name, value)
         self.sdo.download(entry.index, entry.subindex, entry.encode(value))
 
+    def write_period(self, name: str, what: str, period: float, unit_s: float = 0.001) -> None:
+        """Write ``period`` seconds to the entry ``name``, which counts ``unit_s`` units (0:
+        off). A period it cannot hold is a ValueError naming the valid periods in seconds,
+        before anything is sent: one that rounds to 0 (it would switch off what it sets) or
+        that no integer holds included."""
+        count = in_units(what, period, unit_s)
+        entry = self.entry(name)
+        if count is None or not entry.accepts(count) or (period > 0 and count == 0):
+            valid = entry.valid or Ranges(((0, (1 << 8 * (entry.data_type.size or 4)) - 1),))
+            raise ValueError(f"{what} must be {seconds_spans(valid.spans, unit_s)} s, not "
+                             f"{period!r}")
+        self.write(name, count)
+
     # -- NMT ----------------------------------------------------------------------------------
 
     def nmt(self, command: NmtCommand) -> None:
         self.host.run(lambda: self._nmt_commanded(command))  # known before any reply
         self.host.send(nmt_frame(command, self.node_id))
+        self.nmt_command_sent(command)
 
     def _on_nmt_heard(self, frame: Frame, now: float) -> None:
         """Another master's NMT command to this node (or to all) explains what follows."""
         request = parse_nmt(frame, self.description.nmt_aliases)
         if request is not None and request.node_id in (0, self.node_id):
             self._nmt_commanded(request.command)
+            self.nmt_command_sent(request.command)
 
     def _nmt_commanded(self, command: NmtCommand) -> None:
         asked = _ASKED.get(command)
@@ -263,6 +319,11 @@ class Device:
     def nmt_command_seen(self, command: NmtCommand) -> None:
         """An NMT command was sent to the device (by this driver, or heard from another master
         on 000h): drivers update their picture."""
+
+    def nmt_command_sent(self, command: NmtCommand) -> None:
+        """An NMT command to the device is on the bus (this driver's, in its caller's thread
+        once sent; another master's, as heard): what the device acts on only from now (a PDO
+        after a start) may go."""
 
     def booted_up(self, now: float) -> None:
         """The confirmed device (re)booted: drivers restore what the application had set."""
@@ -304,7 +365,9 @@ class Device:
     def monitor_heartbeat(self, period: float, timeout: float | None = None) -> None:
         """Make the device send a heartbeat every ``period`` s (1017h) and raise "lost" when
         none comes for ``timeout`` (default 1.5 periods + 50 ms), "back" when it returns."""
-        self.write("producer_heartbeat_time", milliseconds("heartbeat period", period))
+        if timeout is not None:
+            check_wait("heartbeat timeout", timeout)
+        self.write_period("producer_heartbeat_time", "heartbeat period", period)
         self._watch_heartbeat(period, timeout)
 
     def _watch_heartbeat(self, period: float, timeout: float | None = None) -> None:
@@ -480,7 +543,7 @@ class Device:
 
     def set_heartbeat(self, period: float) -> None:
         """Producer heartbeat every ``period`` seconds; 0 switches it off."""
-        self.write("producer_heartbeat_time", milliseconds("heartbeat period", period))
+        self.write_period("producer_heartbeat_time", "heartbeat period", period)
 
     # -- the device watching the controller (KBX §28, PKP rev 1.5 §26) ----------------------------
 
@@ -488,17 +551,15 @@ class Device:
         """Watch ``node_id``'s heartbeat; missing it for ``period`` s switches the device off
         (Keybox: outputs; keypad generation 2: LEDs). ``period`` 0 stops watching."""
         check_node_id(node_id)
-        check_time("consumer heartbeat period", period)
+        ms = in_units("consumer heartbeat period", period, 0.001)
         if "consumer_heartbeat_time" not in self.description.table:
             raise ValueError(f"this {self.description.kind} (manual {self.description.generation}"
                              ") has no consumer heartbeat (1016h)")
         rule = self.description.consumer_heartbeat
         assert rule is not None, "a description with 1016h says what it accepts"
-        ms = round(period * 1000)
-        if ms not in rule.times_ms:
-            spans = " or ".join(f"{lo / 1000:g}" if lo == hi else f"{lo / 1000:g}..{hi / 1000:g}"
-                                for lo, hi in rule.times_ms.spans)
-            raise ValueError(f"consumer heartbeat period must be {spans} s, not {period}")
+        if ms is None or ms not in rule.times_ms or (period > 0 and ms == 0):
+            raise ValueError("consumer heartbeat period must be "
+                             f"{seconds_spans(rule.times_ms.spans, 0.001)} s, not {period}")
         self.write("consumer_heartbeat_time", rule.compose(ms, node_id))
 
     def restore_factory_defaults(self, *, confirm: bool = False) -> None:
@@ -517,8 +578,7 @@ class Device:
         misses two (KBX §28 note 1: consumer time about twice the producer's). The device's
         own heartbeat is turned on (every ``period`` s) if it was off, so that a trip is seen:
         a "watchdog" health event."""
-        check_range("watchdog period in ms", milliseconds("watchdog period", period), 10,
-                    0xFEFF // 2)
+        check_watchdog(period)
         self.set_consumer_heartbeat(self.host_node_id, 2 * period)
         if self._heartbeat_timeout is None:
             own_ms = int(self.read("producer_heartbeat_time"))

@@ -38,7 +38,7 @@ from blinkcan.devices.keybox import (
     pwm_register,
 )
 from blinkcan.host.bus import HostBus, Timer
-from blinkcan.host.device import Device, confirm_or_close, milliseconds
+from blinkcan.host.device import Device, check_watchdog, confirm_or_close
 from blinkcan.host.events import EventSource
 from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
@@ -91,7 +91,7 @@ class Keybox(Device):
                  fault_poll: float | None = None, restore_outputs: bool = False,
                  sdo_timeout: float = 0.5, verify: bool = True) -> None:
         if watchdog is not None:  # checked before anything is sent (the identity reads)
-            milliseconds("watchdog period", watchdog)
+            check_watchdog(watchdog)
         if fault_poll is not None:
             check_time("fault poll period", fault_poll)
         super().__init__(bus, node_id, describe_keybox("cia301", node_id),
@@ -332,7 +332,7 @@ class Keybox(Device):
 
     def set_fault_period(self, period: float) -> None:
         """Send the fault PDO every ``period`` s as well (2012h, 10 ms units); 0 = on change."""
-        self.write("fault_period", round(period / FAULT_PERIOD_UNIT_S))
+        self.write_period("fault_period", "fault period", period, FAULT_PERIOD_UNIT_S)
 
     # -- what the Keybox does by itself, and recovery ---------------------------------------------
 

@@ -55,8 +55,8 @@ from blinkcan.host.device import (
     HealthEvent,
     NoDeviceError,
     WrongDeviceError,
+    check_watchdog,
     confirm_or_close,
-    milliseconds,
 )
 from blinkcan.host.events import EventSource
 from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
@@ -65,9 +65,13 @@ from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
 from blinkcan.protocol.j1939 import j1939_frame
+from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
 
 PRESS, RELEASE, LONG_PRESS = "press", "release", "long press"
+#: NMT commands after which a keypad ignores PDOs until the next start (CiA 301: RPDOs are
+#: acted on only in OPERATIONAL)
+_PDOS_IGNORED_AFTER = (NmtCommand.STOP, NmtCommand.ENTER_PRE_OPERATIONAL)
 SHOWS = {"off": SHOW_OFF, "complete": SHOW_COMPLETE, "fast flash": SHOW_FAST_FLASH}
 #: PKP §44 / J1939 manual §27: the way back to CANopen, from the J1939 command table
 J1939_RETURN = j1939_frame(PGN_COMMAND, DEFAULT_HOST_ADDRESS,
@@ -160,11 +164,16 @@ class Keypad(Device):
                  protocol: str = "canopen", address: int = DEFAULT_ADDRESS) -> None:
         if protocol not in ("canopen", "j1939"):
             raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
+        #: True from an NMT stop or pre-operational (or such a state reported) to the next
+        #: start: the LED PDOs sent meanwhile were ignored, the picture goes again after it
+        #: (set before the bus handlers that change it are subscribed)
+        self._pdos_ignored = not start
+        self._missed = False  # a picture PDO went while they were ignored
         #: the registered model this driver runs (the PKP-2600-SI unless ``model`` names one)
         self._model = registry_model(model or MODEL)
         self._model_given = model is not None
         if watchdog is not None:  # checked before anything is sent (the identity reads)
-            milliseconds("watchdog period", watchdog)
+            check_watchdog(watchdog)
         check_time("long_press", long_press, 0)
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
@@ -448,9 +457,9 @@ class Keypad(Device):
             self.pdo_frame("led_blink", _masks(self._blink))
         sent = self._sent
         if force or sent is None or sent[0] != on:
-            self.host.send(on)
+            self.send_shown(on)
         if force or sent is None or sent[1] != blink:
-            self.host.send(blink)
+            self.send_shown(blink)
         self._sent = (on, blink)
 
     # -- brightness and backlight -----------------------------------------------------------------
@@ -463,7 +472,7 @@ class Keypad(Device):
             if self.j1939 is not None:
                 self.j1939.send("led_brightness", level)
                 return
-            self.host.send(self.pdo_frame("indicator_brightness", {"level": level}))
+            self.send_shown(self.pdo_frame("indicator_brightness", {"level": level}))
 
     def set_backlight(self, colour: str | None = None, level: int | None = None) -> None:
         """Backlight colour (by name, PKP §18c) and level 0..63 (0 = off, PKP §14)."""
@@ -480,7 +489,7 @@ class Keypad(Device):
                     if self.j1939 is not None:
                         self.j1939.send("backlight_level", level)
                     else:
-                        self.host.send(self._backlight_frame(level))
+                        self.send_shown(self._backlight_frame(level))
 
     def _restore_backlight(self) -> None:
         """The backlight as it is when this runs (after any backlight command in flight)."""
@@ -489,7 +498,7 @@ class Keypad(Device):
                 self.write("backlight_colour", self._backlight_colour)
             with self._picture_lock:
                 if self._backlight_level is not None:
-                    self.host.send(self._backlight_frame(self._backlight_level))
+                    self.send_shown(self._backlight_frame(self._backlight_level))
 
     def _backlight_frame(self, level: int) -> Frame:
         # rev 1.5 §15: generation 2 reads byte 1 as the colour (00h = the default colour), so
@@ -524,7 +533,7 @@ class Keypad(Device):
 
     def set_periodic_key_state(self, period: float) -> None:
         """Send the key state every ``period`` s as well as on change; 0 = only on change."""
-        self.write("tpdo1_event_timer", milliseconds("key state period", period))
+        self.write_period("tpdo1_event_timer", "key state period", period)
 
     def read(self, name: str) -> Value:
         """An object by its CANopen name (SDO); refused in J1939 mode, which has no SDO."""
@@ -675,6 +684,31 @@ class Keypad(Device):
 
     # -- recovery ---------------------------------------------------------------------------------
 
+    def nmt_command_seen(self, command: NmtCommand) -> None:
+        if command in _PDOS_IGNORED_AFTER:  # CiA 301: RPDOs only in OPERATIONAL
+            self._pdos_ignored = True
+
+    def state_reported(self, state: NmtState, now: float) -> None:
+        if state is not NmtState.OPERATIONAL:
+            self._pdos_ignored = True
+        else:  # started by a command this driver did not hear (its own were): show it all
+            self.nmt_command_sent(NmtCommand.START)
+
+    def nmt_command_sent(self, command: NmtCommand) -> None:
+        """After a start, the picture is sent again if part of it went while the keypad
+        was stopped or pre-operational (it dropped those PDOs), as after a reboot; a picture
+        this driver never sent is not (it would switch off what others lit)."""
+        if command is NmtCommand.START and self._pdos_ignored:
+            missed, self._pdos_ignored, self._missed = self._missed, False, False
+            if missed and self.restore and self.confirmed:
+                self.send_picture_again(leds_unsent=False)
+
+    def send_shown(self, frame: Frame) -> None:
+        """Send a PDO of the picture (LEDs, levels, rings), noting one the keypad ignores."""
+        self.host.send(frame)
+        if self._pdos_ignored:
+            self._missed = True
+
     def booted_up(self, now: float) -> None:
         for timer in self._long_timers.values():
             timer.cancel()
@@ -686,17 +720,27 @@ class Keypad(Device):
         self._recover()  # rev 1.5 §26 note 2: the keypad switched its LEDs off
 
     def _recover(self) -> None:
+        # the start below, else the application's, after which what went meanwhile goes again
+        self._pdos_ignored, self._missed = not self.auto_start, False
         if self.auto_start:
             self.start()
         with self._picture_lock:
             if not self.restore:
                 self._sent = None
                 return
-            self._send_changes(force=True)  # errata field report: a rebooted keypad forgot its LEDs
+        self.send_picture_again()
+
+    def send_picture_again(self, leds_unsent: bool = True) -> None:
+        """Send the whole picture the keypad lost or ignored: LEDs (also while this driver
+        has sent none, with ``leds_unsent``: all off), indicator brightness, backlight (its
+        colour by SDO, in a worker). A driver with more to show (ring LEDs) extends it."""
+        with self._picture_lock:
+            if leds_unsent or self._sent is not None:
+                self._send_changes(force=True)  # errata field report: a rebooted keypad forgot
             if self._indicator is not None:
-                self.host.send(self.pdo_frame("indicator_brightness",
+                self.send_shown(self.pdo_frame("indicator_brightness",
                                                {"level": self._indicator}))
             if self._backlight_colour is not None:
                 self.host.spawn(self._restore_backlight)  # the colour goes by SDO: off here
             elif self._backlight_level is not None:
-                self.host.send(self._backlight_frame(self._backlight_level))
+                self.send_shown(self._backlight_frame(self._backlight_level))

@@ -18,7 +18,7 @@ from blinkcan.devices.keypad import LEVEL_MAX
 from blinkcan.devices.pkp3500 import GENERATION, MODEL
 from blinkcan.host.aio import AsyncDriver
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import Device, milliseconds
+from blinkcan.host.device import Device
 from blinkcan.host.events import EventSource
 from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.protocol.cob import check_range
@@ -119,8 +119,8 @@ class Pkp3500Keypad(Keypad):
     def set_encoder_period(self, encoder: int, period: float) -> None:
         """Also send the encoder's state every ``period`` s (0: only when turned; 0.05..65.279,
         MT §51/§52, M72)."""
-        ms = milliseconds("encoder period", period)
-        self.write(f"tpdo{self._check_encoder(encoder) + 1}_event_timer", ms)
+        self.write_period(f"tpdo{self._check_encoder(encoder) + 1}_event_timer",
+                          "encoder period", period)
 
     # -- ring LEDs (MT §17, §20c, §21c) ----------------------------------------------------------
 
@@ -158,7 +158,7 @@ class Pkp3500Keypad(Keypad):
     def _send_rings(self, word: int) -> None:
         with self._rings_lock:
             self._rings = word
-            self.host.send(self.pdo_frame("ring_leds", {"rings": word}))
+            self.send_shown(self.pdo_frame("ring_leds", {"rings": word}))
 
     # -- inputs (MT §14, §23, §24) -----------------------------------------------------------------
 
@@ -187,7 +187,7 @@ class Pkp3500Keypad(Keypad):
 
     def set_analog_period(self, period: float) -> None:
         """The 495h PDO every ``period`` s, 0.08..2 in 10 ms steps (MT §25, M47). Stored."""
-        self.write("analog_period", round(period * 100))
+        self.write_period("analog_period", "analog period", period, 0.01)
 
     # -- what differs from the PKP-2600-SI --------------------------------------------------------
 
@@ -197,11 +197,13 @@ class Pkp3500Keypad(Keypad):
         check_range("brightness", level, 0, LEVEL_MAX)
         self.write("indicator_brightness", level)
 
-    def booted_up(self, now: float) -> None:
-        super().booted_up(now)
+    def send_picture_again(self, leds_unsent: bool = True) -> None:
+        """The key LEDs and levels, and the ring LEDs (after a reboot, a watchdog trip (MT
+        §32: rings off too) or a start after a stop)."""
+        super().send_picture_again(leds_unsent)
         with self._rings_lock:
-            if self.restore and self._rings is not None:
-                self.host.send(self.pdo_frame("ring_leds", {"rings": self._rings}))
+            if self._rings is not None:
+                self.send_shown(self.pdo_frame("ring_leds", {"rings": self._rings}))
 
 
 class AsyncPkp3500Keypad(AsyncDriver[Pkp3500Keypad]):

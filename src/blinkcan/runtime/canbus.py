@@ -92,20 +92,22 @@ class OwnFrames:
         #: look a received frame up here first: :meth:`is_echo` can be true only where it
         #: finds a non-empty deque
         self.pending: dict[Frame, collections.deque[float]] = {}
-        self._sweep_at = -math.inf
-        self._lock = threading.Lock()
+        #: when :meth:`sweep` is due next (a sender sweeps, holding the lock)
+        self.sweep_at = -math.inf
+        #: held by a sender while it adds to or removes from ``pending``
+        self.lock = threading.Lock()
 
     def sent(self, frame: Frame, now: float) -> None:
         if not self.active:
             return
-        with self._lock:
+        with self.lock:
             times = self.pending.get(frame)
             if times is None:
                 self.pending[frame] = collections.deque((now,))
             else:
                 times.append(now)
-            if now >= self._sweep_at:
-                self._sweep(now)
+            if now >= self.sweep_at:
+                self.sweep(now)
 
     def is_echo(self, frame: Frame, now: float) -> bool:
         if not self.active:
@@ -123,9 +125,10 @@ class OwnFrames:
                 return True
             # older than the window: that echo never came; the next one may be this
 
-    def _sweep(self, now: float) -> None:
-        """Forget the frames whose every echo is in or older than the window's past."""
-        self._sweep_at = now + self.window
+    def sweep(self, now: float) -> None:
+        """Forget the frames whose every echo is in or older than the window's past (a
+        sender calls it, holding the lock)."""
+        self.sweep_at = now + self.window
         window = self.window
         pending = self.pending
         for frame, times in list(pending.items()):

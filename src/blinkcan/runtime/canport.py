@@ -9,6 +9,7 @@ come back as received ones, also on python-can's ``udp_multicast``, which echoes
 
 from __future__ import annotations
 
+import collections
 import time
 from collections.abc import Callable
 
@@ -81,6 +82,7 @@ class _PortListener(can.Listener):
         #: (udp_multicast), else None; and the echo check, asked where a frame is among them.
         #: Bound once: every frame received looks
         self.pending = port.own.pending if port.own.active else None
+        self.window = port.own.window
         self.is_echo = port.own.is_echo
 
     def on_message_received(self, msg: can.Message) -> None:
@@ -92,8 +94,15 @@ class _PortListener(can.Listener):
         frame = _new_tuple(Frame, (msg.arbitration_id, bytes(data), msg.is_extended_id))
         now = self.clock()
         pending = self.pending
-        if pending is not None and pending.get(frame) and self.is_echo(frame, now):
-            return
+        if pending is not None:
+            times = pending.get(frame)
+            if times:  # sent here, its echo not yet seen: OwnFrames.is_echo, its usual case
+                # inlined (the oldest sending is within the window), the rest asked of it
+                try:
+                    if now - times.popleft() <= self.window or self.is_echo(frame, now):
+                        return
+                except IndexError:  # emptied meanwhile: this one is no echo
+                    pass
         port = self.port
         try:
             for handler in port.handlers:
@@ -115,6 +124,8 @@ class CanBusPort:
         self.own = OwnFrames(bus)
         #: the record of a frame sent, where the bus echoes (else None): bound once
         self._sent = self.own.sent if self.own.active else None
+        #: the frames sent whose echo may still come, where the bus echoes (else None)
+        self._pending = self.own.pending if self.own.active else None
         #: the handlers, a tuple: the reader reads it per frame, listen and detach replace it
         self.handlers: tuple[FrameHandler, ...] = ()
         self._notifier = notifier
@@ -139,9 +150,17 @@ class CanBusPort:
         """:meth:`send`, reusing the Message of an equal frame sent before (every SDO request
         and reply comes this way: building a Message costs more than the rest of a send)."""
         now = self.clock()
-        sent = self._sent
-        if sent is not None:
-            sent(frame, now)
+        pending = self._pending
+        if pending is not None:  # OwnFrames.sent, inlined (every frame sent on udp_multicast)
+            own = self.own
+            with own.lock:
+                times = pending.get(frame)
+                if times is None:
+                    pending[frame] = collections.deque((now,))
+                else:
+                    times.append(now)
+                if now >= own.sweep_at:
+                    own.sweep(now)
         messages = self._messages
         message = messages.get(frame)
         if message is None:
