@@ -40,13 +40,14 @@ from blinkcan.cli.whole import Whole
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.decode.view import BusView
+from blinkcan.errors import BlinkcanError
 from blinkcan.formats.logs import LogError, read_log
 from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import to_frame
 
 
-class _ReaderGoneError(Exception):
+class _ReaderGoneError(BlinkcanError):
     """The reader of stdout closed it (``| head -2``): nothing more to show anyone."""
 
 
