@@ -8,23 +8,31 @@ each distinct detail of the row group is in a table once, so the lists hold plai
 strings and bytes and no object per row (nothing for the garbage collector to go through,
 and one Arrow conversion per distinct detail). Most frames of a fleet's log are other ECUs'
 (undecoded, one row, the decoder's lookup): for them the loop appends the node, the model,
-one shared detail's number and the text, nothing more.
+one shared detail's number and the text, nothing more. The devices' own frames go to the
+decoder, but for those whose meaning is their bytes alone: a PDO's frame (LED pictures,
+outputs, faults, brightness: most of the devices' frames) is described by the decoder's
+describer and rowed from its bytes (:class:`PdoRoute`, EventRows.follower), with no Event and
+no fields read back; a heartbeat is kept by its bytes; the rows of an event the decoder keeps
+(an SDO read seen before, a J1939 keypad frame) by that entry. ``FrameDecoder.fast = False``
+makes every device frame's rows of its event (the reference of tests/fleet/test_fast_rows.py).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import pyarrow as pa
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
+from blinkcan.decode.describers import Describe, pdo_describer
 from blinkcan.devices.model import DeviceDescription
-from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows
+from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows, Follower
 from blinkcan.formats.columns import ArrowColumns, FrameColumns
 from blinkcan.formats.logs import describe_frame, frame_kind
 from blinkcan.formats.unreadable import UnreadableLine
+from blinkcan.protocol.cob import HEARTBEAT
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:
@@ -33,20 +41,38 @@ if TYPE_CHECKING:
 _new_tuple = tuple.__new__  # Frame.trusted without the call: the readers checked the frames
 #: texts of undecoded frames kept (then they start over): a log has a few hundred identifiers
 _TEXTS_KEPT = 4096
-#: device frames' rows kept (then they start over): a log's devices repeat a few hundred
-#: frames (heartbeats, the same PDOs, the same key state), random data would not repeat
+#: rows of events the decoder keeps (then they start over): as many as it keeps of SDO events
 _ROWS_KEPT = 4096
-#: an identifier's frames are no longer kept when, after this many decoded, under 1 in 4 of
-#: its frames were made again
-_KEEP_TRIAL = 256
+#: the event kinds whose rows read or change what EventRows follows (never kept)
+_FOLLOWING = frozenset({Kind.PDO, Kind.BOOT_UP})
+#: a PDO identifier's follower not made yet (FrameDecoder._followers)
+_FOLLOWED: Any = object()
 #: the Arrow types of a frame's columns: time (seconds), channel, identifier, flag, data
 _FRAME_TYPES = (pa.float64(), pa.string(), pa.int32(), pa.bool_(), pa.binary())
 FrameArrays = tuple[pa.Array, pa.Array, pa.Array, pa.Array, pa.Array]
 #: what a device frame made: node, model, text, a detail per row
 KeptRows = tuple[int | None, str | None, str, list[Detail]]
-#: and the rows' state they read, if any: (the node, its state: EventRows.state)
-KeptFrame = tuple[int | None, str | None, str, list[Detail],
-                  tuple[int | None, tuple[object, ...] | None] | None]
+
+
+class PdoRoute(NamedTuple):
+    """A PDO identifier whose frames mean what their bytes say (no state of the decoder read
+    or changed: Decoder.repeat_state is empty), made once per identifier: a frame of its
+    full length is described by the decoder's describer and rowed by its follower, with
+    no Event (a frame shorter goes to the decoder)."""
+
+    node: int
+    model: str
+    #: the start of its events' text (Event.__str__: the device and the node)
+    who: str
+    length: int
+    #: frames shorter than this mean only that (the decoder's "too short", kept the first
+    #: time: FrameDecoder._pure)
+    shortest: int
+    #: the decoder's describer of the PDO (decode/describers.py pdo_describer)
+    describe: Describe
+    #: its rows from the bytes (EventRows.follower), or None: its one EventRows.pdo_detail
+    follow: Follower | None
+    pdo: str
 
 
 @dataclass
@@ -185,22 +211,105 @@ class FrameDecoder:
         self._rows = EventRows(decoder)
         #: an undecoded frame's text (str of its event) by the decoder's: (node, device, text)
         self._texts: dict[str, tuple[int | None, str | None, str]] = {}
-        #: a device frame's (node, model, text, details) by its identifier, data, and the
-        #: decoder's and the rows' state it reads (Decoder.repeat_state, EventRows.state),
-        #: for frames that changed neither: the same frame from the same state makes them
-        #: again. Valid for the devices' models it was made with
-        self._kept: dict[object, KeptFrame] = {}
-        #: what was made of an event the decoder keeps (Decoder.is_kept), by its kind and
-        #: fields (the fields object kept with it: its id is not reused while kept)
+        #: what was made of an event the decoder keeps (Decoder.is_kept: an SDO read or
+        #: value seen before, a J1939 keypad frame's), by its kind and fields (the fields
+        #: object kept with it: its id is not reused while kept). Such rows read no state
+        #: (EventRows follows PDOs and boot-ups only). Valid for the devices' models they
+        #: were made with (``_models``)
         self._kept_events: dict[tuple[Kind, int], tuple[object, KeptRows]] = {}
-        self._kept_models: dict[int, DeviceDescription] = {}
-        #: per identifier: [frames made again, frames decoded]; those whose frames rarely
-        #: repeat (an LED picture, a sensor's value) are no longer kept (bounded: an
-        #: identifier has a route, Decoder.repeat_state)
-        self._tallies: dict[tuple[int, bool], list[int]] = {}
-        self._unkept: set[tuple[int, bool]] = set()
-        #: False: every frame decoded (the tests' reference)
-        self.keep = True
+        #: per 11-bit PDO identifier decoded, its route (None: its frames go to the decoder),
+        #: for the devices' models it was made with
+        self._pdo_routes: dict[int, PdoRoute | None] = {}
+        #: rows of 11-bit frames whose event depends on their identifier and bytes alone and
+        #: changes nothing (a heartbeat's; a frame too short for its PDO, by its identifier
+        #: alone), by the identifier and bytes, for the devices' models they were made with
+        self._pure: dict[object, KeptRows] = {}
+        self._models: dict[int, DeviceDescription] = {}
+        #: False: every device frame's rows made of its event (the tests' reference)
+        self.fast = True
+
+    def _pdo_route(self, event: Event) -> PdoRoute | None:
+        """The route of a PDO event's identifier, just decoded, where its frames mean what
+        their bytes say (Decoder.repeat_state is empty: not a key state) and its rows are
+        made from them (EventRows.follows: a follower; or the one pdo_detail); None
+        otherwise. Its layout is the one the decoder routes the identifier to (the first of
+        the node's model's PDOs on it, decode/decoder.py Decoder._route)."""
+        frame, node, rows = event.frame, event.node_id, self._rows
+        device = self._decoder.devices.get(node) if node is not None else None
+        if device is None or node is None or frame.extended or \
+                self._decoder.repeat_state(frame.can_id, False, frame.data) != ():
+            return None
+        layout = next((p for p in device.pdos if p.cob_id(node) == frame.can_id), None)
+        if layout is None or layout.name != event.fields.get("pdo"):
+            return None
+        follow = rows.follower(node, layout)
+        if follow is None and rows.follows(layout.name):
+            return None  # its rows read the event's fields (a layout of other signals)
+        return PdoRoute(node, device.model, f"{event.device or 'node'} {node:02X}h: ",
+                        layout.length, layout.min_length,
+                        pdo_describer(layout, device, node, {}), follow, layout.name)
+
+    def _event_rows(self, event: Event, place: int, nodes: list[int | None],
+                    models: list[str | None], texts: list[str | None]) -> list[Detail]:
+        """A decoded device frame's node, model and text set at ``place``; its rows."""
+        kind = event[2]
+        details = SIMPLE_ROWS.get(kind)
+        if details is not None:  # another ECU's frame, or one of no detail
+            node = event[4]
+            device = self._decoder.devices.get(node)  # type: ignore[arg-type]  # None: none
+            nodes[place] = node
+            models[place] = None if device is None else device.model
+            seen = self._texts.get(event.text)  # str(event): device, node and text
+            if seen is not None and seen[0] == node and seen[1] == event.device:
+                texts[place] = seen[2]
+            else:
+                texts[place] = text = str(event)
+                self._texts[event.text] = (node, event.device, text)
+            frame = event.frame
+            route = self._pdo_routes.get(frame.can_id) if not frame.extended else None
+            if self.fast and route is not None and len(frame.data) < route.shortest:
+                self._pure[frame.can_id] = (node, models[place], str(texts[place]), details)
+            return details
+        if self.fast:
+            if self._decoder.is_kept(event) and kind not in _FOLLOWING:
+                return self._kept_rows(event, place, nodes, models, texts)
+            frame = event.frame
+            if kind is Kind.PDO and not frame.extended and frame.can_id not in self._pdo_routes:
+                self._pdo_routes[frame.can_id] = self._pdo_route(event)  # the next: bytes
+            if kind is Kind.HEARTBEAT:  # its bytes and the node's model: the same rows
+                return self._pure_rows((frame.can_id, frame.data), event, place, nodes,
+                                       models, texts)
+        nodes[place], models[place], details = self._rows.rows(event)
+        texts[place] = str(event)
+        return details
+
+    def _pure_rows(self, key: object, event: Event, place: int, nodes: list[int | None],
+                   models: list[str | None], texts: list[str | None]) -> list[Detail]:
+        """:meth:`_event_rows` of an event its frame's identifier and bytes alone make (no
+        state read or changed), kept by ``key`` for the next such frame."""
+        node, model, details = self._rows.rows(event)
+        text = str(event)
+        nodes[place], models[place], texts[place] = node, model, text
+        self._pure[key] = (node, model, text, details)
+        return details
+
+    def _kept_rows(self, event: Event, place: int, nodes: list[int | None],
+                   models: list[str | None], texts: list[str | None]) -> list[Detail]:
+        """:meth:`_event_rows` of an event made from an entry the decoder keeps: what was
+        made of that entry before."""
+        fields = event.fields
+        tag = (event.kind, id(fields))
+        made_of = self._kept_events.get(tag)
+        if made_of is not None and made_of[0] is fields:
+            nodes[place], models[place], texts[place], details = made_of[1]
+            return details
+        node, model, details = self._rows.rows(event)
+        text = str(event)
+        nodes[place], models[place], texts[place] = node, model, text
+        if len(self._kept_events) >= _ROWS_KEPT:
+            self._kept_events.clear()
+        self._kept_events[tag] = (fields, (node, model, text, details))
+        return details
 
     def decode(self, block: FrameColumns, start: int, segment: Segment, limit: int) -> int:
         """Decode the block's frames from ``start`` into ``segment`` until it holds ``limit``
@@ -222,7 +331,7 @@ class FrameDecoder:
         frame-by-frame path's). Nothing is kept per frame but plain values in flat lists
         (objects that outlive a frame would wake the garbage collector)."""
         decoder = self._decoder
-        decode, rows, devices = decoder.decode, self._rows.rows, decoder.devices
+        decode, devices = decoder.decode, decoder.devices
         known = list(map(decoder.undecoded, *zip(*block.identifiers, strict=True)))
         foreign = np.fromiter((k is not None for k in known), np.bool_, len(known))
         index = block.index[start:]
@@ -245,14 +354,15 @@ class FrameDecoder:
         times = block.arrow_times.to_numpy()[at + start].tolist()
         payloads = block.arrow_data.take(pa.array(at + start, pa.int64())).to_pylist()
         snapshot = dict(devices)
-        kept, keep, event_rows = self._kept, self.keep, self._rows
-        kept_events, is_kept = self._kept_events, decoder.is_kept
-        tallies, unkept = self._tallies, self._unkept
-        if self._kept_models != snapshot:  # a model learned: the rows kept name the old ones
-            kept.clear()
-            kept_events.clear()
-            self._kept_models = snapshot
-        repeat_state, row_state, simple_rows = decoder.repeat_state, event_rows.state, SIMPLE_ROWS
+        if self._models != snapshot:  # a model learned: what was made names the old ones
+            self._kept_events.clear()
+            self._pdo_routes.clear()
+            self._pure.clear()
+            self._models = snapshot
+        fast, pdo_routes, pdo_detail = self.fast, self._pdo_routes, self._rows.pdo_detail
+        pure, heartbeat = self._pure, HEARTBEAT
+        if len(pure) > _ROWS_KEPT:
+            pure.clear()
         find_number, number = segment.numbers.get, segment.number
         event_texts = self._texts
         if len(event_texts) > _TEXTS_KEPT:
@@ -268,66 +378,28 @@ class FrameDecoder:
                 break
             can_id, flag = idents[count]
             payload = payloads[count]
-            made = state = None
-            if keep and idents[count] not in unkept:  # made before from the same state?
-                state = repeat_state(can_id, flag, payload)
-                if state is not None:
-                    key = (can_id, flag, payload, state)
-                    made = kept.get(key)
-                    tally = tallies.get(idents[count])
-                    if tally is None:
-                        tally = tallies[idents[count]] = [0, 0]
-                    if made is not None and (made[4] is None or
-                                             row_state(made[4][0]) == made[4][1]):
-                        nodes[place], models[place], texts[place], details, _ = made
-                        tally[0] += 1
-                    else:
-                        made = None
-                        changes, reads = event_rows.changes, event_rows.reads
-                        tally[1] += 1
-                        if tally[1] >= _KEEP_TRIAL and tally[0] * 4 < tally[0] + tally[1]:
-                            unkept.add(idents[count])  # its frames rarely repeat: not kept
-            if made is None:
-                event = decode(new(frame_type, (can_id, payload, flag)), times[count])
-                one = simple_rows.get(event.kind)
-                if one is not None:  # another ECU's frame, or one of no detail
-                    details = one
-                    node = event.node_id
-                    device = devices.get(node)  # type: ignore[arg-type]  # None: no device
-                    nodes[place] = node
-                    models[place] = None if device is None else device.model
-                    seen = event_texts.get(event.text)  # str(event): device, node and text
-                    if seen is not None and seen[0] == node and seen[1] == event.device:
-                        texts[place] = seen[2]
-                    else:
-                        texts[place] = text = str(event)
-                        event_texts[event.text] = (node, event.device, text)
-                elif keep and is_kept(event):  # made from an entry the decoder keeps
-                    fields = event.fields
-                    tag = (event.kind, id(fields))
-                    made_of = kept_events.get(tag)
-                    if made_of is not None and made_of[0] is fields:
-                        nodes[place], models[place], texts[place], details = made_of[1]
-                    else:
-                        before = event_rows.changes, event_rows.reads
-                        nodes[place], models[place], details = rows(event)
-                        texts[place] = str(event)
-                        if (event_rows.changes, event_rows.reads) == before:  # no state
-                            if len(kept_events) >= _ROWS_KEPT:
-                                kept_events.clear()
-                            kept_events[tag] = (fields, (nodes[place], models[place],
-                                                         texts[place], details))
-                else:
-                    nodes[place], models[place], details = rows(event)
-                    texts[place] = str(event)
-                if state is not None and event_rows.changes == changes and \
-                        repeat_state(can_id, flag, payload) == state:  # it changed nothing
-                    if len(kept) >= _ROWS_KEPT:
-                        kept.clear()
-                    node = event.node_id
-                    kept[key] = (nodes[place], models[place], texts[place], details,
-                                 None if event_rows.reads == reads else
-                                 (node, row_state(node)))
+            route = pdo_routes.get(can_id) if fast and not flag else None
+            made = None
+            if route is not None:
+                if len(payload) >= route.length:  # no Event: its bytes
+                    text, fields = route.describe(payload)
+                    nodes[place], models[place] = route.node, route.model
+                    texts[place] = route.who + text
+                    follow = route.follow
+                    details = [pdo_detail(route.pdo, fields)] if follow is None else \
+                        follow(payload)
+                elif len(payload) < route.shortest:
+                    made = pure.get(can_id)
+            elif fast and not flag and can_id & 0x780 == heartbeat:
+                made = pure.get((can_id, payload))
+            decoded = False  # the decoder's devices change only where it decodes a frame
+            if made is not None:
+                nodes[place], models[place], texts[place], details = made
+            elif route is None or len(payload) < route.length:
+                decoded = True
+                details = self._event_rows(
+                    decode(new(frame_type, (can_id, payload, flag)), times[count]), place,
+                    nodes, models, texts)
             added = 1
             if len(details) == 1:
                 code = find_number(details[0])
@@ -336,9 +408,11 @@ class FrameDecoder:
                 added = len(details)
                 several.append(place)
                 several_counts.append(added)
-                several_codes += map(number, details)
+                for detail in details:
+                    code = find_number(detail)
+                    several_codes.append(number(detail) if code is None else code)
             rows_of_devices += added
-            if total + added >= limit or devices != snapshot:
+            if total + added >= limit or (decoded and devices != snapshot):
                 end = place + 1  # full, or a model learned: the rest with the new state
                 break
         else:

@@ -7,6 +7,12 @@ row says ``unchanged`` rather than repeating the pins or keys: a ``fault`` row w
 pin that went into FAULT (``fault``) or out of it (``cleared``), so counting them counts fuse
 blows. The state followed per node starts where the devices start (LEDs dark, outputs OFF, no
 FAULT) and restarts at each boot-up. No pyarrow here: the rows are plain tuples.
+
+Two ways to the same rows: :meth:`EventRows.rows` reads any event's fields (the reference),
+and :meth:`EventRows.follower` compiles, for one PDO of one node whose rows follow a state
+(LEDs, outputs, faults), a function from the frame's data bytes to its rows: the signals read
+by the layout's shifts and masks, compared as masks with the state, and each row a prebuilt
+detail (most of a fleet's device rows; tests/fleet/test_fast_rows.py compares the two).
 """
 
 from __future__ import annotations
@@ -17,7 +23,9 @@ from typing import Any, NamedTuple
 from blinkcan.decode.decoder import Decoder, Event, Kind, numbers
 from blinkcan.decode.j1939 import colour_name
 from blinkcan.devices.colours import channel_name
+from blinkcan.devices.keybox import commanded_outputs
 from blinkcan.devices.keypad_j1939 import LedState
+from blinkcan.devices.pdo import PdoLayout
 from blinkcan.devices.registry import describe_device
 
 #: the event kinds of the table, in the order the schema documents them
@@ -48,6 +56,12 @@ SIMPLE_ROWS = {kind: [Detail(name)] for kind, name in (
 
 _LED_UNCHANGED = Detail("led", state="unchanged")
 _OUTPUT_UNCHANGED = Detail("output", state="unchanged")
+#: a follower: the data bytes of a frame of its layout's length (or longer) -> its rows (a
+#: shorter one's signals are not all there: EventRows.rows reads its event)
+#: the item numbers a mask of a frame's 8 bytes can name, 0 included (a follower's tables of
+#: rows by key or pin cover them all: the state may hold a mask another layout wrote)
+_ITEMS = range(65)
+Follower = Callable[[bytes], "list[Detail]"]
 _new = tuple.__new__  # a Detail without the call to its __new__: many rows are made
 
 
@@ -82,12 +96,6 @@ class EventRows:
         self._leds: dict[tuple[int, str], tuple[int, int, int]] = {}
         self._outputs: dict[int, int] = {}  # node -> the pins HIGH (a mask: bit 0 is pin 1)
         self._faults: dict[int, int] = {}  # node -> the pins in FAULT (a mask)
-        #: node -> what is followed of it (its LEDs, outputs, faults), made again on a change
-        self._states: dict[int, tuple[object, ...]] = {}
-        #: changes of what is followed, counted (a frame that left it alone changed nothing)
-        self.changes = 0
-        #: reads of what is followed, counted (rows made without one depend on no state)
-        self.reads = 0
         self._models: dict[str, str] = {}
         self._heartbeats: dict[object, list[Detail]] = {}  # state -> its row (shared)
         self._pdo: dict[str, Callable[[int, dict[str, Any]], list[Detail]]] = {
@@ -95,17 +103,6 @@ class EventRows:
             "led_blink": self._led_picture, "outputs": self._output_states,
             "faults": self._fault_pins,
         }
-
-    def state(self, node: int | None) -> tuple[object, ...] | None:
-        """What is followed of a node (None: nothing yet): with the same event, the same
-        state gives the same rows (an event's rows read only its node's)."""
-        return self._states.get(node) if node is not None else None
-
-    def _changed(self, node: int) -> None:
-        self.changes += 1
-        self._states[node] = (tuple(sorted((k[1], v) for k, v in self._leds.items()
-                                           if k[0] == node)),
-                              self._outputs.get(node), self._faults.get(node))
 
     def rows(self, event: Event) -> Rowed:
         kind = event.kind
@@ -128,7 +125,7 @@ class EventRows:
             follow = self._pdo.get(name)
             if follow is not None:
                 return _new(Rowed, (node, model, follow(node, event.fields)))
-            return Rowed(node, model, [Detail("pdo", state=name, value=_only_int(event.fields))])
+            return Rowed(node, model, [self.pdo_detail(name, event.fields)])
         if kind is Kind.HEARTBEAT:
             state = event.fields.get("state")
             details = self._heartbeats.get(state)
@@ -141,6 +138,18 @@ class EventRows:
         # SDO services: the kind of step as the state, the value where it is a number
         return _new(Rowed, (node, model, [_new(Detail, (
             "sdo", None, None, _NAMES[kind], None, _int_value(event.fields.get("value"))))]))
+
+    def follows(self, pdo: str) -> bool:
+        """Whether the rows of the PDO named ``pdo`` follow a state (:meth:`follower`), or
+        are its one :meth:`pdo_detail`."""
+        return pdo in self._pdo
+
+    @staticmethod
+    def pdo_detail(pdo: str, fields: dict[str, Any]) -> Detail:
+        """The one row of a PDO whose rows follow nothing, from its describer's fields (the
+        event's, ``pdo`` among them or not): its name, and its value where it has one number
+        (a brightness level)."""
+        return _new(Detail, ("pdo", None, None, pdo, None, _only_int(fields)))
 
     # -- models -----------------------------------------------------------------------------
 
@@ -162,14 +171,11 @@ class EventRows:
 
     def _reboot(self, node: int | None) -> None:
         """Boot-up: LEDs dark, outputs OFF, no FAULT (the devices' power-on state)."""
-        self.reads += 1
         for key in [k for k in self._leds if k[0] == node]:
             del self._leds[key]
         if node is not None:
             self._outputs.pop(node, None)
             self._faults.pop(node, None)
-            if self._states.pop(node, None) is not None:
-                self.changes += 1
 
     def _keys(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         pressed, released = fields["pressed"], fields["released"]
@@ -187,13 +193,11 @@ class EventRows:
         lit = (_mask(fields.get("red", ())), _mask(fields.get("green", ())),
                _mask(fields.get("blue", ())))
         place = (node, name)
-        self.reads += 1
         before = self._leds.get(place, _DARK)
         changed = (lit[0] ^ before[0]) | (lit[1] ^ before[1]) | (lit[2] ^ before[2])
         if not changed:
             return [_LED_UNCHANGED]
         self._leds[place] = lit
-        self._changed(node)
         red, green, blue = lit
         details = []
         for key in numbers(changed):
@@ -206,29 +210,112 @@ class EventRows:
     def _output_states(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         """A row per pin that went HIGH or OFF (KBX §17: the decoder applied OFF wins)."""
         high = _mask(fields["high"])
-        self.reads += 1
         changed = high ^ self._outputs.get(node, 0)
         if not changed:
             return [_OUTPUT_UNCHANGED]
         self._outputs[node] = high
-        self._changed(node)
         return [_new(Detail, ("output", None, pin, "high" if high >> (pin - 1) & 1 else "off",
                               None, None)) for pin in numbers(changed)]
 
     def _fault_pins(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         faults = fields["faults"]
         now = _mask(faults)
-        self.reads += 1
         before = self._faults.get(node, 0)
-        if node not in self._faults or now != before:
-            self._faults[node] = now
-            self._changed(node)
+        self._faults[node] = now
         if now == before:
             return [_new(Detail, ("fault", None, None, "unchanged", None, len(faults)))]
         return [_new(Detail, ("fault", None, pin, "fault", None, None))
                 for pin in numbers(now & ~before)] + \
             [_new(Detail, ("fault", None, pin, "cleared", None, None))
              for pin in numbers(before & ~now)]
+
+    # -- followers: a PDO's rows straight from its bytes ----------------------------------------
+
+    def follower(self, node: int, layout: PdoLayout) -> Follower | None:
+        """The rows of ``layout``'s frames from ``node`` straight from their data bytes: the
+        same rows :meth:`rows` makes of their events, for the PDOs whose rows follow a state
+        (LED pictures, outputs, faults); None for the others. The signals are read as the
+        decoder's describer reads them (decode/describers.py: the word's shifts and masks,
+        a layout with the signals its wording needs), and the state is this object's, so
+        both ways may take turns on one log. The follower takes frames of the layout's
+        length or longer (a shorter one lacks signals: its event's way)."""
+        signals = {s.name: (s.start, s.mask) for s in layout.signals}
+        name = layout.name
+        if name in _LED_STATES and {"red", "green", "blue"} <= signals.keys():
+            return self._picture_follower(node, name, signals["red"],
+                                          signals["green"], signals["blue"])
+        if name == "outputs" and {"off", "high"} <= signals.keys():
+            return self._outputs_follower(node, signals["off"], signals["high"])
+        if name == "faults" and "faults" in signals:
+            return self._faults_follower(node, signals["faults"])
+        return None
+
+    def _picture_follower(self, node: int, name: str, red: tuple[int, int],
+                          green: tuple[int, int], blue: tuple[int, int]) -> Follower:
+        """:meth:`_led_picture` from the bytes: a row per key whose colour changed, each row
+        one of a table by key and colour code (red, green and blue bits)."""
+        leds, place, state = self._leds, (node, name), _LED_STATES[name]
+        (red_at, red_mask), (green_at, green_mask), (blue_at, blue_mask) = red, green, blue
+        table = [_new(Detail, ("led", key, None, state, _COLOUR_NAMES[code], None))
+                 for key in _ITEMS[1:] for code in range(8)]  # (key - 1) * 8 + code
+        unchanged = [_LED_UNCHANGED]  # shared: rows are never changed
+
+        def follow(data: bytes) -> list[Detail]:
+            word = int.from_bytes(data, "little")
+            lit = (word >> red_at & red_mask, word >> green_at & green_mask,
+                   word >> blue_at & blue_mask)
+            before = leds.get(place, _DARK)
+            changed = (lit[0] ^ before[0]) | (lit[1] ^ before[1]) | (lit[2] ^ before[2])
+            if not changed:
+                return unchanged
+            leds[place] = lit
+            r, g, b = lit
+            return [table[(key - 1) * 8 | (r >> (key - 1) & 1) | (g >> (key - 1) & 1) << 1
+                          | (b >> (key - 1) & 1) << 2] for key in numbers(changed)]
+
+        return follow
+
+    def _outputs_follower(self, node: int, off: tuple[int, int],
+                          high: tuple[int, int]) -> Follower:
+        """:meth:`_output_states` from the bytes (KBX §17: OFF wins, devices/keybox.py)."""
+        outputs = self._outputs
+        (off_at, off_mask), (high_at, high_mask) = off, high
+        went_high = [_new(Detail, ("output", None, pin, "high", None, None)) for pin in _ITEMS]
+        went_off = [_new(Detail, ("output", None, pin, "off", None, None)) for pin in _ITEMS]
+        unchanged = [_OUTPUT_UNCHANGED]
+
+        def follow(data: bytes) -> list[Detail]:
+            word = int.from_bytes(data, "little")
+            _, now = commanded_outputs(word >> off_at & off_mask, word >> high_at & high_mask)
+            changed = now ^ outputs.get(node, 0)
+            if not changed:
+                return unchanged
+            outputs[node] = now
+            return [(went_high if now >> (pin - 1) & 1 else went_off)[pin]
+                    for pin in numbers(changed)]
+
+        return follow
+
+    def _faults_follower(self, node: int, signal: tuple[int, int]) -> Follower:
+        """:meth:`_fault_pins` from the bytes: the pins that went into FAULT and out of it,
+        or the one ``unchanged`` row with the count of pins in FAULT (KBX §25)."""
+        faults = self._faults
+        at, mask = signal
+        went_in = [_new(Detail, ("fault", None, pin, "fault", None, None)) for pin in _ITEMS]
+        went_out = [_new(Detail, ("fault", None, pin, "cleared", None, None)) for pin in _ITEMS]
+        unchanged = [[_new(Detail, ("fault", None, None, "unchanged", None, count))]
+                     for count in _ITEMS]  # by the count of pins in FAULT
+
+        def follow(data: bytes) -> list[Detail]:
+            now = int.from_bytes(data, "little") >> at & mask
+            before = faults.get(node, 0)
+            faults[node] = now
+            if now == before:
+                return unchanged[bin(now).count("1")]
+            return [went_in[pin] for pin in numbers(now & ~before)] + \
+                [went_out[pin] for pin in numbers(before & ~now)]
+
+        return follow
 
     # -- J1939 --------------------------------------------------------------------------------
 

@@ -1,8 +1,11 @@
-"""A device frame made again from the same state is not decoded again (fleet/frames.py keeps
-what it made, by Decoder.repeat_state and Decoder.is_kept): the rows are those of decoding
-every frame, row for row and value for value, on the realistic log (every model, J1939 too)
-and on random mixes of each model's frames that change state (a reboot, a model learned
-mid-block, LED pictures, key presses, releases and holds, outputs and faults)."""
+"""The fast rows of device frames (fleet/frames.py: a PDO's frames rowed from their bytes by
+EventRows' followers with no Event, heartbeats and frames too short for their PDO kept by
+their bytes, the rows of events the decoder keeps kept by Decoder.is_kept) are those of the
+generic Event path (every frame decoded, its event's fields made rows by EventRows.rows),
+row for row and value for value: on the realistic log (every model, J1939 too), on mixes of
+each model's frames that change state (a reboot, a model learned mid-block, LED pictures, key
+presses, releases and holds, outputs and faults), and on random data of every registered
+model's PDO layouts (full length, shorter, longer)."""
 
 from __future__ import annotations
 
@@ -27,7 +30,7 @@ from blinkcan.twin import KeypadTwin
 from tests.fleet.logs import EPOCH, candump_lines
 
 
-def _segments(log: Path, keep: bool, limit: int, block_chars: int,
+def _segments(log: Path, fast: bool, limit: int, block_chars: int,
               devices: ModelsByNode | None) -> tuple[list[Any], int]:
     """Every row group's rows as plain values, and how many frames the decoder decoded."""
     decoder = make_decoder(devices)
@@ -41,7 +44,7 @@ def _segments(log: Path, keep: bool, limit: int, block_chars: int,
 
     decoder.decode = counting  # type: ignore[method-assign]
     frames = FrameDecoder(decoder)
-    frames.keep = keep
+    frames.fast = fast
     found: list[Any] = []
     segment = Segment()
 
@@ -61,26 +64,26 @@ def _segments(log: Path, keep: bool, limit: int, block_chars: int,
     return found, decoded
 
 
-def _assert_kept_as_decoded(log: Path, limit: int, block_chars: int,
+def _assert_fast_as_generic(log: Path, limit: int, block_chars: int,
                             devices: ModelsByNode | None) -> tuple[int, int]:
-    """Kept and decoded frame by frame give the same rows; the decodes of both."""
-    kept, fewer = _segments(log, True, limit, block_chars, devices)
+    """The fast rows and the generic Event path's are the same; the decodes of both."""
+    fast, fewer = _segments(log, True, limit, block_chars, devices)
     every, decoded = _segments(log, False, limit, block_chars, devices)
-    assert len(kept) == len(every)
-    for number, (ours, reference) in enumerate(zip(kept, every, strict=True)):
+    assert len(fast) == len(every)
+    for number, (ours, reference) in enumerate(zip(fast, every, strict=True)):
         for column, (mine, theirs) in enumerate(zip(ours, reference, strict=True)):
             assert mine == theirs, (number, column)
     return fewer, decoded
 
 
 @pytest.mark.parametrize("limit", [97, 1 << 16])
-def test_the_realistic_log_reads_the_same_kept(tmp_path: Path, limit: int) -> None:
-    """Every model's traffic and a J1939 keypad's, other ECUs' frames: the frames made again
-    (heartbeats, J1939 keys, key states held) are most of what is no longer decoded."""
+def test_the_realistic_log_reads_the_same_fast(tmp_path: Path, limit: int) -> None:
+    """Every model's traffic and a J1939 keypad's, other ECUs' frames: the PDOs rowed from
+    their bytes and the heartbeats kept are no longer decoded."""
     log = tmp_path / "unit.log"
     write_candump(log, realistic_traffic(20_000))
-    fewer, decoded = _assert_kept_as_decoded(log, limit, 1 << 16, device_nodes())
-    assert fewer < decoded * 0.85  # kept frames are not decoded again
+    fewer, decoded = _assert_fast_as_generic(log, limit, 1 << 16, device_nodes())
+    assert fewer < decoded * 0.85  # PDOs rowed from their bytes are not decoded
 
 
 def _pool(model: Any, node: int, chance: random.Random) -> list[list[Frame]]:
@@ -117,7 +120,7 @@ def _pool(model: Any, node: int, chance: random.Random) -> list[list[Frame]]:
        limit=st.integers(1, 60), known=st.booleans())
 @settings(max_examples=12, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
-def test_random_mixes_of_a_model_read_the_same_kept(
+def test_random_mixes_of_a_model_read_the_same_fast(
         tmp_path_factory: pytest.TempPathFactory, model: Any, seed: int,
         picks: list[tuple[int, int]], limit: int, known: bool) -> None:
     """The model named, or learned from its identity somewhere in the mix; steps taken once
@@ -130,7 +133,48 @@ def test_random_mixes_of_a_model_read_the_same_kept(
         traffic += [(EPOCH + len(traffic) * 0.001, frame) for frame in pool[pick % len(pool)]]
     log = tmp_path_factory.mktemp("mix") / "mix.log"
     log.write_text("".join(candump_lines(traffic)))
-    _assert_kept_as_decoded(log, limit, 1_500, {node: model.name} if known else None)
+    _assert_fast_as_generic(log, limit, 1_500, {node: model.name} if known else None)
+
+
+@pytest.mark.parametrize("model", models(), ids=lambda model: model.name)
+@given(data=st.data(), limit=st.integers(1, 80), known=st.booleans())
+@settings(max_examples=15, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_random_data_of_every_layout_reads_the_same_fast(
+        tmp_path_factory: pytest.TempPathFactory, model: Any, data: st.DataObject,
+        limit: int, known: bool) -> None:
+    """Every PDO layout of the model with random bytes (most of its full length, some
+    shorter or longer), among heartbeats of random states (a boot-up now and then) and
+    the identity that names the model: the fast rows are the Event path's."""
+    node = 0x15 if model.default_node_id != 0x15 else 0x16
+    description = describe_device(model.name)
+    device_type = description.table["device_type"].default
+    assert isinstance(device_type, int)
+    identity = [Frame(SDO_RX + node, bytes((0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0))),
+                Frame(SDO_TX + node, bytes((0x43, 0x00, 0x10, 0x00)) +
+                      device_type.to_bytes(4, "little"))]
+    layouts = st.sampled_from(description.pdos)
+    lengths = st.sampled_from(("full", "full", "full", "short", "long"))
+    traffic: list[tuple[float, Frame]] = []
+    for _ in range(data.draw(st.integers(1, 120), label="frames")):
+        what = data.draw(st.integers(0, 9), label="what")
+        frames: list[Frame]
+        if what == 0:  # a heartbeat of any state (00h: a boot-up)
+            frames = [Frame(HEARTBEAT + node, bytes((data.draw(
+                st.sampled_from((0x00, 0x04, 0x05, 0x7F, 0x42)), label="state"),)))]
+        elif what == 1:
+            frames = identity
+        else:
+            layout = data.draw(layouts, label="layout")
+            size = {"full": layout.length, "short": data.draw(
+                st.integers(0, max(layout.length - 1, 0)), label="short"),
+                "long": 8}[data.draw(lengths, label="length")]
+            frames = [Frame(layout.cob_id(node), data.draw(
+                st.binary(min_size=size, max_size=size), label="bytes"))]
+        traffic += [(EPOCH + len(traffic) * 0.001, frame) for frame in frames]
+    log = tmp_path_factory.mktemp("random") / "random.log"
+    log.write_text("".join(candump_lines(traffic)))
+    _assert_fast_as_generic(log, limit, 1_500, {node: model.name} if known else None)
 
 
 def test_a_frame_that_changes_state_is_decoded_each_time() -> None:
