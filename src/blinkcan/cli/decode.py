@@ -26,7 +26,6 @@ from blinkcan.formats.logs import (
     LogError,
     describe_frame,
     frame_kind,
-    read_log,
     read_log_columns,
 )
 from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
@@ -217,12 +216,13 @@ class _Output:
 
 def _json_lines(decoder: Decoder, file: str, output: _Output,
                 unreadable: UnreadableCount) -> None:
-    """A block of the log at a time: times written by one orjson call, another ECU's frame
-    (two thirds of a bus) a lookup of its line around time and data (Decoder.raw_json), one
-    write per block."""
+    """A block of the log at a time: times written by one orjson call; most frames' lines
+    written without a Frame or an Event: another ECU's frame (two thirds of a bus) a lookup
+    of its line around time and data (Decoder.raw_json), a device's PDO or heartbeat from its
+    data, a kept SDO or J1939 event's line (Decoder.json_rest); one write per block."""
     lines = output.lines
     add = lines.append
-    json_line, raw_json = decoder.json_line, decoder.raw_json
+    json_line, json_rest, raw_json = decoder.json_line, decoder.json_rest, decoder.raw_json
     new = tuple.__new__  # Frame.trusted without the call: the reader checked the frames
     for block in read_log_columns(file):
         times = block.times
@@ -233,10 +233,14 @@ def _json_lines(decoder: Decoder, file: str, output: _Output,
                     json_times(times), times, block.ids, block.data, block.extended,
                     strict=True):
                 parts = raw_json(can_id, extended)
-                if parts is None:
+                if parts is not None:
+                    add(f'{{"time":{stamp}{parts[0]}{data.hex()}{parts[1]}')
+                    continue
+                rest = json_rest(can_id, extended, data, time)
+                if rest is None:
                     add(json_line(new(Frame, (can_id, data, extended)), time))
                 else:
-                    add(f'{{"time":{stamp}{parts[0]}{data.hex()}{parts[1]}')
+                    add(f'{{"time":{stamp}{rest}')
         output.write()
 
 
@@ -260,6 +264,9 @@ def _json_rows(decoder: Decoder, block: FrameColumns, add: Callable[[str], None]
 
 def _text_lines(decoder: Decoder, file: str, output: _Output, unreadable: UnreadableCount,
                 progress: Progress | None, absolute: bool) -> None:
+    """A block of the log at a time (read_log_columns: a candump log's plain blocks read
+    whole); another ECU's frame's text a lookup, a PDO's written without an Event
+    (Decoder.text)."""
     lines = output.lines
     add = lines.append
     task = progress.add_task("decode") if progress is not None else None
@@ -268,23 +275,29 @@ def _text_lines(decoder: Decoder, file: str, output: _Output, unreadable: Unread
     start: float | None = None
     idents = _IdentColumns()
     text_of = decoder.text
-    for timestamp, item in read_log(file):
-        if isinstance(item, Frame):
-            frame, event = item, text_of(item, timestamp)
-        elif isinstance(item, UnreadableLine):
-            unreadable.add(item)
-            add(_unreadable_text(item, start, absolute))
-            continue
-        else:
-            other = other_event(decoder, item)
-            frame, event = other.frame, str(other)
-        ident = idents[frame.can_id, frame.extended]
-        if absolute:
-            shown = iso_utc(timestamp)
-        else:
-            start = timestamp if start is None else start
-            shown = f"{timestamp - start:12.6f}"
-        add(f"{shown}  {ident}  {frame.data.hex(' ').upper():<23}  {event}")
+    new = tuple.__new__  # Frame.trusted without the call: the reader checked the frames
+    for block in read_log_columns(file):
+        others = block.others
+        for row, (timestamp, row_id, row_data, row_extended) in enumerate(zip(
+                block.times, block.ids, block.data, block.extended, strict=True)):
+            other = others.get(row) if others else None
+            if other is None:
+                can_id, data, extended = row_id, row_data, row_extended
+                event = text_of(new(Frame, (can_id, data, extended)), timestamp)
+            elif isinstance(other, UnreadableLine):
+                unreadable.add(other)
+                add(_unreadable_text(other, start, absolute))
+                continue
+            else:
+                decoded = other_event(decoder, other)
+                can_id, data, extended = decoded.frame
+                event = str(decoded)
+            if absolute:
+                shown = iso_utc(timestamp)
+            else:
+                start = timestamp if start is None else start
+                shown = f"{timestamp - start:12.6f}"
+            add(f"{shown}  {idents[can_id, extended]}  {data.hex(' ').upper():<23}  {event}")
         if len(lines) >= _BATCH:
             output.write()
             if progress is not None and task is not None:

@@ -25,10 +25,11 @@ from blinkcan.decode.describers import (  # listing, mask_listing, numbers: kept
     listing,
     mask_listing,
     numbers,
-    pdo_describer,
+    pdo_describers,
 )
 from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.decode.nodes import DevicesByNode, split_devices
+from blinkcan.devices.colours import BacklightColour
 from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS as J1939_DEFAULT_ADDRESS
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.objects import ObjectEntry
@@ -78,6 +79,8 @@ _SDO_KEPT = 4096
 _IDENTITY = frozenset({0x1000, 0x100B})
 #: J1939 keypad frames whose meaning is kept (then they start over)
 _J1939_KEPT = 4096
+#: lines a PDO or heartbeat writer keeps by data (then they start over): a few kB a route
+_WRITTEN_KEPT = 64
 #: routes kept: every 11-bit identifier, and 29-bit ones the J1939 keypad may use up to this
 _ROUTES_KEPT = 2048 + 256
 _dumps = orjson.dumps
@@ -160,6 +163,8 @@ _NO_FIELDS: dict[str, Any] = {}  # shared, never written
 #: before and after the data, and its event as text (Decoder._keep_raw)
 _Raw = tuple[tuple[str, "int | None", "str | None", dict[str, Any]], str, str, str]
 _new_tuple = tuple.__new__
+#: a route's JSON line after the time, from the frame's data (None: the Event's to write)
+_Writer = Callable[[bytes], "str | None"]
 _BOOT_UP = bytes((NmtState.BOOT_UP,))
 
 
@@ -246,8 +251,12 @@ class Decoder:
         #: key-state routes: (node, shift, mask) of the keys in the frame
         self._keyed: dict[tuple[int, bool], tuple[int, int, int]] = {}
         self._json_bodies: dict[object, str] = {}
-        #: routes that write their JSON line without an Event (the PDOs: most of a log)
-        self._json_routes: dict[tuple[int, bool], Callable[[Frame, float], str | None]] = {}
+        #: 11-bit identifiers whose JSON line after the time is written from the data alone,
+        #: without an Event (PDOs, heartbeats: most of the devices' frames); None from one for
+        #: a frame it leaves to the Event (a PDO too short)
+        self._writers: dict[int, _Writer] = {}
+        #: the same for the one-line text (:meth:`text`): PDOs
+        self._text_writers: dict[int, Callable[[bytes], str]] = {}
         #: per route: [cache hits, cache misses]; routes whose frames rarely repeat go uncached
         self._cache_stats: dict[tuple[int, bool], list[int]] = {}
         self._uncached: set[tuple[int, bool]] = set()
@@ -354,7 +363,8 @@ class Decoder:
         return served is not None and served[0][3] is event.fields
 
     def text(self, frame: Frame, time: float = 0.0) -> str:
-        """``str(decode(frame, time))``: another ECU's frame is a lookup."""
+        """``str(decode(frame, time))``: another ECU's frame is a lookup, a PDO's text is
+        written without an Event."""
         if frame[2]:
             text = self._foreign.get(frame[0])
             if text is not None:
@@ -363,6 +373,9 @@ class Decoder:
             raw = self._raw_standard.get(frame[0])
             if raw is not None:
                 return raw[3]
+            writer = self._text_writers.get(frame[0])
+            if writer is not None:  # a PDO: its text without the Event (Decoder._pdo_routes)
+                return writer(frame[1])
         return str(self.decode(frame, time))
 
     def json_line(self, frame: Frame, time: float = 0.0) -> str:
@@ -373,31 +386,15 @@ class Decoder:
         that route's frames do repeat. PDOs write their line without building an Event.
         """
         can_id, data, extended = frame
-        if extended:  # another ECU's frame: a lookup, and to_json's line written directly
-            text = self._foreign.get(can_id)
-            if text is not None:  # the text has no character JSON escapes
-                return (f'{{"time":{_stamp(time)},"id":{can_id},"extended":true,"data":'
-                        f'"{data.hex()}","kind":"frame","node":null,"device":null,"text":'
-                        f'"{text}"}}')
-            known = self._j1939_known.get(frame)  # a J1939 keypad frame seen before
-            if known is not None and known[1] is not None and \
-                    known[2] == len(self.j1939.addresses):  # (Decoder._extended)
-                return f'{{"time":{_stamp(time)},{known[1]}'
+        rest = self.json_rest(can_id, extended, data, time)
+        if rest is not None:
+            return f'{{"time":{_stamp(time)}{rest}'
+        if extended:
             self._served = None
             return self._line_of(self.decode(frame, time), time)
-        raw = self._raw_standard.get(can_id)
-        if raw is not None:  # a frame no device sends: its line around time and data
-            return f'{{"time":{_stamp(time)}{raw[1]}{data.hex()}{raw[2]}'
         if can_id & 0x780 in _SDO_FUNCTIONS and can_id & 0x7F:  # Decoder._route: SDO
-            seen = self._sdo_seen(frame, time)
-            if seen is None:
-                self._served = None
-                return self._line_of(self._sdo_new(frame, time), time)
-            kind, kept = seen
-            if kept[1] is not None:  # its JSON after the time, written before
-                return f'{{"time":{_stamp(time)},{kept[1]}'
-            self._served = kept
-            return self._line_of(_new_tuple(Event, (time, frame, kind, *kept[0])), time)
+            self._served = None  # not one seen before (json_rest)
+            return self._line_of(self._sdo_new(frame, time), time)
         key = (can_id, extended)
         keyed = self._keyed.get(key)
         cache_key: object = frame
@@ -416,17 +413,55 @@ class Decoder:
                 if body is not None:
                     self._cache_stats[key][0] += 1
                     return f'{{"time":{_stamp(time)},{body}'
-        fast = self._json_routes.get(key)
-        line = fast(frame, time) if fast is not None else None
-        kind = Kind.PDO
-        if line is None:
-            self._served = None
-            event = self.decode(frame, time)
-            line, kind = self._line_of(event, time), event.kind
-        if cached and ((key in self._pure and kind is not Kind.BOOT_UP) or (
+        self._served = None
+        event = self.decode(frame, time)
+        line, kind = self._line_of(event, time), event.kind
+        if cached and can_id not in self._writers and (
+                (key in self._pure and kind is not Kind.BOOT_UP) or (
                 keyed is not None and kind is Kind.PDO)):
             self._remember(key, cache_key, time, line)
         return line
+
+    def json_rest(self, can_id: int, extended: bool, data: bytes, time: float) -> str | None:
+        """What follows ``{"time":`` and the time in :meth:`json_line`'s line, where it is
+        written without an Event: another ECU's frame (:meth:`raw_json`), a device's PDO or
+        heartbeat (from its data alone: Decoder._writers), an SDO or J1939 keypad frame that
+        makes a kept event again; None for any other frame (then :meth:`json_line` it), the
+        decoder's state untouched. For a batch writer that writes a block's times at once
+        (decode --json): most frames cost a lookup and a describer, no Frame, no Event."""
+        if extended:
+            text = self._foreign.get(can_id)
+            if text is not None:  # the text has no character JSON escapes
+                parts = self._foreign_json.get(can_id) or self.raw_json(can_id, True)
+                if parts is not None:
+                    return f"{parts[0]}{data.hex()}{parts[1]}"
+            known = self._j1939_known.get(_new_tuple(Frame, (can_id, data, True)))
+            if known is not None and known[1] is not None and \
+                    known[2] == len(self.j1939.addresses):  # (Decoder._extended)
+                body: str = known[1]
+                return "," + body
+            return None
+        raw = self._raw_standard.get(can_id)
+        if raw is not None:  # a frame no device sends: its line around time and data
+            return f"{raw[1]}{data.hex()}{raw[2]}"
+        writer = self._writers.get(can_id)
+        if writer is not None:
+            return writer(data)
+        if can_id & 0x780 in _SDO_FUNCTIONS and can_id & 0x7F:  # Decoder._route: SDO
+            frame = _new_tuple(Frame, (can_id, data, False))
+            seen = self._sdo_seen(frame, time)
+            if seen is None:
+                return None
+            kind, kept = seen
+            written: str | None = kept[1]
+            if written is None:  # its JSON after the time, written once (_line_of)
+                self._served = kept
+                line = self._line_of(_new_tuple(Event, (1.0, frame, kind, *kept[0])), 1.0)
+                written = kept[1]
+                if written is None:
+                    return line[len(_TIME_FIELD + "1.0"):]
+            return "," + written
+        return None
 
     def _line_of(self, event: Event, time: float) -> str:
         """The event's JSON line; where it is a kept one (``_served``: an SDO or J1939 event
@@ -499,6 +534,7 @@ class Decoder:
             return lambda f, t: Event(t, f, Kind.SYNC, "SYNC")
         function, node = can_id & 0x780, can_id & 0x7F
         if function == HEARTBEAT and node:
+            self._writers[can_id] = self._heartbeat_writer(can_id)
             return self._heartbeat  # its boot-up resets key state: never cached (json_line)
         if function in (SDO_TX, SDO_RX) and node:
             self._pure.discard(key)
@@ -514,7 +550,10 @@ class Decoder:
                         self._pure.discard(key)
                         shift, mask = keyed
                         self._keyed[key] = (node, shift, mask & ((1 << device.face.keys) - 1))
-                    route, self._json_routes[key] = self._pdo_routes(layout, node, device)
+                    route, writer, self._text_writers[can_id] = self._pdo_routes(
+                        layout, node, device)
+                    if writer is not None:
+                        self._writers[can_id] = writer
                     return route
         return self._unknown
 
@@ -535,7 +574,8 @@ class Decoder:
             del self._routes[key]
             self._pure.discard(key)
             self._keyed.pop(key, None)
-            self._json_routes.pop(key, None)
+            self._writers.pop(key[0], None)
+            self._text_writers.pop(key[0], None)
             self._cache_stats.pop(key, None)
             self._uncached.discard(key)
         self._json_bodies.clear()
@@ -609,13 +649,14 @@ class Decoder:
     # -- PDOs -------------------------------------------------------------------------------------
 
     def _pdo_routes(self, layout: PdoLayout, node: int, description: DeviceDescription
-                    ) -> tuple[Callable[[Frame, float], Event],
-                               Callable[[Frame, float], str | None]]:
-        """The PDO's two renderings of one describer (decode/describers.py): its Event, and
-        its JSON line written directly (the same text as the Event's ``to_json``, without
-        the Event and the dict in between; None for a frame too short, which the Event
-        route names)."""
-        describe = pdo_describer(layout, description, node, self._keys)
+                    ) -> tuple[Callable[[Frame, float], Event], _Writer | None,
+                               Callable[[bytes], str]]:
+        """The PDO's three renderings of one describer (decode/describers.py): its Event, its
+        JSON line after the time written from the data (:meth:`json_rest`: the same text as
+        the Event's ``to_json``, without the Event and the dicts in between), and its
+        one-line text (:meth:`text`, ``str(event)``). No JSON writer (None) where a name of
+        the layout would need JSON escapes (none does: the Event writes them)."""
+        describe, describe_json = pdo_describers(layout, description, node, self._keys)
         device, name, min_length = description.kind, layout.name, layout.min_length
         too_short = f"{layout.label}: too short"
 
@@ -626,19 +667,63 @@ class Decoder:
             text, fields = describe(data)
             return Event(time, frame, Kind.PDO, text, node, device, {"pdo": name, **fields})
 
-        head = f',"id":{layout.cob_id(node)},"extended":false,"data":"'
-        middle = f'","kind":"pdo","node":{node},"device":{_encode_text(device)},'
         who = f"{device} {node:02X}h: "
+        short_text = who + too_short
 
-        def json_route(frame: Frame, time: float) -> str | None:
-            data = frame.data
+        def text_writer(data: bytes) -> str:
             if len(data) < min_length:
-                return None
-            text, fields = describe(data)
-            rest = _encode({"text": who + text, "pdo": name, **fields})  # to_json's order
-            return f'{{"time":{_stamp(time)}{head}{data.hex()}{middle}{rest[1:]}'
+                return short_text
+            return who + describe_json(data)[0]
 
-        return route, json_route
+        names = [device, name, too_short, *(colour.label for colour in BacklightColour)]
+        for signal in layout.signals:
+            names += [signal.name, signal.label, signal.item or "", signal.unit]
+        if not layout.signals or any(_encode_text(text) != f'"{text}"' for text in names):
+            return route, None, text_writer
+        head = f',"id":{layout.cob_id(node)},"extended":false,"data":"'
+        named = f'"node":{node},"device":"{device}","text":"{who}'
+        middle = f'","kind":"pdo",{named}'
+        short = f'","kind":"frame",{named}{too_short}"}}'
+        after_text = f'","pdo":"{name}",'
+        pure = keyed_signal(layout) is None
+        written: dict[bytes, str] = {}  # a pure PDO's lines by data: periodic ones repeat
+
+        def writer(data: bytes) -> str:
+            if pure:
+                rest = written.get(data)
+                if rest is not None:
+                    return rest
+            if len(data) < min_length:
+                return f"{head}{data.hex()}{short}"
+            text, members = describe_json(data)
+            rest = f"{head}{data.hex()}{middle}{text}{after_text}{members}}}"
+            if pure:
+                if len(written) >= _WRITTEN_KEPT:
+                    written.clear()
+                written[data] = rest
+            return rest
+
+        return route, writer, text_writer
+
+    def _heartbeat_writer(self, can_id: int) -> _Writer:
+        """A node's heartbeat lines after the time by data (a node sends a few states), made
+        by the Event route once; a boot-up forgets the node's keys each time (PKP §10)."""
+        node = can_id & 0x7F
+        written: dict[bytes, str] = {}
+
+        def writer(data: bytes) -> str:
+            rest = written.get(data)
+            if rest is None:
+                event = self._heartbeat(_new_tuple(Frame, (can_id, data, False)), 1.0)
+                rest = _encode(event.to_json())[len(_TIME_FIELD + "1.0"):]
+                if len(written) >= _WRITTEN_KEPT:
+                    written.clear()
+                written[data] = rest
+            elif data[:1] == _BOOT_UP:
+                self._keys.pop(node, None)
+            return rest
+
+        return writer
 
     # -- SDO --------------------------------------------------------------------------------------
 

@@ -105,7 +105,7 @@ ACTIONS: Mapping[str, Action] = MappingProxyType({action.name: action for action
            lambda t, a, now: t.set_digital_input(a["input"], bool(a["level"]), now)),
     Action("blow_fuse", "blow an output's fuse (the output goes to FAULT)", (_PIN,),
            lambda t, a, now: t.blow_fuse(a["pin"], now)),
-    Action("replace_fuse", "replace an output's fuse (clears the fault)", (_PIN,),
+    Action("replace_fuse", "replace an output's fuse (its FAULT stays until a RESET)", (_PIN,),
            lambda t, a, now: t.replace_fuse(a["pin"], now)),
     Action("input_high", "drive a pin's input high", (_PIN,),
            lambda t, a, now: t.set_input(a["pin"], True, now)),
