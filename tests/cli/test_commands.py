@@ -208,6 +208,8 @@ def test_keybox_pwm(bench: Bench) -> None:
         "keybox 0Ch: output 12 and 13 PWM at 30 %")
     assert [emulator.snapshot(keybox)["pins"][i]["pwm_percent"] for i in (11, 12)] == [30, 30]
     assert_one_line_error(invoke("keybox", "pwm", "4", "5", *bus), "PWM pin 4 outside 12..13")
+    # a pin named twice is one pin (was "output 13 and 13")
+    assert run("keybox", "pwm", "13,13", "2", *bus).strip() == "keybox 0Ch: output 13 PWM at 20 %"
 
 
 def test_nmt_commands(bench: Bench) -> None:

@@ -107,3 +107,16 @@ def test_a_conversion_whose_last_write_fails_leaves_no_temporary_file(tmp_path: 
                             timeout=120, check=False)
     assert result.returncode == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["big.log"]
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full here")
+@pytest.mark.parametrize("arguments", [("export", "dbc", "keybox", "-o", "-"),
+                                       ("export", "eds", "keypad", "-o", "-")])
+def test_output_onto_a_full_device_is_one_line_saying_so(arguments: tuple[str, ...]) -> None:
+    """Standard output on a full disk (/dev/full) was "Error: cannot use: No space left on
+    device": use of what?"""
+    with open("/dev/full", "w") as full:
+        result = subprocess.run([sys.executable, "-m", "blinkcan", *arguments], stdout=full,
+                                stderr=subprocess.PIPE, text=True, timeout=120, check=False)
+    assert result.returncode == 1
+    assert result.stderr == "Error: cannot write the output: No space left on device\n"

@@ -683,8 +683,8 @@ def pwm(target: Target, pins: str, duty: str) -> None:
     blinkcan keybox pwm 12 5
     blinkcan keybox pwm 12,13 30%
     """
-    chosen = [_whole("PWM pin", pin, _pwm_pins, "PINS") for pin in pins.split(",")
-              if pin.strip()]
+    chosen = sorted({_whole("PWM pin", pin, _pwm_pins, "PINS") for pin in pins.split(",")
+                     if pin.strip()})  # a pin named twice is one pin
     levels = max((d.face.pwm_duty_max for d in _candidates(target[0])), default=0)
     step = 100 // levels if levels else 100  # KBX §22: 0Ah = 100 %, steps of 10 %
     percent = duty.strip().endswith("%")

@@ -11,6 +11,7 @@ Every error ends the same way: one line on stderr and a non-zero exit (2 for a u
 
 from __future__ import annotations
 
+import errno
 import logging
 import sys
 from collections.abc import Sequence
@@ -163,8 +164,17 @@ class BlinkcanGroup(click.Group):
 
 
 def _os_error(error: OSError) -> str:
-    where = f" {error.filename}" if error.filename else ""
-    return f"cannot use{where}: {error.strerror or error}"
+    """One line for an OSError: the file it names, else what a nameless one is (a full disk
+    under the output: standard output, or a pipe)."""
+    if error.filename:
+        return f"cannot use {error.filename}: {error.strerror or error}"
+    if error.errno in _NO_ROOM:
+        return f"cannot write the output: {error.strerror or error}"
+    return f"{error.strerror or error}"
+
+
+#: errors of a write that found no room (a full disk, a quota, a file size limit)
+_NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 
 
 def _interrupted() -> None:

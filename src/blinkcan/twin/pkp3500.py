@@ -189,12 +189,18 @@ class Pkp3500Twin(KeypadTwin):
             raise ValueError(f"volts must be a number >= 0, not {volts!r}")
         check_time("now", now)
         self.note_time(now)
-        self._counts[input] = min(ANALOG_COUNTS, round(volts * 100))  # 10 mV per count (M44)
+        # 10 mV per count (M44); above full scale, however far (1e308 V), full scale (M45)
+        self._counts[input] = min(ANALOG_COUNTS, round(min(volts, ANALOG_COUNTS / 100) * 100))
         self._refresh_inputs()
         return []
 
     def set_digital_input(self, input: int, level: bool, now: float) -> list[Frame]:
-        """Drive input IN0..IN3 high (5 V) or low (0 V); 2004h reads it from 2.5 V (M46)."""
+        """Drive input IN0..IN3 high (5 V) or low (0 V); 2004h reads it from 2.5 V (M46).
+        ``level``: a bool, or 1 / 0."""
+        if not isinstance(level, int):  # bool is an int; NaN, "1" and None were "high"
+            raise TypeError(f"level must be a bool (or 1 / 0), not {type(level).__name__}")
+        if level not in (0, 1):
+            raise ValueError(f"level must be 0 or 1 (or a bool), not {level!r}")
         return self.set_analog(input, 5.0 if level else 0.0, now)
 
     def _refresh_inputs(self) -> None:
