@@ -25,8 +25,10 @@ it last stored, and every stored write aborts 0606 0000h until a reset finds the
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from enum import Enum
+from fractions import Fraction
 from typing import Any
 
 from blinkcan.devices.common import RESTORE_SIGNATURE, ConsumerHeartbeat
@@ -185,6 +187,18 @@ class CanopenTwin:
     def boot_time(self) -> float:
         """When the device last booted (power-on or reset)."""
         return self._boot_time
+
+    def steps_since_boot(self, now: float, period: float, width: int) -> int:
+        """Whole ``period`` s steps from the last boot to ``now`` on a ``width``-bit counter
+        that wraps (the key PDO's tick timer: PKP rev 1.5 §11 note, errata P8). Any finite
+        ``now`` gives a count, an absurd one too: where the quotient overflows a float, the
+        steps are counted exactly (a pure twin never crashes on a finite time); a time that is
+        no number of seconds (inf, nan) is refused with ValueError."""
+        steps = (check_time("now", now) - self._boot_time) / period
+        if math.isfinite(steps):
+            return int(steps) % (1 << width)
+        exact = (Fraction(now) - Fraction(self._boot_time)) / Fraction(period)
+        return int(exact) % (1 << width)
 
     @property
     def last_time(self) -> float:

@@ -150,6 +150,7 @@ class KeypadTwin(CanopenTwin):
             self.save_settings()
         self._face = description.face
         self._key_pdo = description.pdo("key_state")
+        self._tick_width = self._key_pdo.signal("tick").length  # bits: PKP §11, errata P8
         self._keys = 0
         self._show: ShowPlayer | None = None
         self._show_mode = 0
@@ -244,7 +245,7 @@ class KeypadTwin(CanopenTwin):
 
     def _key_state_frame(self, now: float) -> Frame:
         # errata P8: byte 4 advances every 100 ms from power-on and wraps
-        tick = int((now - self.boot_time) / TICK_PERIOD_S) & 0xFF
+        tick = self.steps_since_boot(now, TICK_PERIOD_S, self._tick_width)
         return Frame(self._key_pdo.cob_id(self.node_id),
                      self._key_pdo.encode({"keys": self._keys, "tick": tick}))
 
