@@ -55,7 +55,10 @@ def test_asyncio_api_has_the_same_names(rig: Rig) -> None:
         await keybox.on(2)
         assert await keybox.state(2) == "high"
         events = keypad.events(timeout=1.0)
-        await asyncio.sleep(0.05)
+        # the keypad sends its key state once started (PKP §10): wait for the driver's NMT
+        # start to reach it, however loaded the machine (a fixed 0.05 s was flaky)
+        await asyncio.to_thread(rig.wait_until, lambda: rig.emulator.snapshot(rig.keypad)[
+            "nmt_state"] == "operational")
         rig.emulator.press(rig.keypad, 9)
         event = await events.__anext__()
         assert (event.key, event.action) == (9, "press")
