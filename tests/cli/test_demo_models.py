@@ -74,3 +74,39 @@ def test_demo_model_mistakes_are_one_line(args: list[str], message: str) -> None
     assert result.exit_code == 2, result.output
     assert len(result.output.strip().splitlines()) == 1, result.output
     assert message in result.output
+
+
+def _section(lines: list[str], title: str) -> list[str]:
+    """The lines after the step titled ``title``, up to the next title."""
+    after = lines[lines.index(title) + 1:]
+    return after[:next((n for n, line in enumerate(after) if line.startswith("==")),
+                       len(after))]
+
+
+@pytest.mark.parametrize(("spec", "protocol"), CASES)
+def test_a_step_whose_effect_comes_later_shows_it(spec: str, protocol: str) -> None:
+    """A new fuse sends nothing (a latched FAULT stays until RESET, 2001h value 02h: Keybox
+    errata K12), so the host then resets the output and the frame shows; a voltage on an
+    analog input shows in the next periodic analog PDO, which the step waits for. With
+    ``--pause 0`` both steps showed no frame at all."""
+    result = CliRunner().invoke(cli, ["demo", "--model", spec, "--protocol", protocol,
+                                      "--pause", "0"])
+    assert result.exit_code == 0, result.output
+    twin = build_twin(spec)
+    try:
+        steps = {action.name: (title, values) for title, action, values in scripted_steps(twin)}
+    finally:
+        twin.close()
+    lines = result.output.splitlines()
+    if "replace_fuse" in steps:
+        title, values = steps["replace_fuse"]
+        after = lines[lines.index(f"== {title}") + 1:]
+        reset = f"== the host resets output {values['pin']}"
+        assert any(line.startswith(reset) for line in after), result.output
+        shown = _section(after, next(line for line in after if line.startswith(reset)))
+        assert any(" > " in line and "2001h" in line for line in shown), result.output
+    if "set_analog" in steps:
+        title, values = steps["set_analog"]
+        shown = _section(lines, f"== {title}")
+        volts = f"in{values['input']} {values['volts']:g} V"
+        assert any(" < " in line and volts in line for line in shown), (volts, result.output)

@@ -5,6 +5,8 @@ times are seconds since the start, or with --absolute the wall clock (ISO 8601 U
 from __future__ import annotations
 
 import io
+import os
+import random
 import re
 import signal
 import subprocess
@@ -15,6 +17,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import IO, Any
 
+import can
 import pytest
 from click.testing import CliRunner
 from rich.console import Console
@@ -213,3 +216,62 @@ def test_emulate_in_a_pipe_writes_whole_lines_from_its_start() -> None:
         else:
             assert all(EMULATE_LINE.match(line) for line in frames), frames
             assert all(float(line.split()[0]) < 10 for line in boot_ups)  # not the uptime
+
+
+@pytest.mark.parametrize("command", [["monitor", "--speed", "0", "--file"], ["decode"]])
+def test_a_reader_that_closes_the_pipe_ends_the_command_quietly(tmp_path: Path,
+                                                                command: list[str]) -> None:
+    """``blinkcan monitor --file LOG | head -2`` exited 1, silently (rich's answer to a broken
+    pipe), where ``decode`` exits 0: a reader closing stdout is the reader's choice, not an
+    error. Both now stop at once, exit 0, no traceback."""
+    path = _candump(tmp_path, [(0.01 * n, "715#05") for n in range(20000)])  # > a pipe's buffer
+    child = subprocess.Popen([sys.executable, "-m", "blinkcan", *command, str(path)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout is not None
+    assert child.stderr is not None
+    try:
+        head = [child.stdout.readline() for _ in range(2)]
+        child.stdout.close()
+        assert child.wait(timeout=60) == 0
+        errors = child.stderr.read()
+    finally:
+        child.kill()
+    assert all(EVENT_LINE.match(line) for line in head), head
+    assert errors.startswith("no --device given: assuming"), errors
+    assert errors.count("\n") == 1, errors
+
+
+def test_a_reader_that_closes_the_pipe_ends_the_live_monitor_quietly() -> None:
+    """The live monitor too: ``blinkcan monitor | head -2`` on a bus that keeps sending."""
+    channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    port = random.randint(40000, 60000)
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("CAN_")}
+    child = subprocess.Popen(
+        [sys.executable, "-m", "blinkcan", "monitor", "-i", "udp_multicast", "-c", channel,
+         "--bus-kwargs", f"port={port}", "hop_limit=0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment)
+    assert child.stdout is not None
+    assert child.stderr is not None
+    stop = threading.Event()
+
+    def send() -> None:  # a heartbeat every 10 ms until the monitor is gone
+        with can.Bus(interface="udp_multicast", channel=channel, port=port,
+                     hop_limit=0) as bus:
+            while not stop.wait(0.01):
+                bus.send(can.Message(arbitration_id=0x715, data=b"\x05",
+                                     is_extended_id=False))
+
+    sender = threading.Thread(target=send, daemon=True)
+    sender.start()
+    try:
+        head = [child.stdout.readline() for _ in range(2)]
+        child.stdout.close()
+        assert child.wait(timeout=60) == 0
+        errors = child.stderr.read()
+    finally:
+        stop.set()
+        child.kill()
+        sender.join(timeout=10)
+    assert all(EVENT_LINE.match(line) for line in head), head
+    assert errors.startswith("no --device given: assuming"), errors
+    assert errors.count("\n") == 1, errors

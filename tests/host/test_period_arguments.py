@@ -117,3 +117,20 @@ def test_a_wait_no_timer_can_hold_is_refused_before_anything_is_sent(
         with pytest.raises(ValueError, match=r"timeout|wait"):
             calls[call]()
         assert len(rig.frames) == before
+
+
+@pytest.mark.parametrize("call", ["set_heartbeat", "monitor_heartbeat", "set_periodic_key_state"])
+@pytest.mark.parametrize("period", [0.02, 3.0])
+def test_a_j1939_period_is_refused_in_seconds(call: str, period: float) -> None:
+    """In J1939 mode the periods are §17/§18's bytes (x 10 ms, 05h..FEh): a period outside
+    was refused as "heartbeat period must be 0x5..0xfe, not 0x2", in the command's units."""
+    with Rig() as rig:
+        rig.add(KeypadTwin(node_id=0x15, protocol="j1939"))
+        keypad = Keypad(rig.bus, protocol="j1939")
+        rig.settle()
+        before = len(rig.frames)
+        with pytest.raises(ValueError, match="period") as refused:
+            getattr(keypad, call)(period)
+        assert "0.05..2.54 s" in str(refused.value)
+        assert f"not {period:g}" in str(refused.value)
+        assert len(rig.frames) == before

@@ -13,6 +13,8 @@ from typing import Any
 
 import pytest
 
+from blinkcan.host.events import LONGEST_EVENT_WAIT
+from blinkcan.host.pkp3500 import AsyncPkp3500Keypad
 from blinkcan.host.registry import driver_class
 from blinkcan.runtime.virtual_waits import RECV_FOREVER
 from blinkcan.testing import Rig
@@ -92,4 +94,44 @@ def test_closing_the_driver_ends_the_iterator_at_once() -> None:
         start = rig.now
         rig.scheduler.call_at(start + 1.0, keypad.close)
         assert list(keypad.events()) == []
+        assert rig.now - start == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("timeout", [1e308, LONGEST_EVENT_WAIT * 2, float("nan"), -1.0,
+                                     float("inf")])
+@pytest.mark.parametrize(("case", "name"), ITERATORS)
+def test_an_iterator_refuses_a_timeout_out_of_range_before_it_waits(case: Case, name: str,
+                                                                     timeout: float) -> None:
+    """A timeout beyond LONGEST_EVENT_WAIT ran the simulation that long
+    (``encoder_events(timeout=1e308)`` on a PKP-3500-MT never ended: 80 ms analog PDOs for
+    1e308 virtual s); on a real bus ``queue.get`` raised OverflowError at the first wait. Now a
+    ValueError naming the range, at the call, with the clock where it was."""
+    rig, driver = _busy_rig(case)
+    with rig:
+        start = rig.now
+        with pytest.raises(ValueError, match=r"timeout must be .*0.*3600.*seconds"):
+            getattr(driver, name)(timeout=timeout)
+        assert rig.now == start
+        driver.close()
+
+
+@pytest.mark.parametrize("name", ["events", "encoder_events", "health_events"])
+def test_an_async_iterator_refuses_a_timeout_out_of_range(name: str) -> None:
+    """The asyncio face's iterators take the same range (checked at the call)."""
+    rig = Rig()
+    twin = rig.add(build_twin("pkp-3500-mt"))
+    with rig:
+        keypad = AsyncPkp3500Keypad(rig.bus, twin.node_id)
+        with pytest.raises(ValueError, match=r"timeout must be .*0.*3600.*seconds"):
+            getattr(keypad, name)(timeout=1e308)
+        keypad.device.close()
+
+
+def test_the_longest_timeout_is_taken() -> None:
+    rig, keypad = _busy_rig(next(case for case in CASES if case.canopen
+                                 and case.model.name == "pkp-2600-si"))
+    with rig:
+        start = rig.now
+        rig.scheduler.call_at(start + 1.0, keypad.close)
+        assert list(keypad.events(timeout=LONGEST_EVENT_WAIT)) == []
         assert rig.now - start == pytest.approx(1.0)

@@ -334,3 +334,29 @@ def test_a_frame_in_flight_when_the_bus_goes_down_is_not_delivered() -> None:
         rig.advance(0.01)
         assert twin.snapshot()["nmt_state"] == "pre-operational"  # the start never arrived
         assert [frame.can_id for _, frame in rig.frames].count(0x000) == 1  # but it was sent
+
+
+def test_recv_zero_takes_a_frame_due_at_this_instant() -> None:
+    """A frame sent at this virtual instant is on the wire now (latency 0): ``recv(0)``
+    returns it, as python-can's virtual bus returns a queued frame, without moving the clock
+    (it returned None while ``recv(>0)`` delivered it at the same time)."""
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))  # its boot-up goes on the wire at 0.0
+        message = rig.bus.recv(0)
+        assert message is not None
+        assert (message.arbitration_id, bytes(message.data)) == (0x70C, b"\x00")
+        assert message.timestamp == 0.0
+        assert rig.now == 0.0
+        assert rig.bus.recv(0) is None  # nothing else is due now
+
+
+def test_recv_zero_leaves_a_frame_the_wire_has_not_carried_yet() -> None:
+    """With a latency the frame is genuinely not due: recv(0) is None, the clock stays, and
+    the frame comes when the wire has carried it."""
+    with Rig(latency=0.001) as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))
+        assert rig.bus.recv(0) is None
+        assert rig.now == 0.0
+        message = rig.bus.recv(0.01)
+        assert message is not None
+        assert message.timestamp == pytest.approx(0.001)

@@ -82,3 +82,49 @@ def test_a_notifier_on_the_rig_bus_still_hears_every_frame() -> None:
         rig.advance(0.25)
         notifier.stop()
         assert heard == [0x70C] * 3
+
+
+SYNC = can.Message(arbitration_id=0x080, data=b"", is_extended_id=False)
+
+
+def test_send_from_another_thread_is_refused_and_moves_nothing() -> None:
+    """``rig.bus.send()`` from another thread wrote the wire log and the scheduler's queue
+    from that thread, racing the rig's; refused as recv() is, nothing on the wire."""
+    with Rig() as rig:
+        rig.add(KeyboxTwin(node_id=0x0C))
+        rig.advance(0.05)
+        start, sent = rig.now, len(rig.frames)
+        error = _in_thread(lambda: rig.bus.send(SYNC))
+        assert isinstance(error, BlinkcanError), error
+        assert isinstance(error, RuntimeError)
+        text = str(error)
+        assert "rig.bus.send()" in text, text
+        assert "'reader'" in text, text
+        assert "'MainThread'" in text, text
+        rig.advance(0.05)
+        assert len(rig.frames) == sent
+        assert rig.now == pytest.approx(start + 0.05)
+        rig.bus.send(SYNC)  # the rig's own thread still sends
+        rig.advance(0.01)
+        assert [frame.can_id for _, frame in rig.frames[sent:]] == [0x080]
+
+
+def test_a_notifier_listener_and_send_periodic_still_send() -> None:
+    """What the rig drives sends from the rig's thread: a listener answering a frame, a
+    ``send_periodic`` task (canopen's and cantools' periodic messages)."""
+    with Rig() as rig:
+        class Answer(can.Listener):
+            def on_message_received(self, msg: can.Message) -> None:
+                if msg.arbitration_id == 0x70C:
+                    rig.bus.send(SYNC)
+
+        notifier = can.Notifier(rig.bus, [Answer()])
+        task = rig.bus.send_periodic(can.Message(arbitration_id=0x123, data=b"\x01",
+                                                 is_extended_id=False), 0.1)
+        rig.add(KeyboxTwin(node_id=0x0C))
+        rig.advance(0.25)
+        task.stop()
+        notifier.stop()
+        ids = [frame.can_id for _, frame in rig.frames]
+        assert ids.count(0x080) == 1  # the boot-up's answer
+        assert ids.count(0x123) == 3

@@ -6,9 +6,11 @@ an LED steady and one blinking, a knob's ring LEDs, an output switched on and on
 PWM (:func:`host_steps`). Then a hand does to it, once each, everything its face has
 (twin/actions.py: press and release a key, turn a knob, set an input, blow and replace a fuse,
 switch the power off and on): the fuse it blows is the output's that is on, so the fault
-shows. A new model's face brings its scenario with it. Every frame is a line: seconds since
-the start, the direction, the frame and its meaning. The emulator runs in real time;
-``pause`` is the time between the steps.
+shows. What a step leaves for later is shown after it (:func:`_after`): a new fuse leaves
+FAULT latched, so the host then resets the output; a voltage shows in the next periodic
+analog PDO, which the step waits for. A new model's face brings its scenario with it. Every
+frame is a line: seconds since the start, the direction, the frame and its meaning. The
+emulator runs in real time; ``pause`` is the time between the steps.
 """
 
 from __future__ import annotations
@@ -119,18 +121,26 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
     twin = twins[0]
     decoder = Decoder(decoder_devices(twins))
     clock = Clock(start=time.monotonic())
-    frames = heard = 0
+    frames = heard = told = 0
 
     def show(frame: Frame, sent: bool, now: float) -> None:
-        nonlocal frames, heard
+        nonlocal frames, heard, told
         console.out(f"{clock(now):>7} {'<' if sent else '>'} {frame.can_id:03X} "
                     f"{frame.data.hex(' ').upper():<23} {decoder.text(frame, now)}",
                     highlight=False)
         frames += 1
         heard += not sent  # a frame of the host's, shown
+        told += sent  # a frame of the device's, shown
 
-    def heard_since(count: int) -> Callable[[], bool]:
-        return lambda: heard > count
+    def told_since(count: int) -> Callable[[], bool]:
+        return lambda: told > count
+
+    def host_step(step: str, command: Callable[[], object]) -> None:
+        console.out(f"== {step}", highlight=False)
+        before = heard
+        command()
+        host.run(lambda: None)  # what it sent is on the bus...
+        _shown(lambda: heard > before, lambda: frames)  # ...and shown
 
     channel = f"blinkcan-demo-{uuid.uuid4().hex[:8]}"
     title = twin.description.title
@@ -148,15 +158,13 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                 try:  # after the power cycle, as a controller does
                     for step, command in host_steps(driver, twin.description.face):
                         time.sleep(pause)
-                        console.out(f"== {step}", highlight=False)
-                        before = heard
-                        command()
-                        host.run(lambda: None)  # what it sent is on the bus...
-                        _shown(heard_since(before), lambda: frames)  # ...and shown
+                        host_step(step, command)
                     for step, action, values in scripted_steps(twin):
                         time.sleep(pause)
                         console.out(f"== {step}", highlight=False)
                         emulator.run(partial(_perform, action, twin, values))
+                        _after(action, values, driver, host_step, partial(
+                            _shown, told_since(told), lambda: frames, limit=1.0))
                     time.sleep(pause)
                     emulator.run(lambda now: None)  # what the last step sent is shown
                     _shown(lambda: True, lambda: frames)  # and the driver's answer
@@ -171,6 +179,20 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
             each.close()
     console.out(f"\n{frames} frames on the bus ({title})", highlight=False)
     return 0
+
+
+def _after(action: Action, values: dict[str, Any], driver: Any,
+           host_step: Callable[[str, Callable[[], object]], None],
+           next_frame: Callable[[], None]) -> None:
+    """Show what a hand's step left for later: the host's command that completes it
+    (``host_step(title, command)``), or the device's next frame (``next_frame()``, counted
+    from after the step ran)."""
+    if action.name == "replace_fuse":  # KBX errata K12: FAULT stays latched until RESET
+        pin = values["pin"]
+        host_step(f"the host resets output {pin} (a new fuse leaves FAULT latched until "
+                  "RESET, 2001h value 02h)", partial(driver.reset, pin))
+    elif action.name == "set_analog":  # MT §14: a periodic PDO (80 ms), the next one tells
+        next_frame()
 
 
 def _shown(first: Callable[[], bool], count: Callable[[], int], quiet: float = 0.03,

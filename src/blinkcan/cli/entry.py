@@ -5,16 +5,20 @@ whatever import it hit. So this module imports nothing before the handler is in 
 what the interpreter has loaded already (``os``, ``sys``) and ``_signal``, the built-in
 module under ``signal`` (whose own import, with ``enum``, is a window of its own).
 What runs before this module (the interpreter's start-up, ``site``, runpy finding
-``blinkcan``) is out of its reach."""
+``blinkcan``) is out of its reach. A Ctrl-C that lands in a callback whose exceptions the
+interpreter drops (an import's module-lock callback: the first lazy imports of any command) is
+raised again where the command catches it, not printed as "Exception ignored" and lost."""
 
 from __future__ import annotations
 
 import _signal  # type: ignore[import-not-found]  # see the module docstring (no stubs)
+import _thread  # built in and loaded at start-up (importlib's locks): no window
 import os
 import sys
 
 TYPE_CHECKING = False  # typing's import is a window too (tens of milliseconds)
 if TYPE_CHECKING:
+    from sys import UnraisableHookArgs
     from types import FrameType
 
 
@@ -33,8 +37,36 @@ def _interrupted(signum: int, frame: FrameType | None) -> None:
     os._exit(130)
 
 
+def _interrupt_main_soon() -> None:
+    """From a thread of its own, a moment later: SIGINT's handler runs again in the main
+    thread, out of the callback (from the hook itself it ran in the hook, and was dropped)."""
+    import time  # noqa: PLC0415 (here only: this module imports nothing before its handler)
+
+    time.sleep(0.001)
+    _thread.interrupt_main()
+
+
+def keep_interrupts_from_callbacks() -> None:
+    """A KeyboardInterrupt raised in a callback whose exceptions the interpreter ignores (the
+    weak-reference callback that frees an import's module lock, a ``__del__``) was printed as
+    "Exception ignored in ..." with a traceback, then dropped: the command ran on. Hand it to
+    the main thread again a moment later (the SIGINT handler runs then, in the command's code,
+    where the command line catches it); any other such exception goes to the hook before."""
+    before = sys.unraisablehook
+
+    def hook(unraisable: UnraisableHookArgs) -> None:
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type,
+                                                          KeyboardInterrupt):
+            _thread.start_new_thread(_interrupt_main_soon, ())
+            return
+        before(unraisable)
+
+    sys.unraisablehook = hook
+
+
 def main() -> None:
     """Run the command line, Ctrl-C quiet from the first moment to the last."""
+    keep_interrupts_from_callbacks()
     before = _signal.getsignal(_signal.SIGINT)
     quiet = before is _signal.default_int_handler  # SIGINT ignored (nohup, `&`) stays so
     if quiet:

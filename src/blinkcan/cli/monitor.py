@@ -4,12 +4,15 @@ the keypad shows them), each Keybox's outputs (PWM pins with their duty). ``--fi
 log at its own pace (``--speed``) instead of a live bus. Without ``--device`` it assumes the
 devices ``decode`` does (cli/decode.py assumed_devices), and it says so. Times: seconds since
 the first frame, ``--absolute`` the wall clock (cli/clock.py). Off a terminal (a pipe, a file)
-there is no picture: each event is one line, as ``decode`` writes it.
+there is no picture: each event is one line, as ``decode`` writes it. A reader that closes
+the pipe (``| head -2``) ends the watching, exit 0, as it ends ``decode``: the reader's choice.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
+import sys
 import time
 from collections.abc import Callable, Iterator
 
@@ -31,16 +34,35 @@ from blinkcan.cli.decode import (
     parse_devices,
 )
 from blinkcan.cli.extras import error_text
-from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
+from blinkcan.cli.render import keybox_panel, keypad_panel
 from blinkcan.cli.seconds import Factor, Seconds
 from blinkcan.cli.whole import Whole
 from blinkcan.decode import Decoder, Event
 from blinkcan.decode.eventlog import EventLog
 from blinkcan.decode.view import BusView
+from blinkcan.errors import BlinkcanError
 from blinkcan.formats.logs import LogError, read_log
 from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime import to_frame
+
+
+class _ReaderGoneError(BlinkcanError):
+    """The reader of stdout closed it (``| head -2``): nothing more to show anyone."""
+
+
+class _OutputConsole(Console):
+    """cli/render.py's ``output_console``, whose broken pipe ends the watching: rich's own
+    answer exits 1 in silence (``SystemExit(1)``), where a closed pipe is the reader's choice."""
+
+    def __init__(self) -> None:
+        super().__init__(highlight=False)
+        self.soft_wrap = not self.is_terminal  # whole lines off a terminal, as output_console
+
+    def on_broken_pipe(self) -> None:
+        self.quiet = True  # stdout to nowhere: the interpreter's last flush finds no pipe
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        raise _ReaderGoneError
 
 
 def render(view: BusView, log: EventLog, clock: Clock | None = None) -> Group:
@@ -134,7 +156,7 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
     decoder = Decoder(known, assumed=not devices)
     view = BusView(decoder)
     log = EventLog(rows, decoder)
-    console = output_console()
+    console = _OutputConsole()
     clock = Clock(absolute)
     lines = not console.is_terminal
 
@@ -151,7 +173,8 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
         return render(view, log, clock)
 
     if log_file is not None:
-        _replay(log_file, speed, duration, feed, picture, console)
+        with contextlib.suppress(_ReaderGoneError):
+            _replay(log_file, speed, duration, feed, picture, console)
         return
     bus = cli_bus()
     end = None if duration is None else time.monotonic() + duration
@@ -170,7 +193,7 @@ def command(devices: tuple[str, ...], log_file: str | None, speed: float,
                     live.update(picture(), refresh=True)
                     shown = time.monotonic()
             live.update(picture(), refresh=True)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, _ReaderGoneError):
         pass
     finally:
         bus.shutdown()

@@ -23,11 +23,10 @@ from collections.abc import AsyncIterator, Callable
 from typing import Any, Generic, TypeVar
 
 from blinkcan.host.device import Device
-from blinkcan.host.events import EventSource
+from blinkcan.host.events import EventSource, check_event_timeout
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
 from blinkcan.host.scan import Found, scan
-from blinkcan.protocol.cob import check_time
 
 E = TypeVar("E")
 D = TypeVar("D", bound=Device)
@@ -62,8 +61,7 @@ def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
              timeout: float | None) -> AsyncIterator[E]:
     """Events from the moment of this call on (from the moment the driver is open, if it is
     still opening). A subscription whose event loop has closed removes itself."""
-    if timeout is not None:
-        check_time("timeout", timeout, 0)
+    check_event_timeout(timeout)
     loop = asyncio.get_running_loop()
     waiting: asyncio.Queue[E] = asyncio.Queue()
     removers: list[Callable[[], None]] = []

@@ -16,7 +16,6 @@ import threading
 from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
-from blinkcan.protocol.cob import check_time
 from blinkcan.runtime.scheduler import Scheduler
 from blinkcan.runtime.virtual_waits import RECV_FOREVER
 
@@ -30,6 +29,26 @@ _CLOSED = object()
 #: wait with no timeout on a rig, ``rig.bus.recv()`` and cantools' ``Tester.expect`` too: one
 #: number to know (README, Testing); a longer wait names its timeout
 SIMULATED_FOREVER = RECV_FOREVER
+
+#: the longest timeout an event iterator takes, in seconds (an hour; virtual ones on a rig):
+#: a longer one ran a busy rig's simulation that long (``timeout=1e308`` never ended) and made
+#: ``queue.get`` raise OverflowError on a real bus. Wait longer with no timeout (None)
+LONGEST_EVENT_WAIT = 3600.0
+
+
+def check_event_timeout(timeout: float | None) -> float | None:
+    """Return ``timeout`` if it is None or a number of seconds from 0 to
+    :data:`LONGEST_EVENT_WAIT`; else TypeError/ValueError naming that range (NaN, negative,
+    infinite or longer timeouts are bad arguments)."""
+    if timeout is None:
+        return None
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)):
+        raise TypeError(f"timeout must be a number of seconds or None, "
+                        f"not {type(timeout).__name__}")
+    if not 0 <= timeout <= LONGEST_EVENT_WAIT:  # NaN too
+        raise ValueError(f"timeout must be from 0 to {LONGEST_EVENT_WAIT:g} seconds "
+                         f"(None: no timeout), not {timeout!r}")
+    return timeout
 
 
 class _Holds:
@@ -101,10 +120,9 @@ class EventSource(Generic[E]):
     def iterate(self, timeout: float | None = None) -> Iterator[E]:
         """Events from the moment of this call (not of the first ``next``); the iterator ends
         after ``timeout`` seconds without one (None: never on a real bus, after
-        :data:`SIMULATED_FOREVER` virtual seconds on a simulated one; else finite, >= 0:
-        ValueError at this call) and when the source closes."""
-        if timeout is not None:
-            check_time("timeout", timeout, 0)
+        :data:`SIMULATED_FOREVER` virtual seconds on a simulated one; else 0 to
+        :data:`LONGEST_EVENT_WAIT`: ValueError at this call) and when the source closes."""
+        check_event_timeout(timeout)
         waiting: queue.SimpleQueue[E | object] = queue.SimpleQueue()
         with self._lock:
             if self.closed:

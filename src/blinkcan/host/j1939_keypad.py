@@ -33,7 +33,7 @@ from blinkcan.devices.keypad_j1939 import (
 )
 from blinkcan.devices.registry import models
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import BOOT_UP, NoDeviceError, check_wait
+from blinkcan.host.device import BOOT_UP, NoDeviceError, check_wait, seconds_spans
 from blinkcan.host.identity_errors import SharedNodeIdError
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import (
@@ -76,6 +76,18 @@ def look_of(on: int, blink: int) -> LedLook:
 HEARD = "heartbeat"
 ADDRESS_LOST = "address lost"  # another node with a lower NAME claimed the keypad's address
 MOVED = "moved"  # the keypad claimed another address (J-5): the driver follows it there
+
+
+def _period_byte(command_name: str, what: str, ms: int) -> int:
+    """``ms`` as the period byte of a J1939 command (x 10 ms, §17/§18); a period the byte
+    cannot carry is a ValueError naming the valid periods in seconds, before anything is
+    sent."""
+    valid = next(each.valid for each in command(command_name).fields if each.name == "period")
+    units = round(ms / 1000 / TIME_UNIT_S)
+    if units not in valid:
+        raise ValueError(f"{what} must be 0 or {seconds_spans(valid.spans, TIME_UNIT_S)} s "
+                         f"in J1939 mode (§17/§18), not {ms / 1000:g}")
+    return units
 
 
 class KeypadGoneError(NoDeviceError):
@@ -218,12 +230,13 @@ class J1939KeypadLink:
         """A CANopen setting the driver writes, as its J1939 command."""
         if name == "tpdo1_event_timer":  # periodic key state (§17): 0 = off, else x 10 ms
             if value:
-                self.send("key_message_period", round(value / 1000 / TIME_UNIT_S))
+                self.send("key_message_period",
+                          _period_byte("key_message_period", "key state period", value))
             self.send("periodic_key_state", int(bool(value)))
             return
         if name == "producer_heartbeat_time":  # §18: on and period x 10 ms; 0 = off
-            period = round(value / 1000 / TIME_UNIT_S)
-            self.send("heartbeat", int(bool(value)), period if value else 0xFF)
+            period = _period_byte("heartbeat", "heartbeat period", value) if value else 0xFF
+            self.send("heartbeat", int(bool(value)), period)
             return
         if name not in SETTING_COMMANDS:
             raise ValueError(f"{name} is a CANopen setting; in J1939 mode use "

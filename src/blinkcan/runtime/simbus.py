@@ -342,7 +342,8 @@ class SimulatedBus(can.BusABC):
 
     def recv(self, timeout: float | None = None) -> can.Message | None:
         """The next frame received (filters applied), running the simulation until it comes
-        or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`). Called by
+        or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`; 0: a frame
+        due at this very instant, the clock stays). Called by
         the thread of a notifier the bus adopted: parked until that notifier stops, None."""
         if self._adopted and self._parked():
             return None
@@ -358,7 +359,10 @@ class SimulatedBus(can.BusABC):
                 message = to_message(received.popleft(), times.popleft())
                 if self._matches_filters(message):
                     return message
-            if scheduler.clock() >= end or not scheduler.run_until(lambda: received, end):
+            # recv(0) too runs what is due at this instant: a frame sent now is on the wire now
+            # (python-can's virtual bus hands over a queued frame); one the latency holds back
+            # is not due yet
+            if not scheduler.run_until(lambda: received, end):
                 return None
 
     def _recv_internal(self, timeout: float | None) -> tuple[can.Message | None, bool]:

@@ -19,7 +19,8 @@ takes the twin, or the node id a twin on this rig answers at; anything else is a
 
 The simulation runs in one thread, the one that made the Rig: ``rig.bus.recv()`` from another
 thread (a reader thread, as on a real bus) is refused with :class:`WrongThreadError`, since it
-would run the simulation and move the clock under that thread. Put a ``can.Notifier`` on
+would run the simulation and move the clock under that thread; ``rig.bus.send()`` too, since it
+would write the wire log and the simulation's queue from there. Put a ``can.Notifier`` on
 ``rig.bus`` instead: the rig hands its listeners every frame, in order, in the rig's thread.
 
 An exception raised in your handlers (a driver's ``on_key``/``subscribe`` callbacks) or in work
@@ -54,14 +55,25 @@ class WrongThreadError(BlinkcanError, RuntimeError):
 
 
 class RigBus(SimulatedBus):
-    """``rig.bus``: the controller's endpoint, whose ``recv()`` runs the simulation and so is
-    the rig's thread's only (a ``can.Notifier``'s own thread still parks in it, see
-    ``runtime.simbus``)."""
+    """``rig.bus``: the controller's endpoint, whose ``recv()`` runs the simulation and whose
+    ``send()`` writes the wire log and the scheduler's queue, so both are the rig's thread's
+    only (a ``can.Notifier``'s own thread still parks in recv, see ``runtime.simbus``; its
+    listeners and ``send_periodic`` tasks run in the rig's thread, so they send)."""
 
     def __init__(self, network: SimulatedNetwork, channel: str,
                  owner: threading.Thread) -> None:
         super().__init__(network, channel)
         self.owner = owner
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        me = threading.current_thread()
+        if me is not self.owner:
+            raise WrongThreadError(
+                f"rig.bus.send() from thread {me.name!r}: it puts the frame on the rig's wire, "
+                f"which is the thread's that made the Rig ({self.owner.name!r}), and would "
+                "change the wire log and the simulation's queue under it. Send from that "
+                "thread: a can.Notifier's listeners and bus.send_periodic() run there")
+        super().send(msg, timeout)
 
     def recv(self, timeout: float | None = None) -> can.Message | None:
         me = threading.current_thread()
