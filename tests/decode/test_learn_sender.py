@@ -54,7 +54,7 @@ def test_a_mid_stream_capture_learns_the_model_from_a_frame_only_it_sends(
     node = model.default_node_id if assumed else 0x3A
     description = describe_device(model.name)
     assumed_devices = _assumed() if assumed else {}
-    traffic = _traffic(description, node)
+    traffic = [_heartbeat(node), *_traffic(description, node)]
     teaching = [n for n, frame in enumerate(traffic)
                 if sole_senders().get(frame.can_id - node) is not None
                 and sole_senders()[frame.can_id - node].model == model.name]
@@ -73,6 +73,36 @@ def test_a_mid_stream_capture_learns_the_model_from_a_frame_only_it_sends(
     assert learning.devices[node].model == model.name
     assert [learning.json_line(f, 9.0) for f in traffic] == \
         [named.json_line(f, 9.0) for f in traffic]
+
+
+def _heartbeat(node: int) -> Frame:
+    return Frame(0x700 + node, b"\x05")  # CiA 301 §7.2.8.3: operational
+
+
+@pytest.mark.parametrize("model", models(), ids=lambda model: model.name)
+def test_another_ecus_frame_on_a_sole_senders_identifier_makes_no_device_up(
+        model: Model) -> None:
+    """Other ECUs' 11-bit frames use the PDO identifiers too (the realistic log's made up 14
+    PKP-3500-MTs and decoded their frames as knob turns): at a node nobody assumed, a model
+    is named only once the node is heard as a CANopen node, and from then on."""
+    node = 0x3A
+    description = describe_device(model.name)
+    traffic = _traffic(description, node)
+    if not any(getattr(sole_senders().get(f.can_id - node), "model", None) == model.name
+               for f in traffic):
+        pytest.skip(f"{model.name} sends no frame only it sends")
+    decoder = Decoder({}, assumed=True)
+    unlearned = Decoder({}, learn=False)
+    for n, frame in enumerate(traffic):
+        assert decoder.decode(frame, n * 0.01) == unlearned.decode(frame, n * 0.01)
+        assert decoder.json_line(frame, n * 0.01) == unlearned.json_line(frame, n * 0.01)
+    assert node not in decoder.devices
+    decoder.decode(_heartbeat(node), 1.0)
+    assert decoder.devices[node].model == model.name
+    named = Decoder({node: description})
+    named.decode(_heartbeat(node), 1.0)
+    for frame in traffic:
+        assert decoder.json_line(frame, 2.0) == named.json_line(frame, 2.0)
 
 
 def test_a_node_named_by_the_caller_is_never_relearned() -> None:

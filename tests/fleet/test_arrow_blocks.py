@@ -159,12 +159,15 @@ def _assert_learned_at(partitions: dict[str, Any], node: int, model: str) -> Non
 def test_a_model_learned_from_a_frame_only_it_sends_names_the_frames_after_it(
         tmp_path: Path, model: Any) -> None:
     """As from identity: a PDO only this model sends (sole_senders) names the node's model
-    mid-block; the fast path and the line-by-line one give the same rows."""
+    mid-block, once the node is heard as a CANopen node (its boot-up just after: another
+    ECU's frame alone names nothing); the fast path and the line-by-line one give the same
+    rows."""
     node = 0x3A
     bases = [base for base, sender in sole_senders().items() if sender.model == model.name]
     if not bases:
         pytest.skip(f"{model.name} sends no frame another model does not")
-    partitions = _learned_mid_block(tmp_path, node, [Frame(bases[0] + node, bytes(8))])
+    teaching = [Frame(bases[0] + node, bytes(8)), Frame(0x700 + node, b"\x00")]
+    partitions = _learned_mid_block(tmp_path, node, teaching)
     _assert_learned_at(partitions, node, model.name)
 
 

@@ -14,6 +14,7 @@ import pytest
 from blinkcan.devices.registry import models
 from blinkcan.host import SharedNodeIdError
 from blinkcan.host.registry import driver_class
+from blinkcan.protocol.cob import SDO_TX
 from blinkcan.protocol.sdo_client import SdoTimeoutError
 from blinkcan.runtime import Emulator
 from blinkcan.runtime.simbus import SimulatedBus
@@ -92,3 +93,29 @@ def test_another_clients_answer_for_an_object_read_is_not_a_second_device(rig: R
     assert keypad.read("device_type") == device_type == twin.objects.get_int("device_type")
     assert keypad.read("device_type") == device_type
     keypad.close()
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_late_replies_to_a_request_and_its_resync_that_timed_out_are_no_second_device(
+        rig: Rig, name: str) -> None:
+    """One device whose replies come 2.4 timeouts late until the delay ends (hatk8 fuzz, seeds
+    36/51/67): the read of 1017h and the resync read after it time out; the same object is read
+    again at once and answered; then the late reply to the first read comes (it answers a
+    request that got no answer, not the one answered), and the resync read's late reply comes
+    while the next request gathers the answers to a read of 1000h. Neither is a second
+    device's: every read goes on and returns the device's value."""
+    twin = rig.add(build_twin(name))
+    driver = driver_class(name)(rig.bus, twin.node_id)
+    timeout = driver.sdo.timeout
+    undo = rig.delay(lambda frame: frame.can_id == SDO_TX + twin.node_id, 2.4 * timeout)
+    with pytest.raises(SdoTimeoutError, match="no reply within"):
+        driver.sdo.upload(0x1017, 0, retries=1)  # the read, then the resync read, time out
+    undo()
+    heartbeat = driver.sdo.upload(0x1017, 0)  # in time: the late replies are still on the way
+    assert int.from_bytes(heartbeat, "little") == twin.objects.get_int("producer_heartbeat_time")
+    rig.advance(0.45 * timeout)  # the first read's late reply came meanwhile
+    for _ in range(3):  # the first gathers while the resync read's late reply comes
+        assert driver.sdo.upload(0x1017, 0) == heartbeat
+        rig.advance(timeout)
+    assert driver.sdo.channel.late_replies == 2
+    driver.close()

@@ -135,3 +135,18 @@ def test_the_longest_timeout_is_taken() -> None:
         rig.scheduler.call_at(start + 1.0, keypad.close)
         assert list(keypad.events(timeout=LONGEST_EVENT_WAIT)) == []
         assert rig.now - start == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("timeout", [1e308, LONGEST_EVENT_WAIT * 2])
+def test_rig_until_refuses_a_timeout_beyond_the_bound(timeout: float) -> None:
+    """``rig.until(never, timeout=1e308)`` on a busy rig ran for ever, as the iterators did."""
+    rig, keypad = _busy_rig(next(case for case in CASES if case.canopen
+                                 and case.model.name == "pkp-2600-si"))
+    with rig:
+        start = rig.now
+        with pytest.raises(ValueError, match=r"timeout must be from 0 to 3600 virtual seconds"):
+            rig.until(lambda: False, timeout=timeout)
+        assert rig.now == start
+        with pytest.raises(AssertionError, match=r"not met within 1\.5 virtual s"):
+            rig.until(lambda: False, timeout=1.5)
+        keypad.close()

@@ -2,8 +2,9 @@
 
 Which node is which device comes from the caller (``{0x15: "keypad"}``) or is learned from the
 bus: an SDO reply of 1000h (device type) or 100Bh (model) names the model, and so does a PDO
-only one registered model sends (devices/registry.py sole_senders). A frame before the one
-that names the model keeps the meaning it had. Everything a device means is read from its
+only one registered model sends (devices/registry.py sole_senders) at a node assumed or heard
+as a CANopen node (its heartbeat or boot-up). A frame before the one that names the model keeps
+the meaning it had. Everything a device means is read from its
 description in ``devices/`` (object names, PDO layouts).
 
 Per node the decoder remembers what it needs to say what changed: the keys held, and the SDO
@@ -263,6 +264,11 @@ class Decoder:
         #: nodes named from 1000h alone (two keypads share it) or assumed: 100Bh or a PDO
         #: only one model sends may still correct them
         self._guessed: set[int] = set(self.devices) if assumed else set()
+        #: nodes that showed they are CANopen nodes (a heartbeat or boot-up, CiA 301 §7.2.8.3)
+        self._heard: set[int] = set()
+        #: unknown nodes that sent a PDO only one model sends, before any heartbeat of theirs:
+        #: another ECU may use that identifier, so the model is named once the node is heard
+        self._unconfirmed: dict[int, DeviceDescription] = {}
         #: keypads in J1939 mode, by address (decode/j1939.py)
         self.j1939 = J1939KeypadDecoder(() if named.j1939 else (J1939_DEFAULT_ADDRESS,),
                                         named.j1939)
@@ -534,6 +540,11 @@ class Decoder:
             return lambda f, t: Event(t, f, Kind.SYNC, "SYNC")
         function, node = can_id & 0x780, can_id & 0x7F
         if function == HEARTBEAT and node:
+            self._heard.add(node)
+            sender = self._unconfirmed.pop(node, None)
+            if sender is not None and self.devices.get(node) is None:
+                self.devices[node] = sender
+                self._forget_routes(node)
             self._writers[can_id] = self._heartbeat_writer(can_id)
             return self._heartbeat  # its boot-up resets key state: never cached (json_line)
         if function in (SDO_TX, SDO_RX) and node:
@@ -921,13 +932,19 @@ class Decoder:
     def _learn_sender(self, can_id: int, node: int) -> None:
         """Name an unknown (or guessed) node's model from a PDO only that model sends
         (sole_senders): as certain as 100Bh, so later identity does not change it. Routed
-        once per identifier: the frames before this one keep their meaning."""
+        once per identifier: the frames before this one keep their meaning. A node nobody
+        assumed is named only once it is heard as a CANopen node (a heartbeat or boot-up,
+        before or after): other ECUs' 11-bit frames use these identifiers too, and one of
+        them must not make a keypad up."""
         sender = sole_senders().get(can_id - node)
         if sender is None or not self.learn:
             return
         known = self.devices.get(node)
         if known is not None and node not in self._guessed:
             return  # named by the caller, or by 100Bh
+        if known is None and node not in self._heard:  # maybe another ECU's 11-bit frame
+            self._unconfirmed.setdefault(node, sender)
+            return
         self._guessed.discard(node)
         if known is not None and known.model == sender.model:
             return

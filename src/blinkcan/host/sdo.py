@@ -20,6 +20,12 @@ reply may still come and would complete the next request to the same object. Wha
    1000h/00 was lost: every CANopen device has them, CiA 301 §7.5.2), else the lost one's late
    reply would be taken for it.
 3. A reply that comes while no request is outstanding is discarded and counted too.
+4. A request that got no answer (a timeout, the resync read's too) is *owed* its reply for
+   ``_OWED_FOR`` seconds: a reply naming its object that comes while no request of that object
+   waits is taken for that late reply (and discarded) first. Delays on the way need not keep
+   the order (a gateway's queue that empties while the device already answers directly), so
+   an owed reply may come after the resync, after a new request of the same object was
+   answered, or while :meth:`SdoChannel.answers` gathers: it is never a second device's.
 
 Two devices at one node id (a wiring mistake) answer every request twice, and the second reply
 completes the next request: "reply for another object". :meth:`SdoChannel.answers` tells: it
@@ -33,7 +39,8 @@ next request to that node tells which first: it gathers the replies to one read 
 long as the duplicate trailed its answer (at least the timeout; :meth:`SdoChannel.answers`) and
 raises :class:`SharedNodeIdError` when more than one device answers; with one, the request goes
 on. Out of step (after a timeout or a reply that did not fit) the channel forgets what was
-answered: a late reply is no duplicate.
+answered: a late reply is no duplicate, and a reply owed to a request that got no answer
+(rule 4) is neither a duplicate answer nor a second device's answer to a gathering read.
 """
 
 from __future__ import annotations
@@ -77,6 +84,10 @@ ABORT_COMMAND = 0x80
 # lost request named is read to get back in step (module docstring)
 #: the longest a request waits to tell a second device from another client (module docstring)
 _MAX_DUPLICATE_WAIT = 5.0
+#: how long a request that got no answer is owed its reply (module docstring, rule 4): far
+#: longer than any delay a device or gateway adds, short enough that a reply lost for good does
+#: not hide a second device for long
+_OWED_FOR = 5.0
 _RESYNC_MUXES = tuple(multiplexer(index, subindex) for index, subindex in
                       ((0x1000, 0), (0x1001, 0), (0x1018, 1), (0x1018, 0)))
 
@@ -97,6 +108,8 @@ class SdoHost(Protocol):
     def wait(self, signal: Signal, timeout: float) -> bool: ...
 
     def sleep(self, seconds: float) -> None: ...
+
+    def clock(self) -> float: ...
 
     def subscribe_fast(self, can_id: int, handler: Callable[[Frame, float], None]
                        ) -> Callable[[], None]: ...
@@ -131,6 +144,9 @@ class SdoChannel:
         self._accept: Callable[[bytes], bool] | None = None
         self._out_of_step = False
         self._lost: set[bytes] = set()  # objects of requests whose replies may still come
+        #: objects of requests that got no answer -> when each gave up (oldest first): their
+        #: replies may still come (module docstring, rule 4)
+        self._owed: dict[bytes, list[float]] = {}
         self._request_id = SDO_RX + node_id
         self._gathered: list[bytes] | None = None  # replies :meth:`answers` gathers
         #: objects of the initiate requests answered while in step -> when (the last time)
@@ -158,15 +174,43 @@ class SdoChannel:
                         self._answered[wanted] = now
                     self._signal.set()
                     return
+            initiate = _answers_initiate(data)
+            if initiate and self._owed and self._take_owed(data[1:4]):
+                self.late_replies += 1  # a request that got no answer gets it now: rule 4
+                log.debug("node %02Xh: late SDO reply %s discarded", self.node_id,
+                          data.hex(" "))
+                return
             if self._gathered is not None:
                 self._gathered.append(data)
                 return
             self.late_replies += 1
             answered = self._answered.get(data[1:4])
-            if answered is not None and _answers_initiate(data):  # module docstring
+            if answered is not None and initiate:  # module docstring
                 self._duplicate_lag = max(self._duplicate_lag or 0.0, now - answered)
             log.debug("node %02Xh: SDO reply %s discarded (no request awaits it)",
                       self.node_id, data.hex(" "))
+
+    def _owe(self, mux: bytes) -> None:
+        """A request of ``mux`` got no answer: its reply may still come (rule 4). Under the
+        state lock."""
+        self._owed.setdefault(mux, []).append(self.host.clock())
+
+    def _take_owed(self, mux: bytes) -> bool:
+        """Whether a reply naming ``mux`` is the late reply of a request that got none (and
+        then it is owed no more); forgets what is owed for longer than ``_OWED_FOR``. Under the
+        state lock."""
+        horizon = self.host.clock() - _OWED_FOR
+        for key in [key for key, times in self._owed.items() if times[-1] < horizon]:
+            del self._owed[key]
+        times = [when for when in self._owed.get(mux, ()) if when >= horizon]
+        if not times:
+            return False
+        del times[0]  # the oldest request's: a server answers in order
+        if times:
+            self._owed[mux] = times
+        else:
+            del self._owed[mux]
+        return True
 
     @contextlib.contextmanager
     def replies_also_from(self, node_id: int) -> Iterator[None]:
@@ -199,7 +243,10 @@ class SdoChannel:
         finally:
             with self._state_lock:
                 gathered, self._gathered = self._gathered, None
-        return [data for data in gathered if _answers_upload_of(data, mux)]
+                replies = [data for data in gathered if _answers_upload_of(data, mux)]
+                if not replies:  # the read got no answer: its reply may still come (rule 4)
+                    self._owe(mux)
+        return replies
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
@@ -275,6 +322,8 @@ class SdoChannel:
                 reply = self._reply
                 if reply is None:  # out of step: a late reply is no duplicate (module docstring)
                     self._answered.clear()
+                    if wanted is not None or accept is not None:  # a request naming an object
+                        self._owe(request[1:4])  # its reply may still come (rule 4)
         if reply is None and self.host.closed:  # woken by :meth:`wake`, or timed out
             raise SdoError("the bus was shut down", self.node_id,
                            int.from_bytes(request[1:3], "little"), request[3])

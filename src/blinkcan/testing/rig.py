@@ -38,6 +38,7 @@ from typing import Any, TypeVar
 import can
 
 from blinkcan.errors import BlinkcanError
+from blinkcan.host.events import LONGEST_EVENT_WAIT
 from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.emulator import Emulator
@@ -149,9 +150,13 @@ class Rig:
 
     def until(self, predicate: Callable[[], object], timeout: float = 1.0) -> float:
         """Run until ``predicate()`` holds and return the virtual time it did; AssertionError
-        if it did not within ``timeout`` virtual seconds."""
+        if it did not within ``timeout`` virtual seconds (0 to :data:`LONGEST_EVENT_WAIT`, the
+        event iterators' bound: a longer one ran a busy rig for ever; else ValueError)."""
         start = self.now
-        if not self.scheduler.run_until(predicate, start + check_time("timeout", timeout, 0)):
+        if check_time("timeout", timeout, 0) > LONGEST_EVENT_WAIT:
+            raise ValueError(f"timeout must be from 0 to {LONGEST_EVENT_WAIT:g} virtual seconds, "
+                             f"not {timeout!r}")
+        if not self.scheduler.run_until(predicate, start + timeout):
             raise AssertionError(f"condition not met within {timeout} virtual s "
                                  f"(from t={start:.3f} to t={self.now:.3f})")
         return self.now
