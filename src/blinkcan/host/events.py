@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterator
 from typing import Generic, TypeVar
 
 from blinkcan.runtime.scheduler import Scheduler
-from blinkcan.runtime.virtual_waits import RECV_FOREVER
+from blinkcan.runtime.virtual_waits import LONGEST_VIRTUAL_WAIT, RECV_FOREVER
 
 log = logging.getLogger(__name__)
 E = TypeVar("E")
@@ -33,7 +33,7 @@ SIMULATED_FOREVER = RECV_FOREVER
 #: the longest timeout an event iterator takes, in seconds (an hour; virtual ones on a rig):
 #: a longer one ran a busy rig's simulation that long (``timeout=1e308`` never ended) and made
 #: ``queue.get`` raise OverflowError on a real bus. Wait longer with no timeout (None)
-LONGEST_EVENT_WAIT = 3600.0
+LONGEST_EVENT_WAIT = LONGEST_VIRTUAL_WAIT
 
 
 def check_event_timeout(timeout: float | None) -> float | None:

@@ -53,7 +53,11 @@ from blinkcan.protocol.cob import check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.canbus import to_frame, to_message
 from blinkcan.runtime.scheduler import SimulatedScheduler
-from blinkcan.runtime.virtual_waits import RECV_FOREVER, install_virtual_waits
+from blinkcan.runtime.virtual_waits import (
+    RECV_FOREVER,
+    check_virtual_timeout,
+    install_virtual_waits,
+)
 from blinkcan.runtime.wire_log import TimedFrame, WireLog
 
 __all__ = ["FrameHandler", "Receiver", "SimulatedBus", "SimulatedCyclicTask",
@@ -342,7 +346,8 @@ class SimulatedBus(can.BusABC):
 
     def recv(self, timeout: float | None = None) -> can.Message | None:
         """The next frame received (filters applied), running the simulation until it comes
-        or ``timeout`` virtual seconds passed (None: at most :data:`RECV_FOREVER`; 0: a frame
+        or ``timeout`` virtual seconds passed (None or infinity: at most :data:`RECV_FOREVER`; a
+        finite timeout up to :data:`LONGEST_VIRTUAL_WAIT`, else ValueError; 0: a frame
         due at this very instant, the clock stays). Called by
         the thread of a notifier the bus adopted: parked until that notifier stops, None."""
         if self._adopted and self._parked():
@@ -351,7 +356,8 @@ class SimulatedBus(can.BusABC):
         scheduler = self.scheduler
         if timeout is not None:  # NaN is refused; +inf waits as None does
             check_time("timeout", timeout, infinite=True)
-        wait = RECV_FOREVER if timeout is None or timeout == float("inf") else max(0.0, timeout)
+        wait = RECV_FOREVER if timeout is None or timeout == float("inf") else \
+            max(0.0, check_virtual_timeout(timeout))
         end = scheduler.clock() + wait
         times = self._received_times
         while True:

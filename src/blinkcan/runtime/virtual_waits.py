@@ -42,6 +42,20 @@ from blinkcan.runtime.scheduler import SimulatedScheduler
 
 #: virtual seconds a wait with no timeout waits at most (``SimulatedBus.recv()`` too)
 RECV_FOREVER = 60.0
+#: the longest timeout a wait on a simulated bus takes, in virtual seconds (an hour): a busy
+#: rig simulates an hour in under a minute of wall time, but ``timeout=1e308`` ran for ever
+LONGEST_VIRTUAL_WAIT = 3600.0
+
+
+def check_virtual_timeout(timeout: float) -> float:
+    """``timeout`` if it is a number of virtual seconds up to :data:`LONGEST_VIRTUAL_WAIT`
+    (one not above 0 waits for nothing); else TypeError/ValueError naming that range."""
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)):
+        raise TypeError(f"timeout must be a number of seconds, not {type(timeout).__name__}")
+    if not timeout <= LONGEST_VIRTUAL_WAIT:  # NaN and infinity too
+        raise ValueError(f"timeout must be at most {LONGEST_VIRTUAL_WAIT:g} virtual seconds on "
+                         f"a simulated bus, not {timeout!r}")
+    return timeout
 
 log = logging.getLogger(__name__)
 
@@ -127,6 +141,7 @@ def _nmt_wait_for_heartbeat(original: Callable[..., Any]) -> Callable[..., Any]:
         scheduler = _scheduler(lambda: self.network.bus)
         if scheduler is None:
             return original(self, timeout)
+        check_virtual_timeout(timeout)
         self._state_received = None
         scheduler.wait(_Until(lambda: self._state_received is not None), timeout,
                        background=True)
@@ -144,6 +159,7 @@ def _nmt_wait_for_bootup(original: Callable[..., Any]) -> Callable[..., Any]:
         if scheduler is None:
             original(self, timeout)
             return
+        check_virtual_timeout(timeout)
         booted = _Flag()
 
         def heard(state: int) -> None:
@@ -174,6 +190,7 @@ def _pdo_wait_for_reception(original: Callable[..., Any]) -> Callable[..., Any]:
         scheduler = _scheduler(lambda: self.pdo_node.network.bus)
         if scheduler is None:
             return original(self, timeout)
+        check_virtual_timeout(timeout)
         self.is_received = False
         scheduler.wait(_Until(lambda: self.is_received), timeout, background=True)
         return self.timestamp if self.is_received else None
@@ -190,7 +207,8 @@ def _tester_expect(original: Callable[..., Any]) -> Callable[..., Any]:
         scheduler = _scheduler(lambda: self._can_bus)
         if scheduler is None:
             return original(self, signals, timeout, discard_other_messages)
-        end = scheduler.clock() + (RECV_FOREVER if timeout is None else timeout)
+        end = scheduler.clock() + (RECV_FOREVER if timeout is None else
+                                   check_virtual_timeout(timeout))
         arrived = _Until(lambda: not self._input_queue.empty())
         while True:
             if not scheduler.wait(arrived, max(0.0, end - scheduler.clock()), background=True):
