@@ -227,15 +227,21 @@ def test_a_reader_that_closes_the_pipe_ends_the_command_quietly(tmp_path: Path,
     path = _candump(tmp_path, [(0.01 * n, "715#05") for n in range(20000)])  # > a pipe's buffer
     child = subprocess.Popen([sys.executable, "-m", "blinkcan", *command, str(path)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert child.stdout is not None
-    assert child.stderr is not None
     try:
-        head = [child.stdout.readline() for _ in range(2)]
-        child.stdout.close()
-        assert child.wait(timeout=60) == 0
-        errors = child.stderr.read()
+        _reads_two_lines_and_closes(child)
     finally:
         child.kill()
+
+
+def _reads_two_lines_and_closes(child: subprocess.Popen[str]) -> None:
+    """As ``| head -2``: two event lines read, stdout closed; the command then exits 0 with
+    only its one line of assumed devices on stderr."""
+    assert child.stdout is not None
+    assert child.stderr is not None
+    head = [child.stdout.readline() for _ in range(2)]
+    child.stdout.close()
+    assert child.wait(timeout=60) == 0
+    errors = child.stderr.read()
     assert all(EVENT_LINE.match(line) for line in head), head
     assert errors.startswith("no --device given: assuming"), errors
     assert errors.count("\n") == 1, errors
@@ -250,8 +256,6 @@ def test_a_reader_that_closes_the_pipe_ends_the_live_monitor_quietly() -> None:
         [sys.executable, "-m", "blinkcan", "monitor", "-i", "udp_multicast", "-c", channel,
          "--bus-kwargs", f"port={port}", "hop_limit=0"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment)
-    assert child.stdout is not None
-    assert child.stderr is not None
     stop = threading.Event()
 
     def send() -> None:  # a heartbeat every 10 ms until the monitor is gone
@@ -264,14 +268,8 @@ def test_a_reader_that_closes_the_pipe_ends_the_live_monitor_quietly() -> None:
     sender = threading.Thread(target=send, daemon=True)
     sender.start()
     try:
-        head = [child.stdout.readline() for _ in range(2)]
-        child.stdout.close()
-        assert child.wait(timeout=60) == 0
-        errors = child.stderr.read()
+        _reads_two_lines_and_closes(child)
     finally:
         stop.set()
         child.kill()
         sender.join(timeout=10)
-    assert all(EVENT_LINE.match(line) for line in head), head
-    assert errors.startswith("no --device given: assuming"), errors
-    assert errors.count("\n") == 1, errors
