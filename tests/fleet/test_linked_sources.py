@@ -40,6 +40,7 @@ def test_a_file_reached_by_three_names_is_decoded_once(tmp_path: Path) -> None:
     code, output = _decode(str(logs), "--parquet", str(tmp_path / "lake"))
     assert code == 0, output
     assert "1 file decoded" in output
+    assert "2 other names of a file listed (links) not decoded twice" in output
     for name in ("b.log", "c.log"):
         assert f"{logs / name}: the same file as {logs / 'a.log'}" in output
     assert _frames(tmp_path / "lake") == _frames_of_one(tmp_path)

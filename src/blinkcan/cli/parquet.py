@@ -57,6 +57,14 @@ def unreadable_text(result: FileResult) -> str:
             f" text; its {result.frames:,} frames are in the dataset")
 
 
+def _links_text(names: int, files: int) -> str:
+    """The summary's part for other names (links) of files listed: decoded once each."""
+    if not names:
+        return ""
+    return (f", {names} other name{'' if names == 1 else 's'} of "
+            f"{'a file' if files == 1 else 'files'} listed (links) not decoded twice")
+
+
 def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
                       devices: dict[NodeKey, str]) -> None:
     check_extra()
@@ -73,6 +81,7 @@ def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
     frames = 0
     counts = {"decoded": 0, "skipped": 0, "failed": 0, "same": 0}
     again = 0  # decoded again: files of theirs were gone from the dataset
+    linked_to: set[str] = set()  # the files other names (links) of which were listed
     progress = _progress_bar(total) if sys.stderr.isatty() else None
     running: contextlib.AbstractContextManager[object] = progress if progress is not None else \
         contextlib.nullcontext()
@@ -104,6 +113,7 @@ def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
         if result.status == "failed":
             say(f"cannot decode {result.source}: {result.error}")
         elif result.status == "same":
+            linked_to.add(str(result.same_as))
             say(f"{result.source}: the same file as {result.same_as} (a link): decoded once, "
                 "under that name")
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
@@ -124,10 +134,7 @@ def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
     decoded = counts["decoded"]
     restored = f", {again} of them again as files of theirs were gone from the dataset" \
         if again else ""
-    linked = counts["same"]
-    files_of = "a file" if linked == 1 else "files"
-    same = f", {linked} other name{'' if linked == 1 else 's'} of {files_of} listed (links) " \
-        "not decoded twice" if linked else ""
+    same = _links_text(counts["same"], len(linked_to))
     click.echo(f"{decoded} file{'' if decoded == 1 else 's'} decoded to {out} ({frames:,} "
                f"frames in {elapsed:.1f} s){restored}{skipped}{same}", err=True)
     if counts["failed"]:
