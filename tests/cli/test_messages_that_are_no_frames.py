@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import can
-import msgpack
+import msgpack  # type: ignore[import-untyped]  # python-can's udp_multicast's
 import pytest
 from can.interfaces.udp_multicast.utils import unpack_message
 from click.testing import CliRunner
