@@ -216,13 +216,6 @@ def test_node_id_over_j1939_is_the_address(
     assert run("keypad", "--protocol", "j1939", *bus, *where, "3", "red") == \
         "keypad 30h (J1939): key 3 red\n"
     assert emulator.snapshot(twin)["commanded"][2]["colour"] == "red"
-    assert run("keypad", "--address", "0x30", "--node-id", "0x30", *bus, "brightness", "40") \
+    # beside --address, --node-id is its CANopen node id (as the driver takes both)
+    assert run("keypad", "--address", "0x30", "--node-id", "0x15", *bus, "brightness", "40") \
         == "keypad 30h (J1939): indicator brightness 40\n"
-
-
-def test_node_id_and_another_address_over_j1939_are_refused() -> None:
-    result = CliRunner().invoke(cli, ["keypad", "--address", "0x21", "--node-id", "0x30", "-i",
-                                      "virtual", "-c", f"none-{uuid.uuid4().hex}", "led", "1",
-                                      "red"])
-    assert result.exit_code == 2
-    assert "--node-id 30h and --address 21h" in result.output

@@ -70,20 +70,17 @@ _ADDRESS_GIVEN = "blinkcan.address_given"
 def _j1939_address() -> int | None:
     """The keypad's J1939 address when ``--protocol j1939`` (or ``--address``) was given, else
     None: ``--address``, else a ``--node-id`` given (a keypad in J1939 mode is reached at its
-    source address, as ``emulate keypad:0x30 --protocol j1939`` claims 30h), else 21h."""
+    source address, as ``emulate keypad:0x30 --protocol j1939`` claims 30h), else 21h. Beside
+    ``--address``, ``--node-id`` is the keypad's CANopen node id (the driver's, for a switch
+    back)."""
     context = click.get_current_context(silent=True)
     if context is None:
         return None
     address: int | None = context.meta.get(_J1939_ADDRESS)
     given: int | None = context.meta.get(_NODE_ID_GIVEN)
-    if address is None or given is None:
-        return address
-    if not context.meta.get(_ADDRESS_GIVEN):
-        return given
-    if given != address:
-        raise click.UsageError(f"--node-id {given:02X}h and --address {address:02X}h: a "
-                               "keypad in J1939 mode is at its address; name it once")
-    return address
+    if address is None or given is None or context.meta.get(_ADDRESS_GIVEN):
+        return address  # with --address, --node-id is its CANopen node id (a switch back)
+    return given
 
 
 def _chosen_model() -> str | None:
@@ -374,7 +371,7 @@ def _group(kind: str) -> click.Group:
                             "read from the device (100Bh) unless --model names it.")
     @click.option("--node-id", type=NODE_ID, default=default,
                   help=f"The {kind}'s node id (default {default:02X}h)" + (
-                      "; over J1939 its source address, as --address." if j1939 else "."))
+                      "; over J1939 with no --address, its source address." if j1939 else "."))
     @click.option("--model", type=click.Choice(names, case_sensitive=False), default=None,
                   expose_value=False, callback=_set_model,
                   help="Drive the device as this model (default: the one it says it is).")
