@@ -47,12 +47,12 @@ def _unpacked(fields: dict[str, Any]) -> can.Message:
 
 @pytest.mark.parametrize("name", HOSTILE)
 def test_python_can_unpacks_it_and_it_is_no_frame(name: str) -> None:
-    from blinkcan.cli.bus_faults import not_a_frame
+    from blinkcan.formats.frame_check import wrong_type as not_a_frame
     assert not_a_frame(_unpacked(HOSTILE[name])) is not None
 
 
 def test_the_frames_python_can_sends_are_frames() -> None:
-    from blinkcan.cli.bus_faults import not_a_frame
+    from blinkcan.formats.frame_check import wrong_type as not_a_frame
     for message in (_frame(1), can.Message(arbitration_id=0x18EF2100, data=b"\x04\x1b"),
                     can.Message(arbitration_id=0x123, is_remote_frame=True, dlc=8),
                     can.Message(arbitration_id=0x123, data=bytes(64), is_fd=True,

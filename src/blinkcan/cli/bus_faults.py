@@ -9,20 +9,19 @@ A datagram python-can *can* unpack is not always a frame: ``udp_multicast`` buil
 ``can.Message`` from any msgpack map and checks the ranges of its numbers, not their types, so
 ``{"arbitration_id": 1.5}`` or a flag ``"yes"`` arrives as a message that every log writer and
 the decoder fail on. :func:`receive` counts such a message as one more bus error
-(:func:`not_a_frame` says why), so one hostile datagram never ends a recording.
+(:func:`~blinkcan.formats.frame_check.wrong_type` says why), so one hostile datagram never
+ends a recording. Its ranges python-can checked (udp_multicast) or the adapter reported; a
+live bus's frame is taken as it comes (a classic DLC of 9-15 included).
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 
 import can
 
-#: the flags of a ``can.Message``: each a bool (or 0/1) on a frame a bus decoded
-_FLAGS = ("is_extended_id", "is_remote_frame", "is_error_frame", "is_fd", "bitrate_switch",
-          "error_state_indicator", "is_rx")
+from blinkcan.formats.frame_check import wrong_type
 
 
 class BusFaults:
@@ -74,31 +73,14 @@ class BusFaults:
                 f"({self.count} errors, first: {self.first}): stopped reading it")
 
 
-def not_a_frame(message: can.Message) -> str | None:
-    """Why ``message`` is no CAN frame (a field of the wrong type), or None when it is one.
-    python-can checked its ranges where the bus asks it to (udp_multicast does); only the
-    types are left to check."""
-    for name, value in (("identifier", message.arbitration_id), ("DLC", message.dlc)):
-        if not isinstance(value, int) or isinstance(value, bool):
-            return f"{name} {value!r} is not an integer"
-    for flag in _FLAGS:
-        value = getattr(message, flag)
-        if not isinstance(value, int) or value not in (0, 1):
-            return f"{flag} {value!r} is not a bool"
-    stamp = message.timestamp
-    if not isinstance(stamp, (int, float)) or not math.isfinite(stamp):
-        return f"timestamp {stamp!r} is not a finite number"
-    return None
-
-
 def receive(bus: can.BusABC, timeout: float, faults: BusFaults,
             report: Callable[[str], None]) -> can.Message | None:
     """``bus.recv(timeout)``, with a bus error counted in ``faults`` (the first one passed to
     ``report``) instead of raised; None then, as for a quiet bus. A message that is no frame
-    (:func:`not_a_frame`) is such an error too."""
+    (a field of the wrong type) is such an error too."""
     try:
         message = bus.recv(timeout)
-        if message is not None and (why := not_a_frame(message)) is not None:
+        if message is not None and (why := wrong_type(message)) is not None:
             raise can.CanOperationError(f"received a message that is no CAN frame: {why}")
     except can.CanError as error:
         if faults.failed(error, time.monotonic()):

@@ -16,10 +16,10 @@ import time
 import can
 import click
 
-from blinkcan.cli.bus_faults import not_a_frame
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_node_id
 from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.whole import NegativeArguments
+from blinkcan.formats.frame_check import wrong_type
 from blinkcan.protocol.cob import HEARTBEAT, split_cob_id
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
 from blinkcan.runtime import to_frame, to_message
@@ -90,14 +90,14 @@ def _drain(bus: can.BusABC, limit: int = 10_000) -> None:
 
 def _receive(bus: can.BusABC, timeout: float) -> can.Message | None:
     """The next frame, or None; a frame the bus cannot decode, or a message that is no frame
-    (:func:`~blinkcan.cli.bus_faults.not_a_frame`), is none of the nodes' answers."""
+    (:func:`~blinkcan.formats.frame_check.wrong_type`), is none of the nodes' answers."""
     try:
         message = bus.recv(timeout)
     except can.CanError as error:
         if is_undecodable(error):
             return None
         raise
-    return None if message is None or not_a_frame(message) is not None else message
+    return None if message is None or wrong_type(message) is not None else message
 
 
 def _said_after(message: can.Message, sent_at: float) -> bool:
