@@ -4,10 +4,12 @@ it, and the binding follows the twins (added, rebooted, renumbered, powered off)
 
 from __future__ import annotations
 
+import ctypes
 import random
+import sys
 import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import can
 import pytest
@@ -15,8 +17,13 @@ import pytest
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator, to_frame, to_message
 from blinkcan.runtime.canport import CanBusPort, reuses_messages
+from blinkcan.runtime.emulator import LOOP_TIMER_SLACK_NS
+from blinkcan.testing import Rig
 from blinkcan.twin import KeypadTwin
+from blinkcan.twin.base import CanopenTwin
 
+#: prctl(2): the calling thread's timer slack, nanoseconds
+_PR_GET_TIMERSLACK = 30
 READ_1000 = bytes.fromhex("4000100000000000")
 
 
@@ -213,3 +220,146 @@ def test_an_echoing_port_drops_each_echo_once_and_never_an_old_sendings_equal() 
         detach()
     finally:
         bus.shutdown()
+
+
+def test_the_twins_cannot_be_changed_by_hand_and_the_error_names_add(
+        host: can.BusABC, device_bus: can.BusABC) -> None:
+    """A twin swapped into ``emulator.twins`` by hand would miss the emulator's bookkeeping
+    (its power-up, timers and the COB-ID binding: requests went to the old twin), so every
+    change of the list by hand is refused with a TypeError that names Emulator.add; the
+    list is unchanged and the twins still answer."""
+    twin = KeypadTwin()
+    other = KeypadTwin()
+    with Emulator(device_bus, [twin]) as emulator:
+        assert len(read(host, 0x15)) == 1
+        changes: dict[str, Callable[[list[CanopenTwin]], object]] = {
+            "swap": lambda twins: twins.__setitem__(0, other),
+            "slice": lambda twins: twins.__setitem__(slice(0, 1), [other]),
+            "delete": lambda twins: twins.__delitem__(0),
+            "append": lambda twins: twins.append(other),
+            "extend": lambda twins: twins.extend([other]),
+            "insert": lambda twins: twins.insert(0, other),
+            "remove": lambda twins: twins.remove(twin),
+            "pop": lambda twins: twins.pop(),
+            "clear": lambda twins: twins.clear(),
+            "sort": lambda twins: twins.sort(key=id),
+            "reverse": lambda twins: twins.reverse(),
+            "+=": lambda twins: twins.__iadd__([other]),
+            "*=": lambda twins: twins.__imul__(2),
+        }
+        for name, change in changes.items():
+            with pytest.raises(TypeError, match=r"Emulator\.add"):
+                change(emulator.twins)
+            assert list(emulator.twins) == [twin], name
+        with pytest.raises(TypeError, match=r"Emulator\.add"):
+            emulator.twins = [other]
+        assert emulator.twins == [twin]
+        assert isinstance(emulator.twins, list)  # reads as before: a list
+        assert len(read(host, 0x15)) == 1  # the twin given still answers, alone
+        emulator.add(other)  # the way in: powered on, bound, answering
+        assert emulator.twins == [twin, other]
+        assert len(read(host, 0x15)) == 2
+
+
+class _Pinger:
+    """A device (duck-typed) that sends 100h every ``period`` from t=0 and, hearing 101h,
+    moves its next frame to ``nudge`` after that moment."""
+
+    node_id = 0x01
+    period = 0.01
+    nudge = 0.004
+
+    def __init__(self) -> None:
+        self.listening = {0x101: None}
+        self.next: float | None = None
+
+    def power_on(self, now: float) -> list[Frame]:
+        self.next = now
+        return []
+
+    def advance(self, now: float) -> list[Frame]:
+        assert self.next is not None
+        if now < self.next:
+            return []
+        self.next += self.period
+        return [Frame(0x100, b"\x01")]
+
+    def next_deadline(self) -> float | None:
+        return self.next
+
+    def receive(self, frame: Frame, now: float) -> list[Frame]:
+        self.next = now + self.nudge
+        return []
+
+    def is_sdo_request(self, frame: Frame) -> bool:
+        return False
+
+
+class _Answerer(_Pinger):
+    """Answers 100h with 101h at once; no schedule."""
+
+    node_id = 0x02
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.listening = {0x100: None}
+
+    def next_deadline(self) -> float | None:
+        return None
+
+    def receive(self, frame: Frame, now: float) -> list[Frame]:
+        return [Frame(0x101, b"")]
+
+
+def test_a_deadline_moved_by_the_answer_to_a_periodic_frame_is_the_one_kept() -> None:
+    """A twin's due frames are sent before its next deadline is planned: an answer they
+    draw at once from another twin may move that deadline meanwhile (the pinger's next
+    frame comes 4 ms after each answer, not 10 ms), and no timer of the old plan fires."""
+    with Rig() as rig:
+        rig.emulator.add(_Pinger())  # type: ignore[arg-type]
+        rig.emulator.add(_Answerer())  # type: ignore[arg-type]
+        rig.advance(0.0405)
+        pings = [round(timed.time, 9) for timed in rig.frames if timed.frame.can_id == 0x100]
+        answers = [timed for timed in rig.frames if timed.frame.can_id == 0x101]
+    assert pings == [0.0, 0.004, 0.008, 0.012, 0.016, 0.02, 0.024, 0.028, 0.032, 0.036,
+                     0.04]
+    assert len(answers) == len(pings)
+
+
+def test_a_hook_sees_every_periodic_frame_sent_before_the_next_deadline_is_planned() -> None:
+    """The tap sees each periodic frame as it is sent, in order, on time (simulated)."""
+    seen: list[tuple[int, float]] = []
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(settings={"producer_heartbeat_time": 10}))
+        rig.emulator.on_frame = lambda frame, sent, now: seen.append((frame.can_id, now))
+        start = rig.now
+        rig.advance(0.1)
+        sent = [(timed.frame.can_id, timed.time) for timed in rig.frames_since(start)
+                if timed.time > start]  # the boot-up went before the hook
+    heartbeats = [at for can_id, at in seen if can_id == 0x700 + twin.node_id]
+    assert len(heartbeats) == 10
+    assert seen == sent
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="timer slack is Linux's")
+def test_the_emulators_own_loop_thread_alone_gets_the_small_timer_slack(
+        device_bus: can.BusABC) -> None:
+    """Given a bus, the emulator's loop thread asks for LOOP_TIMER_SLACK_NS; the caller's
+    thread, and the loop of a port the caller gave, keep theirs."""
+    libc = ctypes.CDLL(None)
+
+    def slack(now: float = 0.0) -> int:
+        return int(libc.prctl(_PR_GET_TIMERSLACK, 0, 0, 0, 0))
+
+    mine = slack()
+    with Emulator(device_bus, [KeypadTwin()]) as emulator:
+        assert emulator.run(slack) == LOOP_TIMER_SLACK_NS
+        assert slack() == mine
+    port = CanBusPort(device_bus, name="callers")
+    port.scheduler.start()
+    try:
+        before = port.scheduler.run(slack)
+        with Emulator(port, [KeypadTwin()]) as emulator:
+            assert emulator.run(slack) == before
+    finally:
+        port.scheduler.stop()
