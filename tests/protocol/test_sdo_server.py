@@ -71,6 +71,24 @@ def test_a_new_initiate_abandons_an_open_transfer() -> None:
     assert server.on_request(h("6000000000000000")) == h("8000000001000405")
 
 
+def test_a_read_answered_before_still_abandons_an_open_transfer() -> None:
+    # the server keeps the reply to an expedited read it answered (session 9); the same read
+    # while an upload or a download is open still ends that transfer: its next segment request
+    # is refused (CiA 301 §7.2.4.3.17)
+    fake = FakeDictionary()
+    server = SdoServer(fake)
+    fake.values[multiplexer(0x3000, 0)] = b"0123456789"
+    read = h("4000200000000000")
+    assert server.on_request(read) == h("4300200001020304")
+    for opening, segment in ((h("4000300000000000"), h("6000000000000000")),
+                             (h("210030000A000000"), h("00") + b"Blink M")):
+        server.on_request(opening)
+        assert server.state.name != "IDLE"
+        assert server.on_request(read) == h("4300200001020304")
+        assert server.state.name == "IDLE"
+        assert server.on_request(segment) == h("8000000001000405")
+
+
 def test_client_abort_gets_no_reply_and_ends_the_transfer() -> None:
     fake = FakeDictionary()
     fake.values[multiplexer(0x3000, 0)] = b"0123456789"

@@ -56,6 +56,9 @@ from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import SDO_RX, SDO_TX, check_node_id
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.sdo import (
+    EXPEDITED_END,
+    EXPEDITED_UPLOAD,
+    EXPEDITED_UPLOAD_MASK,
     SCS_ABORT,
     SCS_INITIATE_DOWNLOAD,
     SCS_INITIATE_UPLOAD,
@@ -77,6 +80,8 @@ log = logging.getLogger(__name__)
 T = TypeVar("T", UploadTransfer, DownloadTransfer)
 _new_tuple = tuple.__new__
 
+#: bytes 4-7 of an initiate upload request: reserved (CiA 301 §7.2.4.3.5)
+_RESERVED = b"\x00\x00\x00\x00"
 #: the command byte of an SDO abort (CiA 301 §7.2.4.3.17: ccs/scs 4)
 ABORT_COMMAND = 0x80
 
@@ -250,13 +255,35 @@ class SdoChannel:
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        return self._run(UploadTransfer(index, subindex), self.timeout if timeout is None
-                         else timeout, self.retries if retries is None else retries).value
+        return self._upload(index, subindex, self.timeout if timeout is None else timeout,
+                            self.retries if retries is None else retries)
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
         self._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is None
                   else timeout, self.retries if retries is None else retries)
+
+    def _upload(self, index: int, subindex: int, timeout: float, retries: int) -> bytes:
+        """``_run(UploadTransfer(index, subindex), timeout, retries).value``, the common case
+        (in step, answered by an expedited upload response) without a transfer object: most
+        reads are one expedited reply, and the transfer's calls cost more than the read. Any
+        other reply, or none, goes on as the transfer's first reply (same rules, same
+        errors)."""
+        mux = multiplexer(index, subindex)  # checked first, as UploadTransfer checks it
+        if self.host.in_handler:
+            raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
+        with self._lock:
+            if self._duplicate_lag is not None or self._out_of_step:
+                return self._attempts(UploadTransfer(index, subindex), timeout, retries).value
+            reply = self._exchange(b"\x40" + mux + _RESERVED, timeout, mux)
+            # UploadTransfer.on_reply's first case, inlined: CiA 301 §7.2.4.3.6, an expedited
+            # initiate upload response naming the object carries the value, n bytes where the
+            # size is stated, else all four. _on_reply took it: eight bytes, naming the object
+            # (the one reply it takes that may name another is an abort, 80h)
+            if reply is not None and reply[0] & EXPEDITED_UPLOAD_MASK == EXPEDITED_UPLOAD:
+                return reply[4 : EXPEDITED_END[reply[0]]]
+            return self._attempts(UploadTransfer(index, subindex), timeout, retries,
+                                  (reply,)).value
 
     def _run(self, transfer: T, timeout: float, retries: int) -> T:
         """Run ``transfer``, and a fresh one per retry; a timeout is retried, anything else
@@ -264,30 +291,40 @@ class SdoChannel:
         if self.host.in_handler:
             raise RuntimeError("SDO transfers block: call them from your thread, not a handler")
         with self._lock:
-            if self._duplicate_lag is not None:
-                self._check_shared(timeout)
-            first: SdoTimeoutError | None = None
-            uncertain: SdoTimeoutError | None = None  # an attempt that may have taken effect
-            for attempt in range(retries + 1):
-                if attempt:
-                    transfer = transfer.again()
-                try:
+            return self._attempts(transfer, timeout, retries)
+
+    def _attempts(self, transfer: T, timeout: float, retries: int,
+                  answered: tuple[bytes | None] | None = None) -> T:
+        """:meth:`_run`, holding the request lock. ``answered``: the first attempt's first
+        request was sent (in step) and got this reply (None: none in time)."""
+        if answered is None and self._duplicate_lag is not None:
+            self._check_shared(timeout)
+        first: SdoTimeoutError | None = None
+        uncertain: SdoTimeoutError | None = None  # an attempt that may have taken effect
+        for attempt in range(retries + 1):
+            if attempt:
+                transfer = transfer.again()
+            try:
+                if answered is not None:
+                    (reply,), answered = answered, None
+                    self._go_on(transfer, timeout, reply)
+                else:
                     if self._out_of_step:
                         self._resync(timeout, transfer)
                     self._transfer(transfer, timeout)
-                    return transfer
-                except SdoTimeoutError as error:
-                    first = first or error
-                    uncertain = uncertain or (error if error.uncertain else None)
-                    if attempt == retries:
-                        raise (uncertain or first) from None
-                    log.debug("node %02Xh: %s; retrying", self.node_id, error)
-                except SdoError as error:
-                    if error.node_id is None:
-                        error.node_id = self.node_id
-                        error.args = (f"node {self.node_id:02X}h {error.args[0]}",)
-                    raise
-            raise AssertionError("unreachable")
+                return transfer
+            except SdoTimeoutError as error:
+                first = first or error
+                uncertain = uncertain or (error if error.uncertain else None)
+                if attempt == retries:
+                    raise (uncertain or first) from None
+                log.debug("node %02Xh: %s; retrying", self.node_id, error)
+            except SdoError as error:
+                if error.node_id is None:
+                    error.node_id = self.node_id
+                    error.args = (f"node {self.node_id:02X}h {error.args[0]}",)
+                raise
+        raise AssertionError("unreachable")
 
     def _check_shared(self, timeout: float) -> None:
         """After a duplicate answer: :class:`SharedNodeIdError` when more than one device
@@ -330,17 +367,19 @@ class SdoChannel:
         return reply
 
     def _transfer(self, transfer: UploadTransfer | DownloadTransfer, timeout: float) -> None:
-        request: bytes | None = transfer.start()
-        wanted: bytes | None = transfer.mux  # then segments, which name no object
-        while request is not None:
-            reply = self._exchange(request, timeout, wanted)
+        self._go_on(transfer, timeout, self._exchange(transfer.start(), timeout, transfer.mux))
+
+    def _go_on(self, transfer: UploadTransfer | DownloadTransfer, timeout: float,
+               reply: bytes | None) -> None:
+        """The rest of ``transfer``, whose first request got ``reply`` (None: none in
+        time)."""
+        while True:
             if reply is None:
                 self._out_of_step = True
                 self._lost.add(transfer.mux)
                 self.host.send(Frame(self._request_id,
                                      transfer.abort_request(AbortCode.SDO_PROTOCOL_TIMED_OUT)))
                 raise self._timeout(transfer, timeout)
-            wanted = None
             try:
                 request = transfer.on_reply(reply)
             except SdoProtocolError:
@@ -353,6 +392,9 @@ class SdoChannel:
                 self.host.send(Frame(self._request_id, transfer.abort_request(
                     AbortCode.COMMAND_SPECIFIER_INVALID)))
                 raise
+            if request is None:
+                return
+            reply = self._exchange(request, timeout, None)  # segments name no object
 
     def _resync(self, timeout: float, transfer: UploadTransfer | DownloadTransfer) -> None:
         """Read 1000h/00 (or another object every device has, that no lost request named),
@@ -411,8 +453,8 @@ class SdoClient:
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        return self.channel._run(UploadTransfer(index, subindex), self.timeout if timeout is None
-                                 else timeout, self.retries if retries is None else retries).value
+        return self.channel._upload(index, subindex, self.timeout if timeout is None
+                                    else timeout, self.retries if retries is None else retries)
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:

@@ -45,6 +45,10 @@ EXPEDITED_UPLOAD_COMMAND = {1: 0x4F, 2: 0x4B, 3: 0x47, 4: 0x43}
 EXPEDITED_DOWNLOAD_COMMAND = {1: 0x2F, 2: 0x2B, 3: 0x27, 4: 0x23}
 
 ZEROS = b"\x00" * 8
+#: byte 0 of an expedited initiate upload response, masked to scs (bits 7-5) and e (bit 1)
+#: (CiA 301 §7.2.4.3.6): the common reply, which clients take without parsing the frame
+EXPEDITED_UPLOAD_MASK = 0xE0 | EXPEDITED
+EXPEDITED_UPLOAD = (SCS_INITIATE_UPLOAD << 5) | EXPEDITED
 _MULTIPLEXER = struct.Struct("<HB")
 #: CiA 301 §7.2.4.3: command byte, index (LSB first), sub-index, four data bytes
 _SDO_LAYOUT = struct.Struct("<BHBI")
@@ -176,11 +180,16 @@ def expedited_upload_reply(mux: bytes, value: bytes) -> bytes:
     return bytes((EXPEDITED_UPLOAD_COMMAND[len(value)],)) + mux + value + ZEROS[len(value) : 4]
 
 
+#: command byte -> where an expedited initiate frame's data ends: 4 - n bytes from byte 4 when
+#: the size is indicated (n in bits 3-2), else all four (CiA 301 §7.2.4.3.3, §7.2.4.3.6). A
+#: table: a client takes the value of every expedited reply with one lookup
+EXPEDITED_END = tuple(8 - ((command >> 2) & 0x03) if command & SIZE_INDICATED else 8
+                      for command in range(256))
+
+
 def expedited_payload(command: int, data: bytes) -> bytes:
     """The data bytes of an expedited transfer: n bytes when the size is indicated, else four."""
-    if command & SIZE_INDICATED:
-        return data[4 : 8 - ((command >> 2) & 0x03)]
-    return data[4:8]
+    return data[4 : EXPEDITED_END[command]]
 
 
 def segment_payload(data: bytes) -> bytes:

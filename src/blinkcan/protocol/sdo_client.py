@@ -14,8 +14,10 @@ from __future__ import annotations
 from blinkcan.errors import BlinkcanError
 from blinkcan.protocol.abort import describe_abort
 from blinkcan.protocol.sdo import (
-    EXPEDITED,
     EXPEDITED_DOWNLOAD_COMMAND,
+    EXPEDITED_END,
+    EXPEDITED_UPLOAD,
+    EXPEDITED_UPLOAD_MASK,
     LAST_SEGMENT,
     SCS_DOWNLOAD_SEGMENT,
     SCS_INITIATE_UPLOAD,
@@ -29,10 +31,6 @@ from blinkcan.protocol.sdo import (
 )
 
 QUIRK_ACKNOWLEDGES = frozenset({0x60, 0x43})  # errata K3: the firmware acknowledges with 43h
-#: byte 0 of an expedited initiate upload response, masked to scs (bits 7-5) and e (bit 1)
-#: (CiA 301 §7.2.4.3.6): the common reply, taken without parsing the frame
-_EXPEDITED_UPLOAD_MASK = 0xE0 | EXPEDITED
-_EXPEDITED_UPLOAD = (SCS_INITIATE_UPLOAD << 5) | EXPEDITED
 #: an initiate upload response that opens a segmented upload: scs 2, e clear
 _SEGMENTED_UPLOAD = SCS_INITIATE_UPLOAD << 5
 #: the upload segment requests (CiA 301 §7.2.4.3.7: ccs 3), toggle bit clear and set
@@ -137,12 +135,11 @@ class UploadTransfer(_Transfer):
                     # (protocol.sdo.segment_payload, inlined)
                     return self._segment(command, data[1 : 8 - ((command >> 1) & 0x07)])
             elif data[1:4] == self.mux:
-                opening = command & _EXPEDITED_UPLOAD_MASK
-                if opening == _EXPEDITED_UPLOAD:
+                opening = command & EXPEDITED_UPLOAD_MASK
+                if opening == EXPEDITED_UPLOAD:
                     # CiA 301 §7.2.4.3.6: the value in the reply, n bytes where the size is
                     # stated, else all four (protocol.sdo.expedited_payload, inlined)
-                    self.value = (data[4 : 8 - ((command >> 2) & 0x03)]
-                                  if command & SIZE_INDICATED else data[4:8])
+                    self.value = data[4 : EXPEDITED_END[command]]
                     self.done = True
                     return None
                 if opening == _SEGMENTED_UPLOAD:

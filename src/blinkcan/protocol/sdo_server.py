@@ -76,8 +76,9 @@ _Handler = Callable[[SdoFrame], "bytes | None"]
 class SdoServer:
     """One server channel (one per node)."""
 
-    __slots__ = ("_buffer", "_download", "_handlers", "_idle", "_mux", "_parsed", "_position",
-                 "_replies", "_segments", "_size", "_state", "_tables", "_toggle", "_upload")
+    __slots__ = ("_buffer", "_download", "_expedited", "_handlers", "_idle", "_mux", "_parsed",
+                 "_position", "_replies", "_segments", "_size", "_state", "_tables", "_toggle",
+                 "_upload")
 
     def __init__(self, access: ObjectAccess) -> None:
         self._upload = access.sdo_upload  # bound once: called on every request
@@ -99,6 +100,11 @@ class SdoServer:
         #: parsing costs about a third of a request (a NamedTuple of seven fields; measured,
         #: benchmarks/sdo_twin.py). Bounded: cleared when full.
         self._parsed: dict[bytes, SdoFrame] = {}
+        #: an expedited upload request's eight bytes -> (its multiplexer, the value bytes, the
+        #: reply) last answered: the same request of an unchanged value gets the same reply
+        #: without a parse or a dispatch (most requests a master sends; bounded like
+        #: ``_parsed``)
+        self._expedited: dict[bytes, tuple[bytes, bytes, bytes]] = {}
         # state -> handler per client command specifier (0..7; CiA 301 §7.2.4.3): the protocol
         # as a table. A list per state, not a dict keyed by (state, ccs): hashing an enum costs
         # a Python call.
@@ -130,7 +136,16 @@ class SdoServer:
 
     def on_request(self, data: bytes) -> bytes | None:
         """The eight reply bytes for one request, or None (a client abort needs no reply)."""
-        request = self._parsed.get(data) if data.__class__ is bytes else None
+        if data.__class__ is bytes:  # hashable
+            known = self._expedited.get(data)
+            # the value is read on every request (a reader may make it anew): its reply is
+            # kept while the very same bytes come back and no transfer is open
+            if known is not None and self._handlers is self._idle and \
+                    self._upload(known[0]) is known[1]:
+                return known[2]
+            request = self._parsed.get(data)
+        else:
+            request = None
         if request is None:
             request = self._parse(data)
         return self._handlers[request.specifier](request)
@@ -166,6 +181,7 @@ class SdoServer:
         if cached is not None and cached[0] is value:
             reply = cached[1]
             if isinstance(reply, bytes):
+                self._known(request.raw, mux, value, reply)
                 return reply
         elif not isinstance(value, bytes):
             return abort_data(mux, value)
@@ -174,6 +190,7 @@ class SdoServer:
             if size in EXPEDITED_UPLOAD_COMMAND:  # CiA 301: 1-4 bytes go expedited
                 reply = bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
                 self._replies[mux] = (value, reply)
+                self._known(request.raw, mux, value, reply)
                 return reply
             reply = (bytes((SEGMENTED_UPLOAD_RESPONSE,)) + mux + size.to_bytes(4, "little"),
                      *_segment_replies(value))
@@ -184,6 +201,13 @@ class SdoServer:
         self._position = 1
         self._toggle = 0
         return reply[0]
+
+    def _known(self, request: bytes, mux: bytes, value: bytes, reply: bytes) -> None:
+        """Keep the expedited ``reply`` to the upload ``request`` of ``value`` (``_expedited``)."""
+        expedited = self._expedited
+        if len(expedited) >= _PARSED_KEPT:
+            expedited.clear()
+        expedited[request] = (mux, value, reply)
 
     def _upload_segment(self, request: SdoFrame) -> bytes:
         # CiA 301 §7.2.4.3.7: alternates from 0 on each segment (SdoFrame.toggle, inlined)
