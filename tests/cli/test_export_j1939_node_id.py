@@ -6,6 +6,8 @@ twice (``keypad@1.5 --manual 1.1``, which said "not '1.5@1.1'"), are one line, e
 
 from __future__ import annotations
 
+from typing import Any
+
 import cantools
 from click.testing import CliRunner
 
@@ -16,7 +18,7 @@ def _frame_ids(args: list[str]) -> set[int]:
     result = CliRunner().invoke(cli, ["export", "dbc", "keypad", "--protocol", "j1939", *args,
                                       "-o", "-"])
     assert result.exit_code == 0, result.output
-    database = cantools.database.load_string(result.stdout, "dbc")
+    database: Any = cantools.database.load_string(result.stdout, "dbc")
     return {message.frame_id for message in database.messages}
 
 
