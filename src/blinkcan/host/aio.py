@@ -53,6 +53,14 @@ def runs_in_simulated_time(bus: object) -> bool:
     return bool(getattr(getattr(bus, "scheduler", None), "simulated", False))
 
 
+def _in_running_loop() -> bool:
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return False
+    return True
+
+
 async def _in_worker(work: Callable[[], T], what: str) -> T:
     """``work()`` in a worker thread. Cancelling the caller cancels its wait only: the work
     runs to its end, and a failure nobody awaits any more is logged (else it would vanish)."""
@@ -174,15 +182,10 @@ class AsyncDriver(Generic[D]):
         self._opening: asyncio.Future[D] | None = None
         #: on a simulated bus every call runs in the awaiting thread: the simulation's one
         self._simulated = runs_in_simulated_time(args[0] if args else kwargs.get("bus"))
-        try:
-            asyncio.get_running_loop()
-        except RuntimeError:
+        if self._simulated or not _in_running_loop():
             self._device = make()
         else:
-            if self._simulated:
-                self._device = make()
-            else:
-                self._opening = asyncio.ensure_future(asyncio.to_thread(make))
+            self._opening = asyncio.ensure_future(asyncio.to_thread(make))
 
     async def open(self) -> Any:
         if self._device is None:
