@@ -195,6 +195,7 @@ def main(smoke: bool = False) -> None:
           "median (range) of the repetitions (target at N=46: no missed frame, p99 no worse "
           "than the anchor's)")
     for count, repeats in plan:
+        load = os.getloadavg()[0]
         results = interleaved({"ours": lambda: ours(count, seconds),  # noqa: B023 (run now)
                                "anchor": lambda: anchor(count, seconds)},  # noqa: B023
                               repeats)
@@ -203,4 +204,5 @@ def main(smoke: bool = False) -> None:
         p99 = [o["p99_ms"] <= a["p99_ms"] for o, a in zip(results["ours"], results["anchor"],
                                                            strict=True)]
         print(f"           p99 no worse than the anchor's in {sum(p99)} of {len(p99)} "
-              f"alternating pairs")
+              f"alternating pairs; load average (1 min) {load:.2f} -> {os.getloadavg()[0]:.2f} "
+              f"(a shared machine: p99 follows it)")

@@ -20,12 +20,14 @@ from hypothesis import strategies as st
 
 from blinkcan.decode.decoder import Decoder, Event
 from blinkcan.decode.nodes import ModelsByNode
+from blinkcan.devices.keypad_j1939 import COMMANDS, PRIORITY
 from blinkcan.devices.registry import describe_device, models
 from blinkcan.fleet.frames import FrameDecoder, Segment
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.task import make_decoder
 from blinkcan.protocol import Frame
 from blinkcan.protocol.cob import HEARTBEAT, NMT, SDO_RX, SDO_TX
+from blinkcan.protocol.j1939 import GLOBAL_ADDRESS, PGN_PROPRIETARY_A, compose_id
 from blinkcan.twin import KeypadTwin
 from tests.fleet.logs import EPOCH, candump_lines
 
@@ -194,3 +196,26 @@ def test_a_frame_that_changes_state_is_decoded_each_time() -> None:
     decoder.decode(boot_up)
     assert decoder.repeat_state(boot_up.can_id, False, boot_up.data) != held  # keys reset
     assert decoder.repeat_state(SDO_RX + 0x15, False, bytes(8)) is None
+
+
+def test_a_kept_j1939_frame_means_it_again_only_with_the_same_keypads(tmp_path: Path) -> None:
+    """PKP-2600-SI J1939 §6 and §18: a command to all from an address that is no keypad is
+    a command; once a key message shows that address is a keypad, the same frame is one the
+    keypad sent (no command), so what the fleet kept of it (Decoder.kept_event) is not
+    used again. Other J1939 and SDO frames kept between them."""
+    twin = KeypadTwin(protocol="j1939")
+    led = next(c for c in COMMANDS if c.name == "single_led")
+    other = 0x30  # not a keypad address yet
+    to_all = Frame(compose_id(PGN_PROPRIETARY_A, other, GLOBAL_ADDRESS, PRIORITY),
+                   led.encode(1, 0, 1, 0), extended=True)
+    twin.power_on(0.0)
+    press = twin.press(3, 0.0)[0]
+    from_other = Frame(press.can_id & ~0xFF | other, press.data, extended=True)
+    read = Frame(SDO_RX + 0x15, bytes((0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0)))
+    steps = [to_all, press, to_all, read, to_all, from_other, to_all, press, to_all, read]
+    traffic = [(EPOCH + n * 0.001, frame) for n, frame in enumerate(steps * 2)]
+    log = tmp_path / "j1939.log"
+    log.write_text("".join(candump_lines(traffic)))
+    for limit in (3, 1 << 16):
+        fewer, decoded = _assert_fast_as_generic(log, limit, 1 << 16, {0x15: "keypad"})
+        assert fewer < decoded  # kept frames were not decoded again

@@ -126,3 +126,23 @@ def test_a_dataset_reached_by_a_link_in_the_folder_is_not_read_as_logs(tmp_path:
         code, output = _decode(str(logs), "--parquet", str(lake))
         assert code == 0, output
         assert "cannot decode" not in output
+
+
+@pytest.mark.parametrize("link", ["hard", "symbolic"])
+def test_names_of_one_file_given_in_another_order_later_are_not_decoded_again(
+        tmp_path: Path, link: str) -> None:
+    """A later run that lists the names of one file in another order finds it decoded under
+    the name it was decoded under before: skipped, the other names "same" as that one. Before,
+    the first name of the later run was decoded again, under its own name, and every frame of
+    the file was twice in the dataset."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    first.write_text(LOG)
+    if link == "hard":
+        os.link(first, second)
+    else:
+        second.symlink_to(first)
+    lake = str(tmp_path / "lake")
+    assert [r.status for r in decode_files([first, second], lake)] == ["decoded", "same"]
+    again = decode_files([second, first], lake)
+    assert [(r.status, r.same_as) for r in again] == [("same", str(first)), ("skipped", None)]
+    assert _frames(tmp_path / "lake") == _frames_of_one(tmp_path)

@@ -9,12 +9,14 @@ here bounds its wall time, so a hang is a failure with a message, not a stuck su
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator, Awaitable, Callable
+import sys
+import threading
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import Any
 
 import pytest
 
-from blinkcan.host import AsyncKeybox, AsyncKeypad
+from blinkcan.host import AsyncKeybox, AsyncKeypad, async_scan
 from blinkcan.host.events import SIMULATED_FOREVER
 from blinkcan.host.pkp3500 import AsyncPkp3500Keypad
 from blinkcan.testing import Rig
@@ -144,3 +146,115 @@ def test_an_iterator_timeout_is_checked_when_asked(name: str, timeout: float) ->
                 iterate(opened.device, timeout)  # the blocking driver's own iterator
 
         _bounded(main)
+
+
+# -- issue: async calls on a rig ran the simulation in worker threads -----------------------------
+
+#: Keyboxes on the rig of the concurrency tests (node ids): calls to different nodes share no
+#: SDO channel, so nothing but the simulation's one thread keeps them apart
+BOXES = range(0x0C, 0x12)
+
+
+def _concurrent_calls(rig: Rig) -> list[object]:
+    """60 SDO calls at once from the asyncio faces of :data:`BOXES` (every 7th cancelled before
+    it ran), then a scan and the closes: the results (an exception is a result)."""
+
+    async def main() -> list[object]:
+        boxes = [AsyncKeybox(rig.bus, node_id) for node_id in BOXES]
+        await asyncio.gather(*(box.open() for box in boxes))
+        calls = [asyncio.ensure_future(box.on(index % 8 + 1) if index % 2 == 0
+                                       else box.state(index % 8 + 1))
+                 for index, box in enumerate(boxes[index % len(boxes)] for index in range(60))]
+        for call in calls[::7]:
+            call.cancel()
+        results = await asyncio.gather(*calls, return_exceptions=True)
+        found = await async_scan(rig.bus, listen=0.1, timeout=0.05, node_ids=BOXES)
+        await asyncio.gather(*(box.__aexit__(None, None, None) for box in boxes))
+        return [*results, [item.node_id for item in found]]
+
+    return _bounded(main)  # type: ignore[no-any-return]
+
+
+def _rig_with_boxes() -> Rig:
+    rig = Rig(response_delay=0.002)  # each reply a little late: the waits overlap
+    for node_id in BOXES:
+        rig.add(KeyboxTwin(node_id=node_id))
+    return rig
+
+
+@pytest.fixture
+def often_switching_threads() -> Iterator[None]:
+    """Python switches threads as often as it can: a race between threads shows every run."""
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    yield
+    sys.setswitchinterval(interval)
+
+
+def test_async_calls_on_a_rig_put_their_frames_on_the_wire_from_the_rigs_thread() -> None:
+    """Every frame the asyncio faces send on a rig is sent by the thread that made the rig
+    (the simulation's one thread), whatever the call: opening, a method, a property, an
+    iterator's wait, a scan, the close. Before, they came from ``asyncio.to_thread`` workers,
+    writing the wire log and the simulation's queue beside the rig's thread."""
+    senders: set[str] = set()
+    with Rig() as rig:
+        twin = rig.add(KeypadTwin(node_id=0x15))
+        rig.add(KeyboxTwin(node_id=0x0C))
+
+        def note_sender(frame: object) -> bool:
+            senders.add(threading.current_thread().name)
+            return False  # drops nothing
+
+        rig.drop(note_sender)
+
+        async def main() -> None:
+            keypad = AsyncKeypad(rig.bus, 0x15)
+            async with AsyncKeybox(rig.bus, 0x0C) as keybox:
+                await keybox.on(3)
+                await keypad.set_led(2, "green")
+                assert await keypad.generation == "1.1"
+                keys = keypad.events(1.0)
+                rig.tap(twin, 4)
+                assert [event.key async for event in keys] == [4, 4]
+                assert [found.node_id for found in await async_scan(
+                    rig.bus, listen=0.1, timeout=0.05, node_ids=range(0x0C, 0x16))] == [0x0C, 0x15]
+            await keypad.__aexit__(None, None, None)
+
+        _bounded(main)
+    assert senders == {threading.current_thread().name}
+
+
+@pytest.mark.usefixtures("often_switching_threads")
+def test_many_concurrent_async_calls_on_a_rig_give_an_ordered_complete_wire_log() -> None:
+    """60 concurrent SDO calls to 6 Keyboxes (some cancelled): each is answered, once, in
+    order, and the same scenario gives the same wire log and results on every run. Before,
+    the calls ran the simulation in several worker threads at once: some failed ("SDO
+    transfers block: call them from your thread"; "no device answers"), and the frames
+    changed from run to run."""
+    logs, outcomes = [], []
+    for _ in range(2):
+        with _rig_with_boxes() as rig:
+            results = _concurrent_calls(rig)
+            frames = list(rig.frames)
+            states = {node_id: rig.snapshot(node_id)["pins"] for node_id in BOXES}
+        logs.append(frames)
+        outcomes.append([type(result).__name__ if isinstance(result, BaseException) else result
+                         for result in results])
+        failures = [result for result in results if isinstance(result, Exception)]
+        assert failures == []
+        assert results[-1] == list(BOXES)  # the scan found every Keybox
+        times = [time for time, _ in frames]
+        assert times == sorted(times)
+        requests = [frame for _, frame in frames if 0x600 < frame.can_id < 0x680]
+        replies = [frame for _, frame in frames if 0x580 < frame.can_id < 0x600]
+        assert len(replies) == len(requests)  # every request answered, once
+        ran = [index for index, result in enumerate(results[:60])
+               if not isinstance(result, BaseException)]
+        assert len(ran) == 60 - len(range(0, 60, 7))
+        for index in ran:  # every "on" that ran left its pin high
+            if index % 2 == 0:
+                assert states[BOXES[index % len(BOXES)]][index % 8]["state"] == "high"
+            else:
+                assert results[index] in ("high", "off")
+    assert logs[0] == logs[1]
+    assert outcomes[0] == outcomes[1]

@@ -54,6 +54,8 @@ def test_a_late_second_device_is_reported_at_the_next_request(rig: Rig, name: st
         driver.close()
     finally:
         late.stop()
+        assert late.bus is not None
+        late.bus.shutdown()  # the test made it: python-can warns of a bus never shut down
 
 
 def test_a_late_reply_after_a_timeout_is_not_a_second_device(rig: Rig) -> None:

@@ -34,9 +34,13 @@ def buses(channel: str) -> Iterator[tuple[can.BusABC, can.BusABC]]:
         bus.shutdown()
 
 
-def _simulated_pair() -> tuple[SimulatedBus, SimulatedBus]:
+@pytest.fixture
+def simulated_pair() -> Iterator[tuple[SimulatedBus, SimulatedBus]]:
     network = SimulatedNetwork(SimulatedScheduler())
-    return SimulatedBus(network, "a"), SimulatedBus(network, "b")
+    pair = (SimulatedBus(network, "a"), SimulatedBus(network, "b"))
+    yield pair
+    for bus in pair:  # python-can warns of a bus never shut down
+        bus.shutdown()
 
 
 def _until(scheduler_simulated: bool, port: Port, condition: threading.Event) -> bool:
@@ -47,8 +51,9 @@ def _until(scheduler_simulated: bool, port: Port, condition: threading.Event) ->
 
 @pytest.mark.parametrize("simulated", [False, True], ids=["python-can", "simulated"])
 def test_a_port_hands_others_frames_to_its_handlers_never_its_own(
-        simulated: bool, buses: tuple[can.BusABC, can.BusABC]) -> None:
-    first, second = _simulated_pair() if simulated else buses
+        simulated: bool, buses: tuple[can.BusABC, can.BusABC],
+        simulated_pair: tuple[SimulatedBus, SimulatedBus]) -> None:
+    first, second = simulated_pair if simulated else buses
     mine, theirs = port_for(first), port_for(second)
     assert isinstance(mine, Port)
     assert mine.scheduler.simulated == simulated
@@ -94,8 +99,9 @@ def test_the_emulator_calls_its_twins_on_the_schedulers_loop(
 
 @pytest.mark.parametrize("simulated", [False, True], ids=["python-can", "simulated"])
 def test_host_bus_and_emulator_take_a_port(
-        simulated: bool, buses: tuple[can.BusABC, can.BusABC]) -> None:
-    device_bus, host_bus = _simulated_pair() if simulated else buses
+        simulated: bool, buses: tuple[can.BusABC, can.BusABC],
+        simulated_pair: tuple[SimulatedBus, SimulatedBus]) -> None:
+    device_bus, host_bus = simulated_pair if simulated else buses
     device_port, host_port = port_for(device_bus), port_for(host_bus)
     twin = KeypadTwin()
     with Emulator(device_port, [twin]), HostBus(host_port) as host:

@@ -32,7 +32,7 @@ def test_twins_started_together_boot_at_once_and_send_out_of_phase() -> None:
     listener = SimulatedBus(network, "controller")
     detach = network.attach(lambda frame, now: heard.append((now, frame)))
     nodes = range(1, 47)
-    with Emulator(SimulatedBus(network, "twins"), [_keybox(n) for n in nodes]):
+    with SimulatedBus(network, "twins") as twins, Emulator(twins, [_keybox(n) for n in nodes]):
         scheduler.run_until(None, 0.1)
     detach()
     listener.shutdown()
@@ -65,8 +65,8 @@ def test_without_a_spread_twins_stay_in_phase_as_in_a_rig() -> None:
 
 def test_a_spread_that_is_not_a_time_is_refused() -> None:
     scheduler = SimulatedScheduler()
-    bus = SimulatedBus(SimulatedNetwork(scheduler), "twins")
-    with pytest.raises(ValueError, match="power_up_spread"):
-        Emulator(bus, [], power_up_spread=-0.01)
-    with pytest.raises(ValueError, match="power_up_spread"):
-        Emulator(bus, [], power_up_spread=float("nan"))
+    with SimulatedBus(SimulatedNetwork(scheduler), "twins") as bus:
+        with pytest.raises(ValueError, match="power_up_spread"):
+            Emulator(bus, [], power_up_spread=-0.01)
+        with pytest.raises(ValueError, match="power_up_spread"):
+            Emulator(bus, [], power_up_spread=float("nan"))

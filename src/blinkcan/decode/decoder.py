@@ -368,6 +368,44 @@ class Decoder:
         served = self._served
         return served is not None and served[0][3] is event.fields
 
+    def kept_event(self, can_id: int, extended: bool, data: bytes, time: float) -> Event | None:
+        """For a batch reader that keeps what it made of kept events (:meth:`is_kept`): where
+        this frame makes a kept event again (an SDO read or value seen before, a J1939 keypad
+        frame's with the same keypad addresses), that event, the decoder's state moved as
+        :meth:`decode` moves it; None otherwise, nothing moved (then decode the frame)."""
+        if extended:
+            frame = _new_tuple(Frame, (can_id, data, True))
+            known = self._j1939_known.get(frame)
+            if known is None or known[2] != len(self.j1939.addresses):  # (Decoder._extended)
+                return None
+            self._served = known
+            return _new_tuple(Event, (time, frame, Kind.J1939, *known[0]))
+        if can_id & 0x780 not in _SDO_FUNCTIONS or not can_id & 0x7F:  # Decoder._route: SDO
+            return None
+        frame = _new_tuple(Frame, (can_id, data, False))
+        seen = self._sdo_seen(frame, time)
+        if seen is None:
+            return None
+        kind, self._served = seen
+        return _new_tuple(Event, (time, frame, kind, *seen[1][0]))
+
+    def key_signal(self, can_id: int) -> tuple[int, int, int] | None:
+        """(node, shift, mask) of the keys in the frames of an 11-bit key-state PDO
+        identifier decoded before (PKP §10: their meaning depends on the keys held before;
+        the mask is the node's keys); None for any other identifier."""
+        return self._keyed.get((can_id, False))
+
+    def keys_held(self, node: int) -> int:
+        """The keys of a node the decoder holds down (a mask, bit 0 is key 1): what its last
+        key state said (PKP §10), none after its boot-up."""
+        return self._keys.get(node, 0)
+
+    def hold_keys(self, node: int, keys: int) -> None:
+        """For a batch reader that keeps what a key-state frame made (by :meth:`key_signal`'s
+        keys and :meth:`keys_held` before it): the keys that frame leaves held, as
+        :meth:`decode` would have left them."""
+        self._keys[node] = keys
+
     def text(self, frame: Frame, time: float = 0.0) -> str:
         """``str(decode(frame, time))``: another ECU's frame is a lookup, a PDO's text is
         written without an Event."""

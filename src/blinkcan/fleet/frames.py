@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
-from blinkcan.decode.describers import Describe, pdo_describer
+from blinkcan.decode.describers import Describe, keyed_signal, pdo_describer
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows, Follower
 from blinkcan.formats.columns import ArrowColumns, FrameColumns
@@ -224,6 +224,13 @@ class FrameDecoder:
         #: changes nothing (a heartbeat's; a frame too short for its PDO, by its identifier
         #: alone), by the identifier and bytes, for the devices' models they were made with
         self._pure: dict[object, KeptRows] = {}
+        #: key-state PDO identifiers (their meaning depends on the keys held before: PKP §10):
+        #: the decoder's (node, shift, mask) of their keys, and the shortest frame that has them
+        self._keyed: dict[int, tuple[int, int, int, int]] = {}
+        #: what a key-state frame that has its keys made, by its identifier, its keys and the
+        #: node's keys held before it (all its event depends on: Decoder.repeat_state; its
+        #: tick is in no row), for the devices' models they were made with
+        self._keyed_rows: dict[tuple[int, int, int], KeptRows] = {}
         self._models: dict[int, DeviceDescription] = {}
         #: False: every device frame's rows made of its event (the tests' reference)
         self.fast = True
@@ -236,11 +243,15 @@ class FrameDecoder:
         the node's model's PDOs on it, decode/decoder.py Decoder._route)."""
         frame, node, rows = event.frame, event.node_id, self._rows
         device = self._decoder.devices.get(node) if node is not None else None
-        if device is None or node is None or frame.extended or \
-                self._decoder.repeat_state(frame.can_id, False, frame.data) != ():
+        if device is None or node is None or frame.extended:
             return None
         layout = next((p for p in device.pdos if p.cob_id(node) == frame.can_id), None)
         if layout is None or layout.name != event.fields.get("pdo"):
+            return None
+        keys = self._decoder.key_signal(frame.can_id)
+        if keys is not None and keys[0] == node and keyed_signal(layout) is not None:
+            self._keyed[frame.can_id] = (*keys, layout.min_length)  # rows by keys (decode)
+        if self._decoder.repeat_state(frame.can_id, False, frame.data) != ():
             return None
         follow = rows.follower(node, layout)
         if follow is None and rows.follows(layout.name):
@@ -295,21 +306,24 @@ class FrameDecoder:
 
     def _kept_rows(self, event: Event, place: int, nodes: list[int | None],
                    models: list[str | None], texts: list[str | None]) -> list[Detail]:
-        """:meth:`_event_rows` of an event made from an entry the decoder keeps: what was
-        made of that entry before."""
-        fields = event.fields
-        tag = (event.kind, id(fields))
+        """:meth:`_event_rows` of an event made from an entry the decoder keeps."""
+        nodes[place], models[place], texts[place], details = self._kept_made(event)
+        return details
+
+    def _kept_made(self, event: Event) -> KeptRows:
+        """What an event made from an entry the decoder keeps makes: what was made of that
+        entry before."""
+        fields = event[6]
+        tag = (event[2], id(fields))
         made_of = self._kept_events.get(tag)
         if made_of is not None and made_of[0] is fields:
-            nodes[place], models[place], texts[place], details = made_of[1]
-            return details
+            return made_of[1]
         node, model, details = self._rows.rows(event)
-        text = str(event)
-        nodes[place], models[place], texts[place] = node, model, text
+        made = (node, model, str(event), details)
         if len(self._kept_events) >= _ROWS_KEPT:
             self._kept_events.clear()
-        self._kept_events[tag] = (fields, (node, model, text, details))
-        return details
+        self._kept_events[tag] = (fields, made)
+        return made
 
     def decode(self, block: FrameColumns, start: int, segment: Segment, limit: int) -> int:
         """Decode the block's frames from ``start`` into ``segment`` until it holds ``limit``
@@ -358,11 +372,18 @@ class FrameDecoder:
             self._kept_events.clear()
             self._pdo_routes.clear()
             self._pure.clear()
+            self._keyed.clear()
+            self._keyed_rows.clear()
             self._models = snapshot
         fast, pdo_routes, pdo_detail = self.fast, self._pdo_routes, self._rows.pdo_detail
         pure, heartbeat = self._pure, HEARTBEAT
         if len(pure) > _ROWS_KEPT:
             pure.clear()
+        keyed, keyed_rows = self._keyed, self._keyed_rows
+        if len(keyed_rows) > _ROWS_KEPT:
+            keyed_rows.clear()
+        keys_held, hold_keys = decoder.keys_held, decoder.hold_keys
+        kept_event, kept_made = decoder.kept_event, self._kept_made
         find_number, number = segment.numbers.get, segment.number
         event_texts = self._texts
         if len(event_texts) > _TEXTS_KEPT:
@@ -379,7 +400,7 @@ class FrameDecoder:
             can_id, flag = idents[count]
             payload = payloads[count]
             route = pdo_routes.get(can_id) if fast and not flag else None
-            made = None
+            made = keyed_key = None
             if route is not None:
                 if len(payload) >= route.length:  # no Event: its bytes
                     text, fields = route.describe(payload)
@@ -390,8 +411,22 @@ class FrameDecoder:
                         follow(payload)
                 elif len(payload) < route.shortest:
                     made = pure.get(can_id)
-            elif fast and not flag and can_id & 0x780 == heartbeat:
+            elif not fast:
+                pass
+            elif not flag and can_id & 0x780 == heartbeat:
                 made = pure.get((can_id, payload))
+            elif not flag and can_id in keyed:  # a key state: by its keys and those before
+                node, shift, mask, shortest = keyed[can_id]
+                if len(payload) >= shortest:
+                    keys = int.from_bytes(payload, "little") >> shift & mask
+                    keyed_key = (can_id, keys, keys_held(node))
+                    made = keyed_rows.get(keyed_key)
+                    if made is not None:
+                        hold_keys(node, keys)
+            else:  # an event the decoder keeps (SDO, J1939 keypad): what it made before
+                event = kept_event(can_id, flag, payload, times[count])
+                if event is not None:
+                    made = kept_made(event)
             decoded = False  # the decoder's devices change only where it decodes a frame
             if made is not None:
                 nodes[place], models[place], texts[place], details = made
@@ -400,6 +435,9 @@ class FrameDecoder:
                 details = self._event_rows(
                     decode(new(frame_type, (can_id, payload, flag)), times[count]), place,
                     nodes, models, texts)
+                if keyed_key is not None and keys_held(node) == keyed_key[1]:
+                    keyed_rows[keyed_key] = (nodes[place], models[place], str(texts[place]),
+                                             details)
             added = 1
             if len(details) == 1:
                 code = find_number(details[0])

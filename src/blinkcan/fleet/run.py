@@ -13,8 +13,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from blinkcan.decode.nodes import ModelsByNode, split_devices
+from blinkcan.fleet.local_files import is_local, local_root
 from blinkcan.fleet.schema import ROWS_PER_GROUP
-from blinkcan.fleet.task import FileResult, decode_file
+from blinkcan.fleet.task import META, FileResult, decode_file, source_key
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
@@ -41,7 +42,8 @@ def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None
     ``out`` itself when it is among them: ``decode logs --parquet logs/lake`` run again must not
     read the dataset as logs). Links are followed: a linked folder is read (once, however many
     links lead to it; a link to a folder being read is a loop, not read again), and a file
-    reached by several names is decoded under the first (``Sources.same`` names the others).
+    reached by several names is decoded under one (``Sources.same`` names the others): the
+    one the dataset ``out`` has it decoded under already, else the first.
     A name that is no readable file (a dangling link, a pipe) is kept: its task names it."""
     dataset = None if out is None or "://" in out else os.path.abspath(out)
     real_dataset = None if dataset is None else os.path.realpath(dataset)
@@ -53,18 +55,40 @@ def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None
             names.extend(_walk(source, (dataset, real_dataset), walked))
         else:
             names.append(source)
-    files: dict[object, str] = {}
-    same: dict[str, str] = {}
-    for name in names:
+    known: dict[object, list[str]] = {}
+    for name in dict.fromkeys(names):
         try:
             found = os.stat(name)
             identity: object = (found.st_dev, found.st_ino)
         except OSError:  # a dangling link, a loop: its task says why it cannot be read
             identity = name
-        first = files.setdefault(identity, name)
-        if first != name:
-            same.setdefault(name, first)
-    return Sources(list(files.values()), same, list(dict.fromkeys(names)))
+        known.setdefault(identity, []).append(name)
+    files: list[str] = []
+    same: dict[str, str] = {}
+    for each in known.values():
+        chosen = each[0] if len(each) == 1 or out is None else _decoded_under(each, out)
+        files.append(chosen)
+        same.update((name, chosen) for name in each if name != chosen)
+    return Sources(files, same, list(dict.fromkeys(names)))
+
+
+def _decoded_under(names: list[str], out: str) -> str:
+    """Of several names of one file, the one the dataset at ``out`` has a manifest for (an
+    earlier run decoded the file under it: its names may have come in another order), else
+    the first. A manifest is keyed by the name (``task.source_key``), so decoding under
+    another name would put every frame of the file in the dataset a second time."""
+    for name in names:
+        manifest = f"{META}/{source_key(name)}.json"
+        if is_local(out):
+            if os.path.exists(os.path.join(local_root(out), manifest)):
+                return name
+            continue
+        from fsspec.core import url_to_fs  # noqa: PLC0415 (a URL only: start-up)
+
+        filesystem, root = url_to_fs(out)
+        if filesystem.exists(f"{root.rstrip('/')}/{manifest}"):
+            return name
+    return names[0]
 
 
 def _walk(folder: str, dataset: tuple[str | None, str | None],

@@ -6,8 +6,18 @@ run in a worker thread: the event loop never blocks. Events reach the loop throu
 ``call_soon_threadsafe``; iterators end when the driver closes. Callbacks given
 to ``on_key`` and the like still run on the bus thread, as with the blocking drivers.
 
+In simulated time (a ``blinkcan.testing.Rig``'s bus) nothing runs in a worker thread: a call,
+a property, the opening and an iterator's wait run the simulation in the thread that awaits
+them (the event loop's, which is the rig's), one after the other, as the blocking driver's
+calls do. The simulation has one thread (``runtime.scheduler``): calls in workers ran it from
+several threads at once, and concurrent calls on a rig failed ("SDO transfers block", missing
+replies) or put their frames on the wire in an order that changed from run to run. A virtual
+wait takes no wall time to speak of (at most ``LONGEST_VIRTUAL_WAIT`` virtual seconds), so
+the loop is not held for long. The driver opens at once, when it is made (as outside a loop).
+
 A cancelled call (``asyncio.wait_for``'s timeout) cancels that call only: the driver and its
-other calls go on. What the worker thread was sending still completes (as an SDO timeout's
+other calls go on (in simulated time a call runs whole, or not at all when it was cancelled
+before it started). What the worker thread was sending still completes (as an SDO timeout's
 write may still have been applied); only the caller stops waiting for it. The driver's picture
 follows what the device confirms, whoever waits: a cancelled ``off(4)`` the Keybox acknowledges
 later makes ``actual[4]`` "off" then, never before; one whose acknowledge never comes is read
@@ -19,6 +29,7 @@ from __future__ import annotations
 import asyncio
 import functools
 import logging
+import threading
 from collections.abc import AsyncIterator, Callable
 from typing import Any, Generic, TypeVar
 
@@ -33,6 +44,21 @@ D = TypeVar("D", bound=Device)
 T = TypeVar("T")
 
 log = logging.getLogger(__name__)
+
+
+def runs_in_simulated_time(bus: object) -> bool:
+    """Whether ``bus`` (a python-can bus, a ``HostBus`` or a port) runs in simulated time: its
+    scheduler says so (a simulated bus's, a rig's, is the simulation's; a python-can bus of
+    an adapter has none)."""
+    return bool(getattr(getattr(bus, "scheduler", None), "simulated", False))
+
+
+def _in_running_loop() -> bool:
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return False
+    return True
 
 
 async def _in_worker(work: Callable[[], T], what: str) -> T:
@@ -63,12 +89,16 @@ def _iterate(opened: AsyncDriver[Any], source: Callable[[Any], EventSource[E]],
     still opening). A subscription whose event loop has closed removes itself."""
     check_event_timeout(timeout)
     loop = asyncio.get_running_loop()
+    loop_thread = threading.get_ident()
     waiting: asyncio.Queue[E] = asyncio.Queue()
     removers: list[Callable[[], None]] = []
     arrivals = _Arrivals()
 
     def deliver(event: E) -> None:
         arrivals.count += 1
+        if threading.get_ident() == loop_thread and not loop.is_closed():
+            waiting.put_nowait(event)  # the simulation, run by the loop's own thread
+            return
         try:
             loop.call_soon_threadsafe(waiting.put_nowait, event)
         except RuntimeError:  # the loop is closed: nobody will read this iterator
@@ -87,29 +117,22 @@ class _Arrivals:
     """How many events reached an async iterator (counted on the bus thread): a simulated
     wait for the next one runs until the count moves."""
 
-    __slots__ = ("abandoned", "count")
+    __slots__ = ("count",)
 
     def __init__(self) -> None:
         self.count = 0
-        #: the awaiting caller stopped waiting (cancelled): the simulation stops too
-        self.abandoned = False
 
 
-async def _next_simulated(events: EventSource[E], waiting: asyncio.Queue[E],
-                          arrivals: _Arrivals, timeout: float | None) -> bool:
-    """Simulated time: run the simulation in a worker thread (as the driver's own calls do)
-    until an event arrives, the driver closes or ``timeout`` virtual seconds pass; nothing
-    else would move the clock, so waiting for an event in real time would wait for ever.
-    True when an event is waiting."""
+def _next_simulated(events: EventSource[E], waiting: asyncio.Queue[E],
+                    arrivals: _Arrivals, timeout: float | None) -> bool:
+    """Simulated time: run the simulation, in this thread (the loop's: the simulation's one
+    thread), until an event arrives, the driver closes or ``timeout`` virtual seconds pass;
+    nothing else would move the clock, so waiting for an event in real time would wait for
+    ever. True when an event is waiting."""
     if waiting.empty():
         seen = arrivals.count
-        try:
-            await asyncio.to_thread(events.run_until, lambda: arrivals.count != seen
-                                    or events.closed or arrivals.abandoned, timeout)
-        except asyncio.CancelledError:
-            arrivals.abandoned = True  # the worker's simulation stops at its next event
-            raise
-    return not waiting.empty()  # the arrivals' hand-offs ran before this resumed
+        events.run_until(lambda: arrivals.count != seen or events.closed, timeout)
+    return not waiting.empty()  # the arrivals were put in the queue by this thread
 
 
 async def _drain(opened: AsyncDriver[Any], subscribe: Callable[[Any], None],
@@ -125,7 +148,7 @@ async def _drain(opened: AsyncDriver[Any], subscribe: Callable[[Any], None],
             if events.closed and waiting.empty():
                 return  # the driver was closed
             if events.simulated:
-                if not await _next_simulated(events, waiting, arrivals, timeout):
+                if not _next_simulated(events, waiting, arrivals, timeout):
                     return  # timeout virtual seconds without one, or the driver closed
                 yield waiting.get_nowait()
                 continue
@@ -145,7 +168,8 @@ async def _drain(opened: AsyncDriver[Any], subscribe: Callable[[Any], None],
 class AsyncDriver(Generic[D]):
     """Wraps a blocking driver: its methods and properties become coroutines, run in a worker
     thread, so the event loop never blocks. Built inside a running loop, the driver opens in
-    a worker thread too (``await x.open()`` or the first awaited call waits for it).
+    a worker thread too (``await x.open()`` or the first awaited call waits for it). In
+    simulated time they run in the awaiting thread instead (see the module docstring).
 
     The base of every asyncio face: a model's face names its blocking driver in ``_driver``
     and turns each of its event sources into an async iterator with :meth:`stream`."""
@@ -156,9 +180,9 @@ class AsyncDriver(Generic[D]):
         make = functools.partial(self._driver, *args, **kwargs)
         self._device: D | None = None
         self._opening: asyncio.Future[D] | None = None
-        try:
-            asyncio.get_running_loop()
-        except RuntimeError:
+        #: on a simulated bus every call runs in the awaiting thread: the simulation's one
+        self._simulated = runs_in_simulated_time(args[0] if args else kwargs.get("bus"))
+        if self._simulated or not _in_running_loop():
             self._device = make()
         else:
             self._opening = asyncio.ensure_future(asyncio.to_thread(make))
@@ -185,7 +209,7 @@ class AsyncDriver(Generic[D]):
 
             async def read() -> Any:
                 await self.open()
-                return await _in_worker(functools.partial(getattr, self._device, name), name)
+                return await self._run(functools.partial(getattr, self._device, name), name)
 
             return read()
         if callable(kind) and not name.startswith("on_"):
@@ -193,12 +217,18 @@ class AsyncDriver(Generic[D]):
             @functools.wraps(kind)
             async def call(*args: Any, **kwargs: Any) -> Any:
                 await self.open()
-                return await _in_worker(
+                return await self._run(
                     functools.partial(getattr(self._device, name), *args, **kwargs),
                     _call_text(name, args, kwargs))
 
             return call
         return getattr(self.device, name)  # callbacks register at once; values as they are
+
+    async def _run(self, work: Callable[[], T], what: str) -> T:
+        """``work()``: here in simulated time (the simulation's thread), else in a worker."""
+        if self._simulated:
+            return work()
+        return await _in_worker(work, what)
 
     def stream(self, source: Callable[[D], EventSource[E]], timeout: float | None = None
                ) -> AsyncIterator[E]:
@@ -215,7 +245,7 @@ class AsyncDriver(Generic[D]):
 
     async def __aexit__(self, *exc_info: object) -> None:
         await self.open()
-        await asyncio.to_thread(self.device.close)
+        await self._run(self.device.close, "close()")
 
 
 class AsyncKeypad(AsyncDriver[Keypad]):
@@ -233,6 +263,9 @@ class AsyncKeybox(AsyncDriver[Keybox]):
 
 
 async def async_scan(*args: Any, **kwargs: Any) -> list[Found]:
+    """:func:`scan` in a worker thread (in the awaiting thread in simulated time)."""
+    if runs_in_simulated_time(args[0] if args else kwargs.get("bus")):
+        return scan(*args, **kwargs)
     return await asyncio.to_thread(scan, *args, **kwargs)
 
 

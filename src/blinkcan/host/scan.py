@@ -95,13 +95,15 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
                 same = identify(device_type) if len(types) == 1 else None
                 return Found(node, same.kind if same else None, device_type,
                              heard=node in heard, answers=len(replies))
-            value = _expedited_value(replies[0])
+            return identity(node, _expedited_value(replies[0]), timeout)
+
+        def identity(node: int, device_type: int | None, window: float) -> Found | None:
             # the device is there: a reply lost now (a busy bus, a loaded host) is asked again,
             # so that it never makes a known device "other CANopen" or a blank column
-            channel = host.sdo(node, timeout=timeout, retries=IDENTITY_RETRIES)
+            channel = host.sdo(node, timeout=window, retries=IDENTITY_RETRIES)
             try:
-                device_type = value if value is not None else int.from_bytes(
-                    channel.upload(0x1000, 0), "little")
+                if device_type is None:
+                    device_type = int.from_bytes(channel.upload(0x1000, 0), "little")
             except SdoError:
                 return None
             try:
@@ -123,6 +125,16 @@ def scan(bus: HostBus | can.BusABC, listen: float = 0.3, timeout: float = 0.2,
         else:
             with ThreadPoolExecutor(max_workers=32) as pool:
                 found = [f for f in pool.map(probe, node_ids) if f is not None]
+        # A node that sent a heartbeat, or whose 1000h reply came after its window (a loaded
+        # host reads late), is there: read its identity as a driver does (retries, a window
+        # twice as long), so that the host's own lateness never drops a present device. A
+        # silent node is not asked twice.
+        answered = {f.node_id for f in found}
+        for node in node_ids:
+            if node not in answered and (node in heard or host.sdo(node).channel.late_replies):
+                again = identity(node, None, 2 * timeout)
+                if again is not None:
+                    found.append(again)
     finally:
         for remove in removers:
             remove()

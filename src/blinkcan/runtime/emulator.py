@@ -37,6 +37,9 @@ Rules:
   (given a python-can bus, not a port) asks for a slack of ``LOOP_TIMER_SLACK_NS`` (prctl
   ``PR_SET_TIMERSLACK``: that thread only, Linux only, nothing else changes; elsewhere, or where
   the call is refused, the default stays). It still sleeps until each deadline: no core spins.
+  On a machine short of CPU the one loop thread is now and then woken milliseconds late by the
+  kernel, as any thread is; every twin due meanwhile is then late with it (``send_periodic``'s
+  thread per frame spreads such a stall over one frame), so the p99 at send follows the load.
 - The bus is read as every blinkcan reader reads it (the port's: ``runtime.canport``): a frame
   it cannot decode is counted and dropped, a failing bus is read with a back-off, a shut-down
   bus stops the reader; each is logged once. Frames the emulator sent never come back to it as

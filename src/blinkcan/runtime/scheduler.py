@@ -54,7 +54,24 @@ _POSTED = object()
 #: the argument of a timer's entry in the simulated scheduler's queue of calls due now
 _TIMER = object()
 _MAX_IDLE_WAIT = 0.5
+#: the longest timeout a wait on a simulated bus takes, in virtual seconds (an hour): a busy
+#: rig simulates an hour in under a minute of wall time, but ``timeout=1e308`` ran for ever, and
+#: a driver's SDO timeout of a day (its bound on a real bus) took minutes. One bound for every
+#: wait in virtual time: the drivers' (here), ``rig.until``, the event iterators,
+#: ``SimulatedBus.recv`` and the libraries' waits (``runtime.virtual_waits``)
+LONGEST_VIRTUAL_WAIT = 3600.0
 _WORKERS = 4  # blocking work (SDO off a handler) per scheduler: bounded, never one per call
+
+
+def check_virtual_timeout(timeout: float) -> float:
+    """``timeout`` if it is a number of virtual seconds up to :data:`LONGEST_VIRTUAL_WAIT`
+    (one not above 0 waits for nothing); else TypeError/ValueError naming that range."""
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)):
+        raise TypeError(f"timeout must be a number of seconds, not {type(timeout).__name__}")
+    if not timeout <= LONGEST_VIRTUAL_WAIT:  # NaN and infinity too
+        raise ValueError(f"timeout must be at most {LONGEST_VIRTUAL_WAIT:g} virtual seconds on "
+                         f"a simulated bus, not {timeout!r}")
+    return timeout
 
 
 class Signal(Protocol):
@@ -578,7 +595,9 @@ class SimulatedScheduler(Scheduler):
         return Flag()
 
     def wait(self, signal: Signal, timeout: float, background: bool = False) -> bool:
-        check_time("timeout", timeout, infinite=True)
+        """As :meth:`Scheduler.wait`, in virtual time: ``timeout`` up to
+        :data:`LONGEST_VIRTUAL_WAIT`, else a ValueError before the simulation runs."""
+        check_time("timeout", check_virtual_timeout(timeout))  # -inf too
         if background:
             return self.run_until(signal.is_set, self.now + timeout)
         self._waits += 1

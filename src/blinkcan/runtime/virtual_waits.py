@@ -38,24 +38,17 @@ from typing import Any
 
 import can
 
-from blinkcan.runtime.scheduler import SimulatedScheduler
+from blinkcan.runtime.scheduler import (
+    LONGEST_VIRTUAL_WAIT,
+    SimulatedScheduler,
+    check_virtual_timeout,
+)
+
+__all__ = ["LONGEST_VIRTUAL_WAIT", "RECV_FOREVER", "check_virtual_timeout",
+           "install_virtual_waits"]
 
 #: virtual seconds a wait with no timeout waits at most (``SimulatedBus.recv()`` too)
 RECV_FOREVER = 60.0
-#: the longest timeout a wait on a simulated bus takes, in virtual seconds (an hour): a busy
-#: rig simulates an hour in under a minute of wall time, but ``timeout=1e308`` ran for ever
-LONGEST_VIRTUAL_WAIT = 3600.0
-
-
-def check_virtual_timeout(timeout: float) -> float:
-    """``timeout`` if it is a number of virtual seconds up to :data:`LONGEST_VIRTUAL_WAIT`
-    (one not above 0 waits for nothing); else TypeError/ValueError naming that range."""
-    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)):
-        raise TypeError(f"timeout must be a number of seconds, not {type(timeout).__name__}")
-    if not timeout <= LONGEST_VIRTUAL_WAIT:  # NaN and infinity too
-        raise ValueError(f"timeout must be at most {LONGEST_VIRTUAL_WAIT:g} virtual seconds on "
-                         f"a simulated bus, not {timeout!r}")
-    return timeout
 
 log = logging.getLogger(__name__)
 
