@@ -7,6 +7,7 @@ from __future__ import annotations
 import ctypes
 import random
 import sys
+import threading
 import time
 import uuid
 from collections.abc import Callable, Iterator
@@ -17,7 +18,7 @@ import pytest
 from blinkcan.protocol import Frame
 from blinkcan.runtime import Emulator, to_frame, to_message
 from blinkcan.runtime.canport import CanBusPort, reuses_messages
-from blinkcan.runtime.emulator import LOOP_TIMER_SLACK_NS
+from blinkcan.runtime.emulator import LOOP_TIMER_SLACK_NS, set_timer_slack
 from blinkcan.testing import Rig
 from blinkcan.twin import KeypadTwin
 from blinkcan.twin.base import CanopenTwin
@@ -351,6 +352,12 @@ def test_the_emulators_own_loop_thread_alone_gets_the_small_timer_slack(
     def slack(now: float = 0.0) -> int:
         return int(libc.prctl(_PR_GET_TIMERSLACK, 0, 0, 0, 0))
 
+    probe = threading.Thread(target=lambda: allowed.append(set_timer_slack(2_000)))
+    allowed: list[bool] = []
+    probe.start()
+    probe.join()
+    if allowed != [True]:
+        pytest.skip("this system refuses prctl(PR_SET_TIMERSLACK) (a sandbox)")
     mine = slack()
     with Emulator(device_bus, [KeypadTwin()]) as emulator:
         assert emulator.run(slack) == LOOP_TIMER_SLACK_NS
@@ -363,3 +370,10 @@ def test_the_emulators_own_loop_thread_alone_gets_the_small_timer_slack(
             assert emulator.run(slack) == before
     finally:
         port.scheduler.stop()
+
+
+def test_a_timer_slack_below_one_nanosecond_is_refused_by_name() -> None:
+    """0 would silently restore the kernel's default slack: refused, as any value below 1."""
+    for nanoseconds in (0, -5):
+        with pytest.raises(ValueError, match=r">= 1 ns"):
+            set_timer_slack(nanoseconds)

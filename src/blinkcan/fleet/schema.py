@@ -1,6 +1,7 @@
 """The table of the dataset: one row per decoded event (see ``rows.py``), and its layout.
 
-``OUT/model=<model>/date=<YYYY-MM-DD>/<source key>.parquet``: Hive partitions by the model of
+``OUT/model=<model>/date=<YYYY-MM-DD>/<source key>.parquet`` (a long log's partition goes on
+in ``<source key>-2.parquet``, ...: writer.GROUPS_PER_FILE): Hive partitions by the model of
 the node a row is about (``unknown`` where no model is known: foreign frames) and by the UTC
 date of its time; the partition columns are in the path, not in the files (Hive's way, which
 DuckDB, Spark, Athena, pyarrow, pandas and polars read). ``_blinkcan/`` beside them holds the

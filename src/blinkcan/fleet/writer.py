@@ -6,9 +6,13 @@ ones); :meth:`PartitionWriter.write` makes each column one Arrow array (the dist
 converted once and taken for the rows, the frame's columns repeated for its rows by one
 ``take``), the times
 with Arrow's arithmetic, and writes each partition's rows as a row group (one stable sort by
-partition, then slices), so memory stays the same whatever the log's size. Files go to a
-folder of the caller's choice (the caller renames them into the dataset once the whole log is
-decoded).
+partition, then slices). A Parquet file holds every row group's metadata (some 11 kB each)
+until it is closed, so a partition's file is closed once it has :data:`GROUPS_PER_FILE` row
+groups (its rows go on in the partition's next file: ``<name>-2.parquet``, ...), and once the
+log's time has passed its date (a log is in time order: no more rows come for it; a row that
+does starts the partition's next file). So memory stays the same whatever the log's size.
+Files go to a folder of the caller's choice (the caller renames them into the dataset once the
+whole log is decoded).
 """
 
 from __future__ import annotations
@@ -33,6 +37,9 @@ if TYPE_CHECKING:
     from blinkcan.fleet.local_files import LocalFiles
 
 _EPOCH_ORDINAL = datetime.date(1970, 1, 1).toordinal()
+#: row groups in one file of a partition before its next file is begun (at most some 0.7 MB of
+#: metadata held per file open; 4 M rows in full row groups)
+GROUPS_PER_FILE = 64
 _DAY_S = 86_400
 #: times a Parquet timestamp in microseconds carries (years 1..9999)
 _EARLIEST_S, _LATEST_S = -62_135_596_800, 253_402_300_800
@@ -72,7 +79,10 @@ class PartitionWriter:
             raise ValueError(f"rows_per_group must be 1 or more, not {rows_per_group}")
         self._fs, self._folder, self._name, self._source = fs, folder, name, source
         self._rows_per_group = rows_per_group
-        self._writers: dict[tuple[str, str], tuple[Any, pq.ParquetWriter]] = {}
+        #: the open file of each partition: its stream, its writer, its row groups so far
+        self._writers: dict[tuple[str, str], tuple[Any, pq.ParquetWriter, list[int]]] = {}
+        #: the files of each partition begun so far (a partition's next file is numbered on)
+        self._files: dict[tuple[str, str], list[str]] = {}
         self._days: dict[int, str] = {}
         self._day = (0.0, 0.0, UNKNOWN)  # the day of the last time: [start, end) and its date
         #: rows written so far
@@ -155,33 +165,56 @@ class PartitionWriter:
         table = pa.Table.from_arrays(arrays, schema=SCHEMA)
         offset = 0
         for partition, size in zip(partitions, sizes, strict=True):
-            self._writer(partition).write_table(table.slice(offset, size))
+            _, writer, groups = self._writer(partition)
+            writer.write_table(table.slice(offset, size))
             offset += size
+            groups[0] += 1
+            if groups[0] >= GROUPS_PER_FILE:
+                self._finish(partition)
         self.rows += rows
+        today = dates if isinstance(dates, str) else min(
+            (date for date in dates if date != UNKNOWN), default=UNKNOWN)
+        if today != UNKNOWN:  # the files of dates the log's time has passed: closed
+            for partition in [p for p in self._writers if UNKNOWN != p[1] < today]:
+                self._finish(partition)
 
-    def _writer(self, partition: tuple[str, str]) -> pq.ParquetWriter:
+    def _finish(self, partition: tuple[str, str]) -> None:
+        """A partition's open file closed (written whole: its footer)."""
+        entry = self._writers.pop(partition, None)
+        if entry is None:
+            return
+        stream, writer, _ = entry
+        writer.close()
+        stream.close()
+
+    def _writer(self, partition: tuple[str, str]
+                ) -> tuple[Any, pq.ParquetWriter, list[int]]:
+        """The partition's open file, begun if it has none (its first, or its next)."""
         entry = self._writers.get(partition)
         if entry is None:
-            folder = f"{self._folder}/{partition_path(*partition)}"
-            self._fs.makedirs(folder, exist_ok=True)
-            stream = self._fs.open(f"{folder}/{self._name}", "wb")
-            entry = self._writers[partition] = (stream, pq.ParquetWriter(stream, SCHEMA,
-                                                                          **_PARQUET_OPTIONS))
-        return entry[1]
+            files = self._files.setdefault(partition, [])
+            name = self._name if not files else \
+                f"{self._name.removesuffix('.parquet')}-{len(files) + 1}.parquet"
+            relative = f"{partition_path(*partition)}/{name}"
+            self._fs.makedirs(f"{self._folder}/{partition_path(*partition)}", exist_ok=True)
+            stream = self._fs.open(f"{self._folder}/{relative}", "wb")
+            files.append(relative)
+            entry = self._writers[partition] = (
+                stream, pq.ParquetWriter(stream, SCHEMA, **_PARQUET_OPTIONS), [0])
+        return entry
 
     def close(self) -> list[str]:
-        """Close the files; their paths relative to the folder."""
-        written = []
-        for partition, (stream, writer) in sorted(self._writers.items()):
-            writer.close()
-            stream.close()
-            written.append(f"{partition_path(*partition)}/{self._name}")
-        self._writers.clear()
+        """Close the files; their paths relative to the folder (by partition, then in the
+        order they were begun)."""
+        for partition in list(self._writers):
+            self._finish(partition)
+        written = [path for _, files in sorted(self._files.items()) for path in files]
+        self._files.clear()
         return written
 
     def abandon(self) -> None:
         """Close the files without finishing them (the caller removes the folder)."""
-        for stream, writer in self._writers.values():
+        for stream, writer, _ in self._writers.values():
             try:
                 writer.close()
             finally:

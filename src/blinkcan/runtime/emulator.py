@@ -118,11 +118,11 @@ def set_timer_slack(nanoseconds: int) -> bool:
     """Linux: the calling thread's timers may fire up to ``nanoseconds`` late (prctl
     ``PR_SET_TIMERSLACK``; the default is 50 us). True where it took; False elsewhere or where
     the C library refuses (nothing changed)."""
-    if not sys.platform.startswith("linux"):
-        return False
     if nanoseconds < 1:
         raise ValueError(f"timer slack must be >= 1 ns (0 would restore the default), "
                          f"got {nanoseconds}")
+    if not sys.platform.startswith("linux"):
+        return False
     try:
         prctl = ctypes.CDLL(None, use_errno=True).prctl
     except (OSError, AttributeError):
