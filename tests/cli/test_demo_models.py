@@ -13,6 +13,7 @@ from click.testing import CliRunner
 
 from blinkcan.cli.demo_model import host_steps, scripted_steps
 from blinkcan.cli.main import cli
+from blinkcan.devices.keypad_j1939 import DEFAULT_ADDRESS
 from blinkcan.devices.registry import models
 from blinkcan.twin.registry import build_twin
 
@@ -36,8 +37,9 @@ def test_the_demo_of_each_model_runs_its_scenario(spec: str, protocol: str) -> N
     face = description.face
     commands = [title for title, _ in host_steps(mock.Mock(), face)]
     lines = result.output.splitlines()
-    assert f"== {description.title} at node {twin.node_id:02X}h ({protocol}) is powered on" \
-        in lines
+    where = f"address {DEFAULT_ADDRESS:02X}h (J1939)" if protocol == "j1939" else \
+        f"node {twin.node_id:02X}h (CANopen)"  # before: "node 15h (j1939)", not where it is
+    assert f"== {description.title} at {where} is powered on" in lines
     for step in steps:
         assert f"== {step}" in lines
     # what the model shows: each command of the host, and a frame the host sent for it

@@ -193,3 +193,29 @@ def test_info_over_j1939_waits_a_heartbeat_period(
         Frame(0x18EF2100, bytes.fromhex("041B75010AFFFFFF"), extended=True), now))
     for _ in range(3):  # whenever info starts within the period
         assert "heartbeat         counter " in run("keypad", "--protocol", "j1939", *bus, "info")
+
+
+@pytest.fixture
+def moved_bench() -> Iterator[tuple[str, Emulator, KeypadTwin]]:
+    """A keypad in J1939 mode at 30h, as ``emulate keypad:0x30 --protocol j1939`` runs it."""
+    channel = f"cli-j1939-{uuid.uuid4().hex}"
+    bus = can.Bus(interface="virtual", channel=channel)
+    twin = KeypadTwin(protocol="j1939", settings={"j1939_source_address": 0x30})
+    with Emulator(bus, [twin]) as emulator:
+        yield channel, emulator, twin
+    bus.shutdown()
+
+
+@pytest.mark.parametrize("where", [["--node-id", "0x30", "led"], ["led", "--node-id", "30h"]])
+def test_node_id_over_j1939_is_the_address(
+        moved_bench: tuple[str, Emulator, KeypadTwin], where: list[str]) -> None:
+    """Before, ``keypad --protocol j1939 --node-id 0x30`` went to 21h (no keypad there: "no
+    keypad heard at 21h"; or, worse, another keypad that is there)."""
+    channel, emulator, twin = moved_bench
+    bus = ["-i", "virtual", "-c", channel]
+    assert run("keypad", "--protocol", "j1939", *bus, *where, "3", "red") == \
+        "keypad 30h (J1939): key 3 red\n"
+    assert emulator.snapshot(twin)["commanded"][2]["colour"] == "red"
+    # beside --address, --node-id is its CANopen node id (as the driver takes both)
+    assert run("keypad", "--address", "0x30", "--node-id", "0x15", *bus, "brightness", "40") \
+        == "keypad 30h (J1939): indicator brightness 40\n"

@@ -4,6 +4,14 @@ python-can raises a ``CanError`` from ``recv`` for each of them (udp_multicast: 
 unpack received message"). A command that watches or records a bus counts them, reports the
 first once, and reads on; only a bus that keeps failing, with no frame and no quiet moment in
 between for :attr:`BusFaults.give_up_after` seconds, ends the watching.
+
+A datagram python-can *can* unpack is not always a frame: ``udp_multicast`` builds a
+``can.Message`` from any msgpack map and checks the ranges of its numbers, not their types, so
+``{"arbitration_id": 1.5}`` or a flag ``"yes"`` arrives as a message that every log writer and
+the decoder fail on. :func:`receive` counts such a message as one more bus error
+(:func:`~blinkcan.formats.frame_check.wrong_type` says why), so one hostile datagram never
+ends a recording. Its ranges python-can checked (udp_multicast) or the adapter reported; a
+live bus's frame is taken as it comes (a classic DLC of 9-15 included).
 """
 
 from __future__ import annotations
@@ -12,6 +20,8 @@ import time
 from collections.abc import Callable
 
 import can
+
+from blinkcan.formats.frame_check import wrong_type
 
 
 class BusFaults:
@@ -66,9 +76,12 @@ class BusFaults:
 def receive(bus: can.BusABC, timeout: float, faults: BusFaults,
             report: Callable[[str], None]) -> can.Message | None:
     """``bus.recv(timeout)``, with a bus error counted in ``faults`` (the first one passed to
-    ``report``) instead of raised; None then, as for a quiet bus."""
+    ``report``) instead of raised; None then, as for a quiet bus. A message that is no frame
+    (a field of the wrong type) is such an error too."""
     try:
         message = bus.recv(timeout)
+        if message is not None and (why := wrong_type(message)) is not None:
+            raise can.CanOperationError(f"received a message that is no CAN frame: {why}")
     except can.CanError as error:
         if faults.failed(error, time.monotonic()):
             report(faults.first_text())

@@ -20,6 +20,7 @@ from typing import Any
 
 import can
 import click
+from click.core import ParameterSource
 
 from blinkcan.cli.answers import confirm
 from blinkcan.cli.bus_options import NODE_ID, bus_options, cli_bus, parse_int
@@ -60,10 +61,26 @@ _J1939_ADDRESS = "blinkcan.j1939_address"
 _MODEL = "blinkcan.model"
 
 
+#: ``--node-id`` as given on the command line (not its default): over J1939, the address
+_NODE_ID_GIVEN = "blinkcan.node_id_given"
+#: ``--address`` was given (not only ``--protocol j1939``, whose address is 21h)
+_ADDRESS_GIVEN = "blinkcan.address_given"
+
+
 def _j1939_address() -> int | None:
-    """The keypad's J1939 address when ``--protocol j1939`` was given, else None."""
+    """The keypad's J1939 address when ``--protocol j1939`` (or ``--address``) was given, else
+    None: ``--address``, else a ``--node-id`` given (a keypad in J1939 mode is reached at its
+    source address, as ``emulate keypad:0x30 --protocol j1939`` claims 30h), else 21h. Beside
+    ``--address``, ``--node-id`` is the keypad's CANopen node id (the driver's, for a switch
+    back)."""
     context = click.get_current_context(silent=True)
-    return None if context is None else context.meta.get(_J1939_ADDRESS)
+    if context is None:
+        return None
+    address: int | None = context.meta.get(_J1939_ADDRESS)
+    given: int | None = context.meta.get(_NODE_ID_GIVEN)
+    if address is None or given is None or context.meta.get(_ADDRESS_GIVEN):
+        return address  # with --address, --node-id is its CANopen node id (a switch back)
+    return given
 
 
 def _chosen_model() -> str | None:
@@ -305,6 +322,7 @@ def _info(device: Any) -> None:
 def _set_node_id(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
     if value is not None:
         ctx.obj = (ctx.obj[0], value)
+        ctx.meta[_NODE_ID_GIVEN] = value
 
 
 #: ``--node-id`` after the command too (``blinkcan keypad info --node-id 0x16``)
@@ -346,11 +364,14 @@ def _group(kind: str) -> click.Group:
     kinds = _models_of(kind)
     titles = ", ".join(found.description().title for found in kinds)
     names = [name for found in kinds for name in found.names]
+    j1939 = any("j1939" in found.description(generation).features
+                for found in kinds for generation in found.generations)
 
     @click.group(kind, help=f"One-shot control of a {kind}. Models: {titles}; which one is "
                             "read from the device (100Bh) unless --model names it.")
     @click.option("--node-id", type=NODE_ID, default=default,
-                  help=f"The {kind}'s node id (default {default:02X}h).")
+                  help=f"The {kind}'s node id (default {default:02X}h)" + (
+                      "; over J1939 with no --address, its source address." if j1939 else "."))
     @click.option("--model", type=click.Choice(names, case_sensitive=False), default=None,
                   expose_value=False, callback=_set_model,
                   help="Drive the device as this model (default: the one it says it is).")
@@ -358,6 +379,8 @@ def _group(kind: str) -> click.Group:
     @click.pass_context
     def group(ctx: click.Context, node_id: int) -> None:
         ctx.obj = (kind, node_id)
+        if ctx.get_parameter_source("node_id") is not ParameterSource.DEFAULT:
+            ctx.meta[_NODE_ID_GIVEN] = node_id
 
     group.command_class = NegativeArguments  # ``keybox on -1``: a pin, refused by its range
     return group
@@ -394,6 +417,7 @@ def _set_protocol(ctx: click.Context, param: click.Parameter, value: str | None)
 def _set_address(ctx: click.Context, param: click.Parameter, value: int | None) -> None:
     if value is not None:
         ctx.meta[_J1939_ADDRESS] = value
+        ctx.meta[_ADDRESS_GIVEN] = True
 
 
 # a keypad in J1939 mode (spec/pkp-2600-si-j1939.md): led, backlight and brightness go as J1939

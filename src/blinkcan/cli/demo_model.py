@@ -40,6 +40,7 @@ from blinkcan.protocol.nmt import NmtCommand, nmt_frame
 from blinkcan.runtime import Emulator
 from blinkcan.twin.actions import Action, actions_of
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.keypad import KeypadTwin
 
 #: the value a scripted step gives an argument where its range's first is not the one to show
 _SHOWN: dict[str, Callable[[float, float], float]] = {
@@ -150,8 +151,7 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                 HostBus(host_bus) as host:
             emulator = Emulator(device_bus, twins)
             emulator.on_frame = show
-            console.out(f"== {title} at node {twin.node_id:02X}h ({protocol}) is powered on",
-                        highlight=False)
+            console.out(f"== {title} at {_where(twin)} is powered on", highlight=False)
             with emulator, panel(emulator, address, console):
                 _started(console, emulator, twin, host, protocol)
                 driver = _driver(twin, host, protocol)  # it restores what it showed
@@ -179,6 +179,14 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
             each.close()
     console.out(f"\n{frames} frames on the bus ({title})", highlight=False)
     return 0
+
+
+def _where(twin: CanopenTwin) -> str:
+    """"node 15h (CANopen)", or a keypad in J1939 mode's source address: "address 21h
+    (J1939)" (its node id is only kept for a switch back to CANopen)."""
+    if isinstance(twin, KeypadTwin) and twin.protocol == "j1939":
+        return f"address {twin.j1939.settings['source_address']:02X}h (J1939)"
+    return f"node {twin.node_id:02X}h (CANopen)"
 
 
 def _after(action: Action, values: dict[str, Any], driver: Any,

@@ -19,6 +19,7 @@ import click
 from blinkcan.cli.bus_options import bus_options, cli_bus, parse_node_id
 from blinkcan.cli.seconds import Seconds
 from blinkcan.cli.whole import NegativeArguments
+from blinkcan.formats.frame_check import wrong_type
 from blinkcan.protocol.cob import HEARTBEAT, split_cob_id
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame
 from blinkcan.runtime import to_frame, to_message
@@ -88,13 +89,15 @@ def _drain(bus: can.BusABC, limit: int = 10_000) -> None:
 
 
 def _receive(bus: can.BusABC, timeout: float) -> can.Message | None:
-    """The next frame, or None; a frame the bus cannot decode is none of the nodes' answers."""
+    """The next frame, or None; a frame the bus cannot decode, or a message that is no frame
+    (:func:`~blinkcan.formats.frame_check.wrong_type`), is none of the nodes' answers."""
     try:
-        return bus.recv(timeout)
+        message = bus.recv(timeout)
     except can.CanError as error:
         if is_undecodable(error):
             return None
         raise
+    return None if message is None or wrong_type(message) is not None else message
 
 
 def _said_after(message: can.Message, sent_at: float) -> bool:

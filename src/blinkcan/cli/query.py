@@ -74,6 +74,9 @@ def _check_reads_only(connection: Any, sql: str) -> None:
             raise click.ClickException(
                 f"query only reads: {statement.query.strip()!r} is not a SELECT (DESCRIBE, "
                 "SHOW, SUMMARIZE, WITH and VALUES are)")
+    if len(statements) > 1:  # DuckDB returns the last one's rows: the others would vanish
+        raise click.UsageError(f"one statement at a time: this SQL has {len(statements)} "
+                               "(run each as its own query, or join them with UNION ALL)")
 
 
 @click.command("query")

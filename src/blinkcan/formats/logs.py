@@ -51,7 +51,7 @@ from blinkcan.formats.log_source import (
     open_binary,
     open_text,
 )
-from blinkcan.formats.unreadable import UnreadableLine
+from blinkcan.formats.unreadable import UnreadableLine, shown
 from blinkcan.protocol.frame import Frame
 
 if TYPE_CHECKING:  # python-can loads where a file needs it: a candump log reads without it
@@ -69,7 +69,8 @@ def _read_errors() -> tuple[type[BaseException], ...]:
     import can  # noqa: PLC0415
     from can.io.blf import BLFParseError  # noqa: PLC0415
 
-    return (ValueError, IndexError, KeyError, struct.error, UnicodeDecodeError, sqlite3.Error,
+    return (ValueError, IndexError, KeyError, TypeError, struct.error, UnicodeDecodeError,
+            sqlite3.Error,
             EOFError, can.CanError, NotImplementedError, ImportError, BLFParseError,
             gzip.BadGzipFile, zlib.error)
 
@@ -185,12 +186,34 @@ def _messages(source: LogSource) -> Iterator[can.Message | UnreadableLine]:
     with reader:
         try:
             if suffix == ".blf":
-                yield from _blf_messages(reader)
+                yield from _framed(_blf_messages(reader), "object")
                 return
-            for message in reader:
-                yield _as_written(message, suffix)
+            yield from _framed((_as_written(message, suffix) for message in reader),
+                               "row" if suffix == ".db" else "message")
         except _read_errors() as error:
             raise LogError(f"{source}: not a readable log ({_reason(error)})") from None
+
+
+def _framed(messages: Iterator[can.Message | UnreadableLine], unit: str
+            ) -> Iterator[can.Message | UnreadableLine]:
+    """``messages`` of a log python-can reads whole (BLF, SQLite, MF4), each one that is no
+    frame (formats/frame_check.py: a SQLite row's NaN time or 48-bit identifier) an
+    :class:`UnreadableLine` in its place, numbered in ``unit``s from 1."""
+    from blinkcan.formats.frame_check import why_no_frame  # noqa: PLC0415
+
+    number = 0
+    for message in messages:
+        if isinstance(message, UnreadableLine):
+            yield message
+            continue
+        number += 1
+        if (why := why_no_frame(message)) is None:
+            yield message
+        else:
+            text = (f"{message.timestamp!r} {message.arbitration_id!r} "
+                    f"{bytes(message.data).hex().upper()}")  # python-can's str() may fail
+            yield UnreadableLine(number, text, f"{shown(text)} is no frame ({why})",
+                                 unit=unit)
 
 
 def _blf_reader() -> type[can.io.generic.MessageReader]:
@@ -282,9 +305,8 @@ def _text_messages(source: LogSource, suffix: str) -> Iterator[can.Message | Unr
             if candump:
                 yield from candump_messages(stream)
                 return
-            for message in text_log_messages(stream, suffix):
-                yield message if isinstance(message, UnreadableLine) else \
-                    _as_written(message, suffix)
+            yield from text_log_messages(stream, suffix,
+                                         lambda message: _as_written(message, suffix))
         except LineTooLongError as error:
             raise LogError(f"{source}: {error}") from None
         except _read_errors() as error:
@@ -539,7 +561,13 @@ class FrameWriter:
             # as the losses said: never its raw text
             message.channel = self._writable_name(message.channel)
         if self._pcap is not None:
-            self._pcap.write(message)
+            from blinkcan.formats.pcap import PcapError  # noqa: PLC0415
+
+            try:
+                self._pcap.write(message)
+            except PcapError as error:  # a time before 1970: not written, the others kept
+                self.count -= 1
+                raise LogError(f"{self.path}: {error}") from None
         else:
             assert self._logger is not None
             self._logger.on_message_received(message)

@@ -30,6 +30,8 @@ from blinkcan.protocol.frame import Frame
 LINKTYPE_CAN_SOCKETCAN = 227
 _HEADER = struct.Struct("<IHHiIII")
 _PACKET = struct.Struct("<IIII")
+#: the last second a packet header's unsigned 32-bit seconds field holds (in 2106)
+_LAST_SECOND = 0xFFFFFFFF
 _CAN = struct.Struct(">IBB2x8s")
 _CANFD = struct.Struct(">IBB2x64s")
 _MAGIC_MICRO, _MAGIC_NANO = 0xA1B2C3D4, 0xA1B23C4D
@@ -71,7 +73,13 @@ class PcapWriter:
         self.count = 0
 
     def write(self, message: can.Message) -> None:
+        """One packet; a time pcap cannot hold (before 1970, after 2106: its seconds are an
+        unsigned 32-bit field) is a :class:`PcapError` and nothing is written."""
         timestamp = message.timestamp
+        if not 0 <= timestamp < _LAST_SECOND:
+            raise PcapError(f"a pcap packet's time is 0..{_LAST_SECOND - 1} s since 1970, not "
+                            f"{timestamp!r}: frame {message.arbitration_id:X}h cannot be "
+                            "written")
         seconds = int(timestamp)
         micros = round((timestamp - seconds) * 1_000_000)
         if micros >= 1_000_000:

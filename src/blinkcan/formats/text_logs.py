@@ -21,9 +21,10 @@ A log none of whose lines is a frame is not a log of that format: ValueError onc
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
+from blinkcan.formats.frame_check import why_no_frame
 from blinkcan.formats.log_source import (
     OverlongLine,
     UnterminatedLine,
@@ -132,9 +133,13 @@ def _trc_reader() -> type[can.io.generic.MessageReader]:
     return _TrcReader
 
 
-def text_log_messages(stream: TextIO, suffix: str) -> Iterator[can.Message | UnreadableLine]:
+def text_log_messages(stream: TextIO, suffix: str,
+                      as_written: Callable[[can.Message], can.Message] = lambda m: m
+                      ) -> Iterator[can.Message | UnreadableLine]:
     """The messages python-can's reader of ``suffix`` (.asc, .trc, .csv) reads from
-    ``stream``, each line it cannot read an :class:`UnreadableLine` in its place."""
+    ``stream``, each as ``as_written`` makes it; each line it cannot read, or reads as a
+    message that is no frame (formats/frame_check.py: a 48-bit identifier, a time of inf, a
+    DLC of 99 over one byte), an :class:`UnreadableLine` in its place."""
     from can.io.player import MESSAGE_READERS  # noqa: PLC0415
 
     feed = _Feed(stream, kind_of(suffix))
@@ -167,6 +172,12 @@ def text_log_messages(stream: TextIO, suffix: str) -> Iterator[can.Message | Unr
             feed.passed.clear()
         if message is None:
             break
+        message = as_written(message)
+        if (why := why_no_frame(message)) is not None:
+            unreadable = feed.unreadable(ValueError(why))
+            first = first or unreadable
+            yield unreadable
+            continue
         frames += 1
         yield message
     if first is not None and not frames:

@@ -1,4 +1,5 @@
-"""python-canopen's and cantools' blocking waits, in a simulated bus's virtual time.
+"""python-canopen's, cantools' and python-can's own blocking waits, in a simulated bus's
+virtual time.
 
 These libraries wait with real-time primitives: python-canopen's SDO client takes its reply
 from a ``queue.Queue`` with ``RESPONSE_TIMEOUT`` (0.3 s) and sleeps with ``time.sleep``; its
@@ -12,7 +13,9 @@ real seconds. So, while a :class:`~blinkcan.runtime.simbus.SimulatedBus` has ado
 - ``canopen.nmt.NmtMaster.wait_for_heartbeat`` and ``wait_for_bootup``,
 - ``canopen.pdo.base.PdoMap.wait_for_reception``,
 - ``cantools.tester.Message._expect_input_queue`` (``Tester.expect``; ``timeout=None`` waits at
-  most :data:`RECV_FOREVER` virtual seconds, as ``recv()`` does).
+  most :data:`RECV_FOREVER` virtual seconds, as ``recv()`` does),
+- python-can's own ``can.BufferedReader.get_message`` (a reader a notifier on the bus feeds,
+  found through python-can's registry of notifiers; ``timeout=None`` as ``recv()``).
 
 Each replacement looks at the bus of the object it is called on: a simulated bus runs its
 simulation until the awaited thing happened or the timeout passed in virtual time (the same
@@ -85,6 +88,32 @@ def _scheduler(bus_of: Callable[[], object]) -> SimulatedScheduler | None:
         return None
     scheduler = getattr(bus, "scheduler", None) if isinstance(bus, can.BusABC) else None
     return scheduler if isinstance(scheduler, SimulatedScheduler) else None
+
+
+# -- python-can ---------------------------------------------------------------------------------
+
+
+def _reader_bus(reader: object) -> object:
+    """The bus whose running ``can.Notifier`` hands ``reader`` its messages (python-can's
+    registry of notifiers and their buses: a reader names no bus); None when none does."""
+    registry = getattr(can.Notifier, "_registry", None)
+    for pair in list(getattr(registry, "pairs", ())):
+        notifier = pair.notifier
+        if not notifier.stopped and any(known is reader for known in notifier.listeners):
+            return pair.bus
+    return None
+
+
+def _buffered_get_message(original: Callable[..., Any]) -> Callable[..., Any]:
+    def get_message(self: Any, timeout: float | None = 0.5) -> Any:
+        scheduler = _scheduler(lambda: _reader_bus(self))
+        if scheduler is None or self.is_stopped or (timeout is not None and timeout < 0):
+            return original(self, timeout)  # python-can's own (a negative timeout: its error)
+        wait = RECV_FOREVER if timeout is None else check_virtual_timeout(timeout)
+        scheduler.wait(_Until(lambda: not self.buffer.empty()), wait, background=True)
+        return original(self, 0)  # a message is buffered, or None: without blocking
+
+    return get_message
 
 
 # -- python-canopen ---------------------------------------------------------------------------
@@ -220,6 +249,7 @@ def _tester_expect(original: Callable[..., Any]) -> Callable[..., Any]:
 
 #: (module, class, method, the replacement made from the original)
 WAITS: tuple[tuple[str, str, str, Callable[[Callable[..., Any]], Callable[..., Any]]], ...] = (
+    ("can.listener", "BufferedReader", "get_message", _buffered_get_message),
     ("canopen.sdo.client", "SdoClient", "read_response", _sdo_read_response),
     ("canopen.sdo.client", "SdoClient", "send_request", _sdo_send_request),
     ("canopen.nmt", "NmtMaster", "wait_for_heartbeat", _nmt_wait_for_heartbeat),

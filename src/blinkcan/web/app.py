@@ -72,26 +72,42 @@ class Panel:
 
     def state(self) -> dict[str, Any]:
         devices = self.emulator.run(lambda now: [t.snapshot() for t in self.emulator.twins])
-        for twin, device in zip(self.emulator.twins, devices, strict=True):
+        for index, (twin, device) in enumerate(zip(self.emulator.twins, devices, strict=True)):
             description = twin.description
+            device["index"] = index  # what the page names it by (node ids may be shared)
             device["model"], device["title"] = description.model, description.title
             device["edition"] = description.edition
             device["face"] = self._faces.setdefault(description.model, asdict(description.face))
         return {"devices": devices, "frames": self.frames}
 
     def twin(self, node_id: object) -> CanopenTwin:
-        for twin in self.emulator.twins:
-            if twin.node_id == node_id:
-                return twin
+        """The device at ``node_id``; a node id two devices share (a keypad in J1939 mode
+        keeps its CANopen node id beside a CANopen device at it) names neither."""
+        found = [twin for twin in self.emulator.twins if twin.node_id == node_id]
+        if len(found) == 1:
+            return found[0]
         nodes = ", ".join(f"{t.node_id}" for t in self.emulator.twins)
+        if found:
+            raise ValueError(f"{len(found)} devices have node id {node_id!r}: name one by its "
+                             f"'device' index (0..{len(self.emulator.twins) - 1}, as "
+                             "/api/state lists them)")
         raise ValueError(f"no device with node id {node_id!r}; the panel has {nodes}")
+
+    def device(self, index: object) -> CanopenTwin:
+        """The device at ``index`` in the panel's list (``/api/state``'s ``index``)."""
+        twins = self.emulator.twins
+        if isinstance(index, bool) or not isinstance(index, int) or \
+                not 0 <= index < len(twins):
+            raise ValueError(f"device must be an index 0..{len(twins) - 1}, not {index!r}")
+        return twins[index]
 
     def act(self, request: dict[str, Any]) -> None:
         """Validate and carry out one action (ValueError with the reason): the actions and
         their arguments are the device's face's (twin/actions.py)."""
         if not isinstance(request, dict):
-            raise ValueError("send a JSON object: {node, action, key|pin|...}")
-        twin = self.twin(request.get("node"))
+            raise ValueError("send a JSON object: {device (or node), action, key|pin|...}")
+        twin = self.device(request["device"]) if "device" in request else \
+            self.twin(request.get("node"))
         name = request.get("action")
         action = ACTIONS.get(name) if isinstance(name, str) else None
         if action is None:

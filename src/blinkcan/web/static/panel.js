@@ -11,10 +11,12 @@ const BACKLIGHT = { off: null, red: "#ff3030", green: "#22dd44", blue: "#3a6bff"
 const hex = (n) => n.toString(16).toUpperCase().padStart(2, "0") + "h";
 let latest = null;
 
-async function act(node, action, extra) {
+// a device is named by its place in the panel (its "index"): two may share a node id (a
+// keypad in J1939 mode keeps its CANopen node id beside one of another protocol)
+async function act(id, action, extra) {
   const response = await fetch("/api/action", {
     method: "POST", headers: { "Content-Type": "application/json" },
-    body: JSON.stringify(Object.assign({ node, action }, extra || {})),
+    body: JSON.stringify(Object.assign({ device: id, action }, extra || {})),
   });
   if (!response.ok) {
     const body = await response.json();
@@ -33,12 +35,12 @@ function element(tag, attributes, children) {
 
 // Each device's elements are built once and then updated in place: a click's press and
 // release always land on the same element, however often the state changes.
-const views = new Map();  // node id -> { kind, root, update(device) }
-const current = new Map();  // node id -> latest snapshot
+const views = new Map();  // device index -> { model, node, root, update(device) }
+const current = new Map();  // device index -> latest snapshot
 
-function headerView(node) {
+function headerView(id, node) {
   const power = element("button", { class: "power", "data-test": `power-${node}` });
-  power.onclick = () => act(node, current.get(node).powered ? "power_off" : "power_on");
+  power.onclick = () => act(id, current.get(id).powered ? "power_off" : "power_on");
   const title = element("h2");
   const facts = element("div", { class: "facts" });
   return { parts: [power, title, facts], update(device) {
@@ -52,7 +54,7 @@ function headerView(node) {
         `${device.bitrate / 1000} kbit/s · heartbeat ${j.heartbeat_ms ? j.heartbeat_ms + " ms" : "off"}`;
       return;
     }
-    title.textContent = `${device.title} ${hex(node)} · ${device.edition}`;
+    title.textContent = `${device.title} ${hex(device.node_id)} · ${device.edition}`;
     facts.innerHTML = `NMT <b data-test="nmt-${node}">${device.nmt_state}</b> · ` +
       `${device.bitrate / 1000} kbit/s · heartbeat ${device.heartbeat_ms ? device.heartbeat_ms + " ms" : "off"}` +
       (device.quirks === "cia301" ? " · CiA 301 profile" : "");
@@ -62,7 +64,7 @@ function headerView(node) {
 // A rotary encoder: its ring LEDs drawn clockwise from six o'clock (as the model's face
 // numbers them), turned by dragging up/down or scrolling; its cap is the key it also is.
 const TICK_PIXELS = 12;
-function knobView(node, encoder, cell) {
+function knobView(id, encoder, cell) {
   const dots = encoder.ring_leds.map((led, i) => {
     const angle = (i / encoder.ring_leds.length) * 2 * Math.PI;  // clockwise from six o'clock
     const dot = element("div", { class: "ring-led", "data-test": `ring-led-${led}` });
@@ -74,7 +76,7 @@ function knobView(node, encoder, cell) {
   const counter = element("span", { class: "counter", "data-test": `counter-${encoder.number}` });
   cell.appendChild(counter);
   cell.classList.add("knob");
-  const turn = (ticks) => { if (ticks) act(node, "turn", { encoder: encoder.number, ticks }); };
+  const turn = (ticks) => { if (ticks) act(id, "turn", { encoder: encoder.number, ticks }); };
   cell.addEventListener("wheel", (event) => {
     event.preventDefault();
     turn(event.deltaY < 0 ? 1 : -1);  // scroll up: clockwise
@@ -92,8 +94,8 @@ function knobView(node, encoder, cell) {
   });
   cell.addEventListener("pointerup", async () => {  // a click without turning pushes the knob
     if (dragY !== null && !turned) {
-      await act(node, "press", { key: encoder.key });
-      await act(node, "release", { key: encoder.key });
+      await act(id, "press", { key: encoder.key });
+      await act(id, "release", { key: encoder.key });
     }
     dragY = null;
   });
@@ -109,7 +111,7 @@ function knobView(node, encoder, cell) {
 
 // Inputs: a slider per analog input (0 to the face's full scale), and a switch per digital
 // input showing its level; where one input is both (the face counts it in each), one row.
-function inputsView(node, face) {
+function inputsView(id, face) {
   const box = element("div", { class: "inputs" });
   const rows = [];
   for (let n = 0; n < Math.max(face.analog_inputs, face.digital_inputs); n++) {
@@ -119,12 +121,12 @@ function inputsView(node, face) {
       row.slider = element("input", { type: "range", min: 0, max: face.analog_volts_max, step: 0.01,
                                       value: 0, "data-test": `analog-${n}` });
       row.slider.addEventListener("change", () =>
-        act(node, "set_analog", { input: n, volts: parseFloat(row.slider.value) }));
+        act(id, "set_analog", { input: n, volts: parseFloat(row.slider.value) }));
       parts.push(row.slider, row.value);
     }
     if (n < face.digital_inputs) {
       row.level = element("button", { class: "level", "data-test": `digital-${n}` });
-      row.level.onclick = () => act(node, "set_digital_input",
+      row.level.onclick = () => act(id, "set_digital_input",
                                     { input: n, level: row.level.dataset.level === "high" ? 0 : 1 });
       parts.push(row.level);
     }
@@ -146,8 +148,8 @@ function inputsView(node, face) {
   } };
 }
 
-function keypadView(node, face) {
-  const head = headerView(node);
+function keypadView(id, node, face) {
+  const head = headerView(id, node);
   const grid = element("div", { class: "keypad" });
   grid.style.gridTemplateColumns = `repeat(${Math.max(...face.grid.map((row) => row.length))}, 4.2rem)`;
   const cells = new Map();  // key number -> its elements
@@ -158,22 +160,22 @@ function keypadView(node, face) {
       ? element("div", { class: "led", "data-test": `led-${number}` }) : null;
     const cell = element("div", { class: "key", "data-test": `key-${number}` },
                          [...(led ? [led] : []), element("span", { class: "num", text: number })]);
-    const press = (event) => { event.preventDefault(); act(node, "press", { key: number }); };
-    const release = (event) => { event.preventDefault(); act(node, "release", { key: number }); };
+    const press = (event) => { event.preventDefault(); act(id, "press", { key: number }); };
+    const release = (event) => { event.preventDefault(); act(id, "release", { key: number }); };
     const encoder = face.encoders.find((e) => e.key === number);
     if (!encoder) {  // a knob is pushed by a click (knobView)
       cell.addEventListener("pointerdown", press);
       cell.addEventListener("pointerup", release);
       cell.addEventListener("pointerleave", (event) => {
-        const key = current.get(node).keys[number - 1];
+        const key = current.get(id).keys[number - 1];
         if (key.pressed) release(event);
       });
     }
-    const knob = encoder ? knobView(node, encoder, cell) : null;
+    const knob = encoder ? knobView(id, encoder, cell) : null;
     cells.set(number, { cell, led, knob, encoder });
     grid.appendChild(cell);
   }
-  const inputs = inputsView(node, face);
+  const inputs = inputsView(id, face);
   const footer = element("div", { class: "facts" });
   const root = element("div", { class: "device", "data-test": `device-${node}` },
                        [...head.parts, grid, inputs.root, footer]);
@@ -213,17 +215,17 @@ function keypadView(node, face) {
   } };
 }
 
-function keyboxView(node, face) {
-  const head = headerView(node);
+function keyboxView(id, node, face) {
+  const head = headerView(id, node);
   const grid = element("div", { class: "keybox" });
   const cells = [];
   for (let number = 1; number <= face.pins; number++) {
     const state = element("div", { class: "state", "data-test": `state-${number}` });
     const fuse = element("button", { "data-test": `fuse-${number}` });
-    fuse.onclick = () => act(node, current.get(node).pins[number - 1].fuse === "blown"
+    fuse.onclick = () => act(id, current.get(id).pins[number - 1].fuse === "blown"
                              ? "replace_fuse" : "blow_fuse", { pin: number });
     const input = element("button", { "data-test": `input-${number}` });
-    input.onclick = () => act(node, current.get(node).pins[number - 1].input
+    input.onclick = () => act(id, current.get(id).pins[number - 1].input
                               ? "input_low" : "input_high", { pin: number });
     const lowside = element("div", { class: "lowside", text: "low side" });
     const cell = element("div", { class: "pin", "data-test": `pin-${number}` },
@@ -257,20 +259,19 @@ function render() {
   if (!latest) return;
   const devices = document.getElementById("devices");
   latest.devices.forEach((device) => {
-    current.set(device.node_id, device);
-    let view = views.get(device.node_id);
-    if (!view || view.model !== device.model) {
-      view = (device.face.keys ? keypadView : keyboxView)(device.node_id, device.face);
+    current.set(device.index, device);
+    let view = views.get(device.index);
+    if (!view || view.model !== device.model || view.node !== device.node_id) {
+      if (view) view.root.remove();  // a keypad that moved to another node id: drawn again
+      view = (device.face.keys ? keypadView : keyboxView)(device.index, device.node_id,
+                                                           device.face);
       view.model = device.model;
-      views.set(device.node_id, view);
+      view.node = device.node_id;
+      views.set(device.index, view);
       devices.appendChild(view.root);
     }
     view.update(device);
   });
-  const present = new Set(latest.devices.map((d) => d.node_id));
-  for (const [node, view] of views) {  // a keypad that moved to another node id
-    if (!present.has(node)) { view.root.remove(); views.delete(node); current.delete(node); }
-  }
   document.getElementById("frames").replaceChildren(...latest.frames.slice().reverse().map(
     (f) => element("li", { text: `${f.time.padStart(9)}  ${f.id.padStart(3)}  ${f.data.padEnd(23)}  ${f.text}` })));
 }
