@@ -52,8 +52,9 @@ from collections.abc import Callable, Iterator
 from typing import Protocol, TypeVar
 
 from blinkcan.host.identity_errors import SharedNodeIdError, several_answer
+from blinkcan.host.waits import check_wait
 from blinkcan.protocol.abort import AbortCode
-from blinkcan.protocol.cob import SDO_RX, SDO_TX, check_node_id
+from blinkcan.protocol.cob import SDO_RX, SDO_TX, check_node_id, check_range
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.sdo import (
     EXPEDITED_END,
@@ -80,6 +81,9 @@ log = logging.getLogger(__name__)
 T = TypeVar("T", UploadTransfer, DownloadTransfer)
 _new_tuple = tuple.__new__
 
+#: the most times a request that got no reply is sent again: each try waits a whole timeout,
+#: so more is a typo
+MAX_SDO_RETRIES = 100
 #: bytes 4-7 of an initiate upload request: reserved (CiA 301 §7.2.4.3.5)
 _RESERVED = b"\x00\x00\x00\x00"
 #: the command byte of an SDO abort (CiA 301 §7.2.4.3.17: ccs/scs 4)
@@ -95,6 +99,12 @@ _MAX_DUPLICATE_WAIT = 5.0
 _OWED_FOR = 5.0
 _RESYNC_MUXES = tuple(multiplexer(index, subindex) for index, subindex in
                       ((0x1000, 0), (0x1001, 0), (0x1018, 1), (0x1018, 0)))
+
+
+def check_retries(retries: int) -> int:
+    """``retries`` if it is a retry count, an int 0..:data:`MAX_SDO_RETRIES`; else
+    TypeError/ValueError naming it, before anything is sent."""
+    return check_range("retries", retries, 0, MAX_SDO_RETRIES)
 
 
 class SdoHost(Protocol):
@@ -119,6 +129,9 @@ class SdoHost(Protocol):
     def subscribe_fast(self, can_id: int, handler: Callable[[Frame, float], None]
                        ) -> Callable[[], None]: ...
 
+    @property
+    def simulated(self) -> bool: ...
+
 
 class SdoChannel:
     """The client side of one node's SDO server.
@@ -135,7 +148,7 @@ class SdoChannel:
         self.host = host
         self.node_id = check_node_id(node_id)  # checked once: requests are built unchecked
         self.timeout = timeout
-        self.retries = retries
+        self.retries = check_retries(retries)
         self.late_replies = 0
         self._lock = threading.Lock()
         self._state_lock = threading.Lock()
@@ -255,13 +268,15 @@ class SdoChannel:
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        return self._upload(index, subindex, self.timeout if timeout is None else timeout,
-                            self.retries if retries is None else retries)
+        return self._upload(index, subindex, self.timeout if timeout is None
+                            else check_wait("timeout", timeout, self.host),
+                            self.retries if retries is None else check_retries(retries))
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
         self._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is None
-                  else timeout, self.retries if retries is None else retries)
+                  else check_wait("timeout", timeout, self.host),
+                  self.retries if retries is None else check_retries(retries))
 
     def _upload(self, index: int, subindex: int, timeout: float, retries: int) -> bytes:
         """``_run(UploadTransfer(index, subindex), timeout, retries).value``, the common case
@@ -449,14 +464,17 @@ class SdoClient:
         self.channel = channel
         self.node_id = channel.node_id
         self.timeout = timeout
-        self.retries = retries
+        self.retries = check_retries(retries)
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
         return self.channel._upload(index, subindex, self.timeout if timeout is None
-                                    else timeout, self.retries if retries is None else retries)
+                                    else check_wait("timeout", timeout, self.channel.host),
+                                    self.retries if retries is None else
+                                    check_retries(retries))
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
         self.channel._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is
-                          None else timeout, self.retries if retries is None else retries)
+                          None else check_wait("timeout", timeout, self.channel.host),
+                          self.retries if retries is None else check_retries(retries))
