@@ -112,3 +112,11 @@ def test_a_step_whose_effect_comes_later_shows_it(spec: str, protocol: str) -> N
         shown = _section(lines, f"== {title}")
         volts = f"in{values['input']} {values['volts']:g} V"
         assert any(" < " in line and volts in line for line in shown), (volts, result.output)
+    if protocol == "j1939":  # before: nothing after the power-on (the keypad says nothing,
+        # J-4): the host now turns its heartbeat on, and the counter back at 00h is a power-on
+        title, _ = steps["power_on"]
+        after = lines[lines.index(f"== {title}"):]
+        assert any(" < " in line and "heartbeat 0," in line for line in after), result.output
+        restored = _section(after, "== the driver hears the power-on (its heartbeat counter "
+                                   "back at 00h) and shows the LEDs again")
+        assert any(" > " in line and "LED 1 green" in line for line in restored), result.output

@@ -50,6 +50,8 @@ _SHOWN: dict[str, Callable[[float, float], float]] = {
 }
 #: how long the twin may take to become operational after the host's NMT start
 _START_TIMEOUT = 5.0
+#: the heartbeat period the host asks of a keypad in J1939 mode, in seconds (§18)
+_J1939_HEARTBEAT = 0.5
 
 
 def scripted_steps(twin: CanopenTwin) -> list[tuple[str, Action, dict[str, Any]]]:
@@ -156,6 +158,8 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                 _started(console, emulator, twin, host, protocol)
                 driver = _driver(twin, host, protocol)  # it restores what it showed
                 try:  # after the power cycle, as a controller does
+                    booted = _watching_power_on(driver, protocol, pause, host_step, partial(
+                        _shown, told_since(told), lambda: frames, limit=2 * _J1939_HEARTBEAT))
                     for step, command in host_steps(driver, twin.description.face):
                         time.sleep(pause)
                         host_step(step, command)
@@ -164,10 +168,8 @@ def run_model_demo(console: Console, spec: str, protocol: str = "canopen",
                         console.out(f"== {step}", highlight=False)
                         emulator.run(partial(_perform, action, twin, values))
                         _after(action, values, driver, host_step, partial(
-                            _shown, told_since(told), lambda: frames, limit=1.0))
-                    time.sleep(pause)
-                    emulator.run(lambda now: None)  # what the last step sent is shown
-                    _shown(lambda: True, lambda: frames)  # and the driver's answer
+                            _shown, told_since(told), lambda: frames, limit=1.0), booted)
+                    _last_shown(emulator, pause, lambda: frames)
                     if web is not None:
                         console.out("the twin keeps running with the panel; Ctrl-C stops",
                                     highlight=False)
@@ -189,9 +191,35 @@ def _where(twin: CanopenTwin) -> str:
     return f"node {twin.node_id:02X}h (CANopen)"
 
 
+def _last_shown(emulator: Emulator, pause: float, count: Callable[[], int]) -> None:
+    """After the last step: what it sent is shown, and the driver's answer."""
+    time.sleep(pause)
+    emulator.run(lambda now: None)
+    _shown(lambda: True, count)
+
+
+def _watching_power_on(driver: Any, protocol: str, pause: float,
+                       host_step: Callable[[str, Callable[[], object]], None],
+                       first_heartbeat: Callable[[], None]) -> threading.Event | None:
+    """A keypad in J1939 mode says nothing when it powers on (J-4): the host turns its
+    heartbeat on (§18), whose counter back at 00h the driver takes for a power-on ("boot-up",
+    and the LEDs sent again), and waits for the first, the one the next follow. The event is
+    set at the driver's "boot-up"; None in CANopen, where the boot-up frame says it."""
+    if protocol == "canopen":
+        return None
+    booted = threading.Event()
+    driver.on_health(lambda event: booted.set() if event.kind == "boot-up" else None)
+    time.sleep(pause)
+    host_step(f"the host turns the keypad's heartbeat on (every {_J1939_HEARTBEAT:g} s, §18): "
+              "a counter back at 00h is a power-on",
+              partial(driver.monitor_heartbeat, _J1939_HEARTBEAT))
+    first_heartbeat()
+    return booted
+
+
 def _after(action: Action, values: dict[str, Any], driver: Any,
            host_step: Callable[[str, Callable[[], object]], None],
-           next_frame: Callable[[], None]) -> None:
+           next_frame: Callable[[], None], booted: threading.Event | None = None) -> None:
     """Show what a hand's step left for later: the host's command that completes it
     (``host_step(title, command)``), or the device's next frame (``next_frame()``, counted
     from after the step ran)."""
@@ -201,6 +229,9 @@ def _after(action: Action, values: dict[str, Any], driver: Any,
                   "RESET, 2001h value 02h)", partial(driver.reset, pin))
     elif action.name == "set_analog":  # MT §14: a periodic PDO (80 ms), the next one tells
         next_frame()
+    elif action.name == "power_on" and booted is not None:  # J1939: the next heartbeat tells
+        host_step("the driver hears the power-on (its heartbeat counter back at 00h) and "
+                  "shows the LEDs again", partial(booted.wait, 2 * _J1939_HEARTBEAT))
 
 
 def _shown(first: Callable[[], bool], count: Callable[[], int], quiet: float = 0.03,
