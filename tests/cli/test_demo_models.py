@@ -112,8 +112,9 @@ def test_a_step_whose_effect_comes_later_shows_it(spec: str, protocol: str) -> N
         shown = _section(lines, f"== {title}")
         volts = f"in{values['input']} {values['volts']:g} V"
         assert any(" < " in line and volts in line for line in shown), (volts, result.output)
-    if protocol == "j1939":  # before: nothing after the power-on (the keypad says nothing,
-        # J-4): the host now turns its heartbeat on, and the counter back at 00h is a power-on
+    if protocol == "j1939":  # before: nothing after the power-on (the keypad says nothing: §5,
+        # heartbeat and claim off): the host now turns its heartbeat on, the counter back at 00h
+        # is a power-on
         title, _ = steps["power_on"]
         after = lines[lines.index(f"== {title}"):]
         assert any(" < " in line and "heartbeat 0," in line for line in after), result.output

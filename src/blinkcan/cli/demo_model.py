@@ -201,10 +201,11 @@ def _last_shown(emulator: Emulator, pause: float, count: Callable[[], int]) -> N
 def _watching_power_on(driver: Any, protocol: str, pause: float,
                        host_step: Callable[[str, Callable[[], object]], None],
                        first_heartbeat: Callable[[], None]) -> threading.Event | None:
-    """A keypad in J1939 mode says nothing when it powers on (J-4): the host turns its
-    heartbeat on (§18), whose counter back at 00h the driver takes for a power-on ("boot-up",
-    and the LEDs sent again), and waits for the first, the one the next follow. The event is
-    set at the driver's "boot-up"; None in CANopen, where the boot-up frame says it."""
+    """A keypad in J1939 mode says nothing when it powers on (its heartbeat and address claim
+    are off by default, spec/pkp-2600-si-j1939.md §5): the host turns its heartbeat on (§18),
+    whose counter back at 00h the driver takes for a power-on ("boot-up", and the LEDs sent
+    again), and waits for the first, the one the next follow. The event is set at the driver's
+    "boot-up"; None in CANopen, where the boot-up frame says it."""
     if protocol == "canopen":
         return None
     booted = threading.Event()
