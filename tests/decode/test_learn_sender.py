@@ -4,6 +4,8 @@ is seen every frame decodes as with the model named; the frames before keep what
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 
 from blinkcan.decode import Decoder
@@ -114,3 +116,48 @@ def test_a_node_named_by_the_caller_is_never_relearned() -> None:
     for frame in frames:
         decoder.decode(frame)
     assert decoder.devices[0x15] is keypad
+
+
+#: frames that show a CANopen node is at ``node`` (Decoder._hear), by what they are
+_SHOWN_BY: dict[str, Callable[[int], Frame]] = {
+    "its heartbeat": _heartbeat,
+    "its SDO reply": lambda node: Frame(0x580 + node, bytes((0x60, 0x17, 0x10, 0, 0, 0, 0, 0))),
+    "an NMT start addressed to it": lambda node: Frame(0x000, bytes((0x01, node))),
+}
+#: frames that do not: an NMT command to all nodes, a request nobody answered
+_NOT_SHOWN_BY: dict[str, Callable[[int], Frame]] = {
+    "an NMT start to all nodes": lambda node: Frame(0x000, bytes((0x01, 0))),
+    "an SDO request to it": lambda node: Frame(0x600 + node, bytes((0x40, 0, 0x10, 0, 0, 0, 0, 0))),
+}
+#: registered models with a frame only they send (the PKP-3500-MT's encoder and analog TPDOs)
+_SOLE_SENDING = [m for m in models() if any(
+    sender.model == m.name for sender in sole_senders().values())]
+
+
+@pytest.mark.parametrize("json", [False, True], ids=["events", "json"])
+@pytest.mark.parametrize("evidence", [*_SHOWN_BY, *_NOT_SHOWN_BY])
+@pytest.mark.parametrize("model", _SOLE_SENDING, ids=lambda model: model.name)
+def test_a_node_shown_to_be_canopen_names_the_model_of_its_sole_sender_frames(
+        model: Model, evidence: str, json: bool) -> None:
+    """A PKP-3500-MT at a node nobody assumed, with its heartbeat off (its default), is named
+    from its own frames once an SDO reply comes from it or the master addresses it an NMT
+    command, as by a heartbeat (found by the newcomer pass: `monitor` of an MT at 16h showed
+    raw frames after `nmt start 0x16`); a broadcast NMT or an unanswered request does not."""
+    node = 0x16
+    description = describe_device(model.name)
+    traffic = _traffic(description, node)
+    decoder = Decoder({}, assumed=True)
+    frames = [*traffic, {**_SHOWN_BY, **_NOT_SHOWN_BY}[evidence](node)]
+    for n, frame in enumerate(frames):
+        if json:
+            decoder.json_line(frame, n * 0.01)
+        else:
+            decoder.decode(frame, n * 0.01)
+    if evidence in _SHOWN_BY:
+        assert decoder.devices[node].model == model.name
+        same_as = Decoder({node: description})
+    else:
+        assert node not in decoder.devices
+        same_as = Decoder({}, learn=False)
+    for frame in traffic:
+        assert decoder.json_line(frame, 2.0) == same_as.json_line(frame, 2.0)

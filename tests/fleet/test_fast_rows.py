@@ -1,6 +1,7 @@
 """The fast rows of device frames (fleet/frames.py: a PDO's frames rowed from their bytes by
 EventRows' followers with no Event, heartbeats and frames too short for their PDO kept by
-their bytes, the rows of events the decoder keeps kept by Decoder.is_kept) are those of the
+their bytes, key states by their keys and the keys held before, the rows of events the decoder
+keeps kept by Decoder.is_kept and Decoder.kept_event) are those of the
 generic Event path (every frame decoded, its event's fields made rows by EventRows.rows),
 row for row and value for value: on the realistic log (every model, J1939 too), on mixes of
 each model's frames that change state (a reboot, a model learned mid-block, LED pictures, key

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
+from functools import partial
 from typing import Any
 
 import pytest
@@ -23,6 +24,8 @@ from blinkcan.twin import KeyboxTwin
 #: over the bound, and still under the drivers' own bound of a day
 TOO_LONG = 1.5 * LONGEST_VIRTUAL_WAIT
 BOUND = r"^timeout must be at most 3600 virtual seconds on a simulated bus"
+#: a driver's own wait, checked before anything is sent
+DRIVER_BOUND = r"^(sdo_timeout|timeout) must be 0\.\.3600 virtual seconds on a simulated bus"
 
 
 @pytest.fixture
@@ -34,24 +37,31 @@ def busy() -> Iterator[Rig]:
         yield rig
 
 
-#: driver waits that reach no device on the busy rig
-WAITS: dict[str, Callable[[Rig], Any]] = {
-    "Keybox opening (SDO)": lambda rig: Keybox(rig.bus, 0x0D, sdo_timeout=TOO_LONG),
-    "Keypad opening (SDO)": lambda rig: Keypad(rig.bus, 0x15, sdo_timeout=TOO_LONG),
-    "J1939 keypad opening": lambda rig: Keypad(rig.bus, protocol="j1939",
-                                               sdo_timeout=TOO_LONG),
-    "an SDO upload's own timeout": lambda rig: Keybox(rig.bus, 0x0C).sdo.upload(
-        0x1000, 0, timeout=TOO_LONG),
+#: driver waits that reach no device on the busy rig, made ready to call (a driver used by the
+#: call is opened first: its own requests are not the call's)
+WAITS: dict[str, Callable[[Rig], Callable[[], Any]]] = {
+    "Keybox opening (SDO)": lambda rig: partial(Keybox, rig.bus, 0x0D, sdo_timeout=TOO_LONG),
+    "Keypad opening (SDO)": lambda rig: partial(Keypad, rig.bus, 0x15, sdo_timeout=TOO_LONG),
+    "J1939 keypad opening": lambda rig: partial(Keypad, rig.bus, protocol="j1939",
+                                                sdo_timeout=TOO_LONG),
+    "an SDO upload's own timeout": lambda rig: partial(
+        Keybox(rig.bus, 0x0C).sdo.upload, 0x1000, 0, timeout=TOO_LONG),
+    "an SDO download's own timeout": lambda rig: partial(
+        Keybox(rig.bus, 0x0C).sdo.download, 0x2001, 4, b"\x01", timeout=TOO_LONG),
 }
 
 
 @pytest.mark.parametrize("wait", WAITS)
 def test_a_driver_wait_over_the_bound_is_refused_before_the_simulation_runs(
         busy: Rig, wait: str) -> None:
-    start = busy.now
-    with pytest.raises(ValueError, match=BOUND):
-        WAITS[wait](busy)
+    call = WAITS[wait](busy)
+    start, sent = busy.now, len(busy.frames)
+    with pytest.raises(ValueError, match=DRIVER_BOUND):
+        call()
     assert busy.now == start  # no virtual time ran: no wall time either
+    busy.advance(1.0)  # a request queued before the refusal would go out now
+    requests = [f for f in list(busy.frames)[sent:] if f.frame.can_id != 0x70C]
+    assert requests == []  # refused before anything was sent: nothing switched meanwhile
 
 
 @pytest.mark.parametrize("timeout", [TOO_LONG, math.inf, math.nan, -math.inf])

@@ -29,7 +29,8 @@ from blinkcan.formats.eds import eds_text
 @click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
               show_default=True, help="DBC of a keypad: its CANopen PDOs or its J1939 mode.")
 @click.option("--address", type=J1939Address(), default=None,
-              help="DBC, J1939: the keypad's source address (default 21h).")
+              help="DBC, J1939: the keypad's source address (default 21h; --node-id says it "
+                   "too).")
 def command(kind: str, device: str, output: str | None, quirks: str, node_id: int | None,
             manual: str | None, force: bool, protocol: str, address: int | None) -> None:
     """Write the EDS or DBC file of a device, from the same tables the twins run on.
@@ -37,6 +38,9 @@ def command(kind: str, device: str, output: str | None, quirks: str, node_id: in
     \b
     blinkcan export dbc keypad --protocol j1939 -o keypad-j1939.dbc
     """
+    if manual and "@" in device:
+        raise click.UsageError(f"{device} names its generation and --manual {manual} another: "
+                               "name it once")
     try:
         description = describe_device(f"{device}@{manual}" if manual else device, quirks)
     except ValueError as error:
@@ -51,6 +55,11 @@ def command(kind: str, device: str, output: str | None, quirks: str, node_id: in
             raise click.UsageError(
                 "J1939 mode: a DBC of " + ", ".join(m.description().title for m in having)
                 + "".join(f" (blinkcan export dbc {m.name} --protocol j1939)" for m in having))
+        if node_id is not None:  # a J1939 keypad is at its address: --node-id says it too
+            if address is not None and address != node_id:  # (as keypad and emulate take it)
+                raise click.UsageError(f"a J1939 DBC is for one address: --node-id "
+                                       f"{node_id:02X}h or --address {address:02X}h")
+            address = node_id
         text = j1939_dbc_text(address if address is not None else DEFAULT_ADDRESS)
     else:
         text = eds_text(description) if kind == "eds" else dbc_text(description, node_id)

@@ -3,7 +3,8 @@
 Which node is which device comes from the caller (``{0x15: "keypad"}``) or is learned from the
 bus: an SDO reply of 1000h (device type) or 100Bh (model) names the model, and so does a PDO
 only one registered model sends (devices/registry.py sole_senders) at a node assumed or heard
-as a CANopen node (its heartbeat or boot-up). A frame before the one that names the model keeps
+as a CANopen node (its heartbeat or boot-up, an SDO reply from it, or an NMT command addressed
+to it). A frame before the one that names the model keeps
 the meaning it had. Everything a device means is read from its
 description in ``devices/`` (object names, PDO layouts).
 
@@ -264,7 +265,7 @@ class Decoder:
         #: nodes named from 1000h alone (two keypads share it) or assumed: 100Bh or a PDO
         #: only one model sends may still correct them
         self._guessed: set[int] = set(self.devices) if assumed else set()
-        #: nodes that showed they are CANopen nodes (a heartbeat or boot-up, CiA 301 §7.2.8.3)
+        #: nodes that showed they are CANopen nodes (Decoder._hear)
         self._heard: set[int] = set()
         #: unknown nodes that sent a PDO only one model sends, before any heartbeat of theirs:
         #: another ECU may use that identifier, so the model is named once the node is heard
@@ -578,11 +579,7 @@ class Decoder:
             return lambda f, t: Event(t, f, Kind.SYNC, "SYNC")
         function, node = can_id & 0x780, can_id & 0x7F
         if function == HEARTBEAT and node:
-            self._heard.add(node)
-            sender = self._unconfirmed.pop(node, None)
-            if sender is not None and self.devices.get(node) is None:
-                self.devices[node] = sender
-                self._forget_routes(node)
+            self._hear(node)
             self._writers[can_id] = self._heartbeat_writer(can_id)
             return self._heartbeat  # its boot-up resets key state: never cached (json_line)
         if function in (SDO_TX, SDO_RX) and node:
@@ -615,6 +612,19 @@ class Decoder:
             (event.text, event.node_id, event.device, _NO_FIELDS),
             head[len('{"time":0'):] + ',"data":"', '"' + tail, str(event))
 
+    def _hear(self, node: int) -> None:
+        """``node`` showed it is a CANopen node: a heartbeat or boot-up (CiA 301 §7.2.8.3), an
+        SDO reply (§7.2.4), or an NMT command addressed to it (§7.2.8.3.1: the master runs it
+        as one). A model that a PDO only it sends named there before (``_unconfirmed``) is now
+        the node's model, for the frames from here on."""
+        if node in self._heard:
+            return
+        self._heard.add(node)
+        sender = self._unconfirmed.pop(node, None)
+        if sender is not None and self.devices.get(node) is None:
+            self.devices[node] = sender
+            self._forget_routes(node)
+
     def _forget_routes(self, node: int) -> None:
         """A node's model became known: its routes and their cached JSON change."""
         for can_id in [i for i in self._raw_standard if i & 0x7F == node]:
@@ -641,6 +651,8 @@ class Decoder:
         data = frame.data
         if request is not None:
             text, node = _NMT_TEXT[request.command], request.node_id
+            if node:
+                self._hear(node)
         elif len(data) < 2:
             return Event(time, frame, Kind.FRAME, "NMT frame too short")
         else:  # PKP §7 (errata P12): the keypad's legacy 00h is a stop
@@ -816,6 +828,7 @@ class Decoder:
             return self._sdo_request(frame, data, time, node, device)
         if len(data) < 8:
             return Event(time, frame, Kind.FRAME, "SDO reply shorter than 8 bytes", node, kind)
+        self._hear(node)  # an SDO server answered there
         return self._sdo_reply(frame, time, node, device)
 
     def _entry(self, device: DeviceDescription | None, index: int, sub: int) -> ObjectEntry | None:
@@ -971,8 +984,8 @@ class Decoder:
         """Name an unknown (or guessed) node's model from a PDO only that model sends
         (sole_senders): as certain as 100Bh, so later identity does not change it. Routed
         once per identifier: the frames before this one keep their meaning. A node nobody
-        assumed is named only once it is heard as a CANopen node (a heartbeat or boot-up,
-        before or after): other ECUs' 11-bit frames use these identifiers too, and one of
+        assumed is named only once it is heard as a CANopen node (Decoder._hear, before or
+        after): other ECUs' 11-bit frames use these identifiers too, and one of
         them must not make a keypad up."""
         sender = sole_senders().get(can_id - node)
         if sender is None or not self.learn:

@@ -12,9 +12,13 @@ one shared detail's number and the text, nothing more. The devices' own frames g
 decoder, but for those whose meaning is their bytes alone: a PDO's frame (LED pictures,
 outputs, faults, brightness: most of the devices' frames) is described by the decoder's
 describer and rowed from its bytes (:class:`PdoRoute`, EventRows.follower), with no Event and
-no fields read back; a heartbeat is kept by its bytes; the rows of an event the decoder keeps
-(an SDO read seen before, a J1939 keypad frame) by that entry. ``FrameDecoder.fast = False``
-makes every device frame's rows of its event (the reference of tests/fleet/test_fast_rows.py).
+no fields read back (those that follow no state kept by their bytes); a heartbeat is kept by
+its bytes; a key state by its keys and the keys held before it (Decoder.key_signal: the
+decoder's keys moved, its text the decoder's, its rows from the masks); the rows of an event
+the decoder keeps (an SDO read seen before, a J1939 keypad frame) by that entry, with no
+decode (Decoder.kept_event), a J1939 one by its bytes while the keypads' addresses stay.
+``FrameDecoder.fast = False`` makes every device frame's rows of its event (the reference of
+tests/fleet/test_fast_rows.py).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import pyarrow as pa
 from blinkcan.decode.decoder import Decoder, Event, Kind
 from blinkcan.decode.describers import Describe, keyed_signal, pdo_describer
 from blinkcan.devices.model import DeviceDescription
-from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows, Follower
+from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows, Follower, key_rows
 from blinkcan.formats.columns import ArrowColumns, FrameColumns
 from blinkcan.formats.logs import describe_frame, frame_kind
 from blinkcan.formats.unreadable import UnreadableLine
@@ -73,6 +77,9 @@ class PdoRoute(NamedTuple):
     #: its rows from the bytes (EventRows.follower), or None: its one EventRows.pdo_detail
     follow: Follower | None
     pdo: str
+    #: the text and rows of frames rowed without a follower (they follow no state), by their
+    #: bytes: periodic ones repeat (brightness levels)
+    rowed: dict[bytes, tuple[str, list[Detail]]]
 
 
 @dataclass
@@ -227,6 +234,10 @@ class FrameDecoder:
         #: key-state PDO identifiers (their meaning depends on the keys held before: PKP §10):
         #: the decoder's (node, shift, mask) of their keys, and the shortest frame that has them
         self._keyed: dict[int, tuple[int, int, int, int]] = {}
+        #: what a J1939 keypad frame the decoder keeps made (Decoder.kept_event), by its
+        #: identifier and bytes, with the count of keypad addresses it was made with (its
+        #: meaning depends on them alone: Decoder.repeat_state)
+        self._j1939_rows: dict[tuple[int, bytes], tuple[int, KeptRows]] = {}
         #: what a key-state frame that has its keys made, by its identifier, its keys and the
         #: node's keys held before it (all its event depends on: Decoder.repeat_state; its
         #: tick is in no row), for the devices' models they were made with
@@ -258,7 +269,7 @@ class FrameDecoder:
             return None  # its rows read the event's fields (a layout of other signals)
         return PdoRoute(node, device.model, f"{event.device or 'node'} {node:02X}h: ",
                         layout.length, layout.min_length,
-                        pdo_describer(layout, device, node, {}), follow, layout.name)
+                        pdo_describer(layout, device, node, {}), follow, layout.name, {})
 
     def _event_rows(self, event: Event, place: int, nodes: list[int | None],
                     models: list[str | None], texts: list[str | None]) -> list[Detail]:
@@ -374,6 +385,7 @@ class FrameDecoder:
             self._pure.clear()
             self._keyed.clear()
             self._keyed_rows.clear()
+            self._j1939_rows.clear()
             self._models = snapshot
         fast, pdo_routes, pdo_detail = self.fast, self._pdo_routes, self._rows.pdo_detail
         pure, heartbeat = self._pure, HEARTBEAT
@@ -382,7 +394,10 @@ class FrameDecoder:
         keyed, keyed_rows = self._keyed, self._keyed_rows
         if len(keyed_rows) > _ROWS_KEPT:
             keyed_rows.clear()
-        keys_held, hold_keys = decoder.keys_held, decoder.hold_keys
+        j1939_rows, addresses = self._j1939_rows, decoder.j1939.addresses
+        if len(j1939_rows) > _ROWS_KEPT:
+            j1939_rows.clear()
+        keys_held, hold_keys, frame_text = decoder.keys_held, decoder.hold_keys, decoder.text
         kept_event, kept_made = decoder.kept_event, self._kept_made
         find_number, number = segment.numbers.get, segment.number
         event_texts = self._texts
@@ -400,15 +415,23 @@ class FrameDecoder:
             can_id, flag = idents[count]
             payload = payloads[count]
             route = pdo_routes.get(can_id) if fast and not flag else None
-            made = keyed_key = None
+            made = None
             if route is not None:
                 if len(payload) >= route.length:  # no Event: its bytes
-                    text, fields = route.describe(payload)
                     nodes[place], models[place] = route.node, route.model
-                    texts[place] = route.who + text
                     follow = route.follow
-                    details = [pdo_detail(route.pdo, fields)] if follow is None else \
-                        follow(payload)
+                    if follow is not None:
+                        texts[place] = route.who + route.describe(payload)[0]
+                        details = follow(payload)
+                    else:
+                        rowed = route.rowed.get(payload)
+                        if rowed is None:
+                            if len(route.rowed) >= _ROWS_KEPT:
+                                route.rowed.clear()
+                            text, fields = route.describe(payload)
+                            rowed = route.rowed[payload] = (
+                                route.who + text, [pdo_detail(route.pdo, fields)])
+                        texts[place], details = rowed
                 elif len(payload) < route.shortest:
                     made = pure.get(can_id)
             elif not fast:
@@ -419,14 +442,28 @@ class FrameDecoder:
                 node, shift, mask, shortest = keyed[can_id]
                 if len(payload) >= shortest:
                     keys = int.from_bytes(payload, "little") >> shift & mask
-                    keyed_key = (can_id, keys, keys_held(node))
+                    before = keys_held(node)
+                    keyed_key = (can_id, keys, before)
                     made = keyed_rows.get(keyed_key)
                     if made is not None:
                         hold_keys(node, keys)
+                    else:  # its text from the decoder (which holds its keys), its rows here
+                        device = devices.get(node)
+                        made = keyed_rows[keyed_key] = (
+                            node, None if device is None else device.model,
+                            frame_text(new(frame_type, (can_id, payload, False))),
+                            key_rows(keys & ~before, before & ~keys, keys.bit_count()))
             else:  # an event the decoder keeps (SDO, J1939 keypad): what it made before
-                event = kept_event(can_id, flag, payload, times[count])
-                if event is not None:
-                    made = kept_made(event)
+                if flag:
+                    j1939_made = j1939_rows.get((can_id, payload))
+                    if j1939_made is not None and j1939_made[0] == len(addresses):
+                        made = j1939_made[1]
+                if made is None:
+                    event = kept_event(can_id, flag, payload, times[count])
+                    if event is not None:
+                        made = kept_made(event)
+                        if flag:
+                            j1939_rows[can_id, payload] = (len(addresses), made)
             decoded = False  # the decoder's devices change only where it decodes a frame
             if made is not None:
                 nodes[place], models[place], texts[place], details = made
@@ -435,9 +472,6 @@ class FrameDecoder:
                 details = self._event_rows(
                     decode(new(frame_type, (can_id, payload, flag)), times[count]), place,
                     nodes, models, texts)
-                if keyed_key is not None and keys_held(node) == keyed_key[1]:
-                    keyed_rows[keyed_key] = (nodes[place], models[place], str(texts[place]),
-                                             details)
             added = 1
             if len(details) == 1:
                 code = find_number(details[0])

@@ -178,11 +178,8 @@ class EventRows:
             self._faults.pop(node, None)
 
     def _keys(self, node: int, fields: dict[str, Any]) -> list[Detail]:
-        pressed, released = fields["pressed"], fields["released"]
-        if not (pressed or released):
-            return [_new(Detail, ("key", None, None, "held", None, len(fields["held"])))]
-        return [_new(Detail, ("key", key, None, "pressed", None, None)) for key in pressed] + \
-            [_new(Detail, ("key", key, None, "released", None, None)) for key in released]
+        return key_rows(_mask(fields["pressed"]), _mask(fields["released"]),
+                        len(fields["held"]))
 
     def _led_picture(self, node: int, fields: dict[str, Any]) -> list[Detail]:
         """A row per key whose colour changed (the picture as three masks, red, green and
@@ -334,6 +331,20 @@ class EventRows:
                           colour=colour_name(fields["colour"]))
         return Detail("j1939", state=str(message or command or "address"),
                       value=_int_value(fields.get("value")))
+
+
+_PRESSED = tuple(Detail("key", key, state="pressed") for key in _ITEMS)
+_RELEASED = tuple(Detail("key", key, state="released") for key in _ITEMS)
+
+
+def key_rows(pressed: int, released: int, held: int) -> list[Detail]:
+    """The rows of a key state (PKP §10) from the masks of the keys pressed and released
+    since the last one (bit 0 is key 1): a row per key pressed, then per key released; or,
+    where none was, the one ``held`` row with the count of keys held."""
+    if not (pressed or released):
+        return [_new(Detail, ("key", None, None, "held", None, held))]
+    return [_PRESSED[key] for key in numbers(pressed)] + \
+        [_RELEASED[key] for key in numbers(released)]
 
 
 def _only_int(fields: dict[str, Any]) -> int | None:

@@ -54,6 +54,7 @@ from blinkcan.host.bus import Handler, HostBus, Timer
 from blinkcan.host.events import EventSource
 from blinkcan.host.identity_errors import IdentityError, SharedNodeIdError, several_answer
 from blinkcan.host.sdo import SdoClient
+from blinkcan.host.waits import check_wait
 from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame, parse_nmt
@@ -75,20 +76,6 @@ def unreversed(version: str) -> str:
     if version.endswith("V") and not version.startswith("V"):
         return version[::-1]
     return version
-
-
-#: the longest a driver call waits for a device (an SDO reply, a J1939 answer): longer is a
-#: typo, and 1e300 s overflowed the platform's timers at the first wait
-LONGEST_WAIT_S = 24 * 3600.0
-
-
-def check_wait(what: str, seconds: float) -> float:
-    """``seconds`` if it is a time to wait, 0..:data:`LONGEST_WAIT_S`; else TypeError /
-    ValueError naming ``what`` and the range, before anything is sent."""
-    check_time(what, seconds, 0)
-    if seconds > LONGEST_WAIT_S:
-        raise ValueError(f"{what} must be 0..{LONGEST_WAIT_S:g} seconds, not {seconds!r}")
-    return seconds
 
 
 def in_units(what: str, period: float, unit_s: float) -> int | None:
@@ -189,6 +176,11 @@ class Device:
         check_wait("sdo_timeout", sdo_timeout)  # before anything is sent
         self.description = description
         self.host = HostBus.attach(bus)  # shared by every driver on this bus
+        try:
+            check_wait("sdo_timeout", sdo_timeout, self.host)  # a simulated bus's bound too
+        except ValueError:
+            self.host.release()
+            raise
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
         self.health = EventSource[HealthEvent](self.host.scheduler)
         #: True once the device at ``node_id`` was confirmed to be this driver's model (or the

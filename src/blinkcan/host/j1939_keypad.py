@@ -33,8 +33,9 @@ from blinkcan.devices.keypad_j1939 import (
 )
 from blinkcan.devices.registry import models
 from blinkcan.host.bus import HostBus
-from blinkcan.host.device import BOOT_UP, NoDeviceError, check_wait, seconds_spans
+from blinkcan.host.device import BOOT_UP, NoDeviceError, seconds_spans
 from blinkcan.host.identity_errors import SharedNodeIdError
+from blinkcan.host.waits import check_wait
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.j1939 import (
     ADDRESS_MAX,
@@ -181,7 +182,7 @@ class J1939KeypadLink:
         unacknowledged): a Request for Address Claimed and a software revision request (§11,
         §20); its revision, heartbeat or key message answers. :class:`NoDeviceError`
         otherwise."""
-        check_wait("timeout", timeout)  # before anything is sent
+        check_wait("timeout", timeout, self.host)  # before anything is sent
         with self._revision_lock:  # no software_revision() request in between
             self._heard_signal.clear()
             self._revision_signal.clear()
@@ -246,7 +247,7 @@ class J1939KeypadLink:
     def software_revision(self, timeout: float = 0.5) -> str:
         """Ask the keypad for its software revision (§11); callers in other threads wait
         their turn (the reply names no request)."""
-        check_wait("timeout", timeout)  # before anything is sent
+        check_wait("timeout", timeout, self.host)  # before anything is sent
         with self._revision_lock:
             self._revision = None
             self._revision_signal.clear()
@@ -262,7 +263,7 @@ class J1939KeypadLink:
         waited for up to ``heartbeat_wait`` seconds (default: one and a half periods at the
         keypad's default period, §18), so a heartbeat that is on is not called "not heard"."""
         if heartbeat_wait is not None:
-            check_wait("heartbeat_wait", heartbeat_wait)
+            check_wait("heartbeat_wait", heartbeat_wait, self.host)
         revision = self.software_revision(timeout)
         # one period and a half: a heartbeat due as the wait starts may come a little late
         wait = 1.5 * heartbeat_period_default() if heartbeat_wait is None else heartbeat_wait

@@ -52,6 +52,7 @@ from collections.abc import Callable, Iterator
 from typing import Protocol, TypeVar
 
 from blinkcan.host.identity_errors import SharedNodeIdError, several_answer
+from blinkcan.host.waits import check_wait
 from blinkcan.protocol.abort import AbortCode
 from blinkcan.protocol.cob import SDO_RX, SDO_TX, check_node_id, check_range
 from blinkcan.protocol.frame import Frame
@@ -127,6 +128,9 @@ class SdoHost(Protocol):
 
     def subscribe_fast(self, can_id: int, handler: Callable[[Frame, float], None]
                        ) -> Callable[[], None]: ...
+
+    @property
+    def simulated(self) -> bool: ...
 
 
 class SdoChannel:
@@ -264,13 +268,15 @@ class SdoChannel:
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        return self._upload(index, subindex, self.timeout if timeout is None else timeout,
+        return self._upload(index, subindex, self.timeout if timeout is None
+                            else check_wait("timeout", timeout, self.host),
                             self.retries if retries is None else check_retries(retries))
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
         self._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is None
-                  else timeout, self.retries if retries is None else check_retries(retries))
+                  else check_wait("timeout", timeout, self.host),
+                  self.retries if retries is None else check_retries(retries))
 
     def _upload(self, index: int, subindex: int, timeout: float, retries: int) -> bytes:
         """``_run(UploadTransfer(index, subindex), timeout, retries).value``, the common case
@@ -462,12 +468,13 @@ class SdoClient:
 
     def upload(self, index: int, subindex: int, *, timeout: float | None = None,
                retries: int | None = None) -> bytes:
-        return self.channel._upload(index, subindex, self.timeout if timeout is None else
-                                    timeout, self.retries if retries is None else
+        return self.channel._upload(index, subindex, self.timeout if timeout is None
+                                    else check_wait("timeout", timeout, self.channel.host),
+                                    self.retries if retries is None else
                                     check_retries(retries))
 
     def download(self, index: int, subindex: int, data: bytes, *, timeout: float | None = None,
                  retries: int | None = None) -> None:
         self.channel._run(DownloadTransfer(index, subindex, data), self.timeout if timeout is
-                          None else timeout, self.retries if retries is None else
-                          check_retries(retries))
+                          None else check_wait("timeout", timeout, self.channel.host),
+                          self.retries if retries is None else check_retries(retries))
