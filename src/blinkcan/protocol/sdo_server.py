@@ -76,9 +76,8 @@ _Handler = Callable[[SdoFrame], "bytes | None"]
 class SdoServer:
     """One server channel (one per node)."""
 
-    __slots__ = ("_buffer", "_download", "_expedited", "_handlers", "_idle", "_mux", "_parsed",
-                 "_position", "_replies", "_segments", "_size", "_state", "_tables", "_toggle",
-                 "_upload")
+    __slots__ = ("_buffer", "_download", "_handlers", "_idle", "_mux", "_parsed", "_position",
+                 "_replies", "_segments", "_size", "_state", "_tables", "_toggle", "_upload")
 
     def __init__(self, access: ObjectAccess) -> None:
         self._upload = access.sdo_upload  # bound once: called on every request
@@ -95,16 +94,14 @@ class SdoServer:
         #: the open upload's replies: its initiate response, then its segments (``_position``:
         #: the next)
         self._segments: tuple[bytes, ...] = ()
-        #: request bytes -> their parse. A master polls the same requests byte for byte (a
-        #: read of an object is always the same eight bytes), an SdoFrame is immutable, and
-        #: parsing costs about a third of a request (a NamedTuple of seven fields; measured,
-        #: benchmarks/sdo_twin.py). Bounded: cleared when full.
-        self._parsed: dict[bytes, SdoFrame] = {}
-        #: an expedited upload request's eight bytes -> (its multiplexer, the value bytes, the
-        #: reply) last answered: the same request of an unchanged value gets the same reply
-        #: without a parse or a dispatch (most requests a master sends; bounded like
-        #: ``_parsed``)
-        self._expedited: dict[bytes, tuple[bytes, bytes, bytes]] = {}
+        #: request bytes -> their parse, or for an expedited read answered before, (its parse,
+        #: the value bytes, the reply): the same read of a value with the same bytes gets the
+        #: same reply without a dispatch. A master polls the same requests byte
+        #: for byte (a read of an object is always the same eight bytes), an SdoFrame is
+        #: immutable, and parsing costs about a third of a request (a NamedTuple of seven
+        #: fields; measured, benchmarks/sdo_twin.py). One table: every request looks up once.
+        #: Bounded: cleared when full.
+        self._parsed: dict[bytes, SdoFrame | tuple[SdoFrame, bytes, bytes]] = {}
         # state -> handler per client command specifier (0..7; CiA 301 §7.2.4.3): the protocol
         # as a table. A list per state, not a dict keyed by (state, ccs): hashing an enum costs
         # a Python call.
@@ -136,18 +133,18 @@ class SdoServer:
 
     def on_request(self, data: bytes) -> bytes | None:
         """The eight reply bytes for one request, or None (a client abort needs no reply)."""
-        if data.__class__ is bytes:  # hashable
-            known = self._expedited.get(data)
-            # the value is read on every request (a reader may make it anew): its reply is
-            # kept while the very same bytes come back and no transfer is open
-            if known is not None and self._handlers is self._idle and \
-                    self._upload(known[0]) is known[1]:
-                return known[2]
-            request = self._parsed.get(data)
-        else:
-            request = None
-        if request is None:
-            request = self._parse(data)
+        known = self._parsed.get(data) if data.__class__ is bytes else None  # hashable
+        if isinstance(known, SdoFrame):
+            return self._handlers[known.specifier](known)
+        if known is not None:  # an expedited read answered before: (its parse, value, reply)
+            # the value is read on every request (a reader may make it anew): the reply is
+            # kept while the value's bytes are the same and no transfer is open
+            request, kept, reply = known
+            value = self._upload(request.mux)
+            if value == kept and self._handlers is self._idle:
+                return reply
+            return self._answer_upload(request, value)
+        request = self._parse(data)
         return self._handlers[request.specifier](request)
 
     def _parse(self, data: bytes) -> SdoFrame:
@@ -173,15 +170,19 @@ class SdoServer:
         self._enter(TransferState.IDLE)  # CiA 301 §7.2.4.3.17: an abort is not answered
 
     def _initiate_upload(self, request: SdoFrame) -> bytes:
+        return self._answer_upload(request, self._upload(request.mux))
+
+    def _answer_upload(self, request: SdoFrame, value: bytes | AbortCode) -> bytes:
+        """The reply to the initiate upload ``request`` of an object whose value (or refusal)
+        is ``value``; a transfer still open is abandoned."""
         mux = request.mux
         if self._handlers is not self._idle:
             self._enter(TransferState.IDLE)
-        value = self._upload(mux)
         cached = self._replies.get(mux)
         if cached is not None and cached[0] is value:
             reply = cached[1]
             if isinstance(reply, bytes):
-                self._known(request.raw, mux, value, reply)
+                self._known(request, value, reply)
                 return reply
         elif not isinstance(value, bytes):
             return abort_data(mux, value)
@@ -190,7 +191,7 @@ class SdoServer:
             if size in EXPEDITED_UPLOAD_COMMAND:  # CiA 301: 1-4 bytes go expedited
                 reply = bytes((EXPEDITED_UPLOAD_COMMAND[size],)) + mux + value + ZEROS[size:4]
                 self._replies[mux] = (value, reply)
-                self._known(request.raw, mux, value, reply)
+                self._known(request, value, reply)
                 return reply
             reply = (bytes((SEGMENTED_UPLOAD_RESPONSE,)) + mux + size.to_bytes(4, "little"),
                      *_segment_replies(value))
@@ -202,12 +203,12 @@ class SdoServer:
         self._toggle = 0
         return reply[0]
 
-    def _known(self, request: bytes, mux: bytes, value: bytes, reply: bytes) -> None:
-        """Keep the expedited ``reply`` to the upload ``request`` of ``value`` (``_expedited``)."""
-        expedited = self._expedited
-        if len(expedited) >= _PARSED_KEPT:
-            expedited.clear()
-        expedited[request] = (mux, value, reply)
+    def _known(self, request: SdoFrame, value: bytes, reply: bytes) -> None:
+        """Keep the expedited ``reply`` to the upload ``request`` of ``value`` (``_parsed``)."""
+        parsed = self._parsed
+        if len(parsed) >= _PARSED_KEPT:
+            parsed.clear()
+        parsed[request.raw] = (request, value, reply)
 
     def _upload_segment(self, request: SdoFrame) -> bytes:
         # CiA 301 §7.2.4.3.7: alternates from 0 on each segment (SdoFrame.toggle, inlined)
