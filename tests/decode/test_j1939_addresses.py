@@ -15,6 +15,7 @@ from click.testing import CliRunner
 
 from blinkcan.cli.main import cli
 from blinkcan.decode import Decoder, Kind
+from blinkcan.decode.decoder import encode_json
 from blinkcan.devices.keypad_j1939 import (
     DEFAULT_ADDRESS,
     NVM_PREFIX,
@@ -225,3 +226,22 @@ def test_help_says_how_to_name_a_j1939_keypad() -> None:
     for command_name in ("decode", "monitor"):
         result = CliRunner().invoke(cli, [command_name, "--help"])
         assert "j1939:0x30=keypad" in " ".join(result.output.split())
+
+
+@pytest.mark.parametrize("frame", [
+    Frame(0x18EFFF00, bytes.fromhex("041B2AFFFFFFFFFF"), True),  # §11 revision request
+    Frame(0x18EFFF00, bytes.fromhex("041B0103010000FF"), True),  # §7a single LED
+    Frame(0x18A7FF00, bytes.fromhex("1100000000000000"), True),  # §7b colour 1
+    Frame(0x18A6FF00, bytes(8), True),  # §7b colour 2
+], ids=["revision request", "single LED", "LEDs colour 1", "LEDs colour 2"])
+def test_a_command_to_all_keypads_names_no_keypad_at_ffh(frame: Frame) -> None:
+    """FFh is J1939's global address: every keypad takes the command (spec J-2), so it is
+    no keypad's at FFh (the J1939 demo printed "keypad FFh: software revision request" and
+    `monitor --file` drew a panel for a keypad FFh)."""
+    decoder = Decoder({}, assumed=True)
+    for _ in range(2):  # the second time from the decoder's kept frames
+        event = decoder.decode(frame, 0.0)
+        assert event.node_id is None
+        assert str(event).endswith(", to all keypads")
+        assert decoder.json_line(frame, 0.0) == encode_json(event.to_json())
+    assert 0xFF not in decoder.j1939.addresses

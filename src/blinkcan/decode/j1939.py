@@ -160,6 +160,14 @@ KEYPAD_PGNS = frozenset({PGN_ADDRESS_CLAIMED, PGN_REQUEST, PGN_LEDS_COLOUR_1, PG
 _COMMANDS_KEPT = 1024
 
 
+def _to_all(destination: int, meaning: J1939Meaning) -> J1939Meaning:
+    """A command to the global address is no keypad's at FFh: every keypad takes it (spec
+    J-2, J1939-21), so it names no address and says so."""
+    if destination != GLOBAL_ADDRESS:
+        return meaning
+    return meaning._replace(text=f"{meaning.text}, to all keypads", address=None)
+
+
 class J1939KeypadDecoder:
     """Decodes PKP-2600-SI J1939 frames; remembers which addresses are keypads. ``models``
     names the model at an address (the user said it: ``--device j1939:0x30=keypad``); those
@@ -265,7 +273,7 @@ class J1939KeypadDecoder:
         key = (destination, data)
         meaning = self._commands.get(key)
         if meaning is None:
-            meaning = self._describe_command(destination, data)
+            meaning = _to_all(destination, self._describe_command(destination, data))
             if len(self._commands) >= _COMMANDS_KEPT:
                 self._commands.clear()
             self._commands[key] = meaning
@@ -297,6 +305,10 @@ class J1939KeypadDecoder:
         return J1939Meaning(text, destination, True, {"command": command.name, **fields})
 
     def _multiple_leds(self, pgn: int, destination: int, data: bytes) -> J1939Meaning:
+        return _to_all(destination, self._leds_of(pgn, destination, data))
+
+    @staticmethod
+    def _leds_of(pgn: int, destination: int, data: bytes) -> J1939Meaning:
         which = 1 if pgn == PGN_LEDS_COLOUR_1 else 2
         if len(data) != 8:
             return J1939Meaning(f"LEDs colour {which}: malformed", destination, True)
