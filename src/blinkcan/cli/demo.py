@@ -224,7 +224,10 @@ def run_demo(console: Console, pause: float = 0.6, web: str | None = None,
                 Live(console=console, auto_refresh=False, transient=show.lines) as live:
             show.live = live
             keypad = Keypad(host)
-            keybox = Keybox(host, watchdog=0.2)  # outputs off if this controller dies
+            # outputs off if this controller dies; a second, not less: on a loaded machine
+            # this one process's threads (twins, controller, screen) can starve the host's
+            # heartbeat for a few hundred ms, and the demo would show a trip nobody caused
+            keybox = Keybox(host, watchdog=1.0)
             identity = keypad.identity()
             show.header = (f"Controller: keypad {identity.model_id} firmware "
                            f"{identity.software_version}, Keybox {keybox.identity().model_id} "
