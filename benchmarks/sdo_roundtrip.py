@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import os
 import random
 import statistics
 import subprocess
@@ -23,7 +24,7 @@ import sys
 import threading
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -121,8 +122,32 @@ def _blocks(calls: dict[str, Callable[[], object]], count: int, block: int,
     return results
 
 
+@contextlib.contextmanager
+def _one_cpu() -> Iterator[str]:
+    """The threads made inside on one CPU (Linux: they inherit the affinity of the thread that
+    makes them). In one process the three setups' threads hand each frame to one another; the
+    kernel puts them on one CPU in some blocks and spreads them in others, and spread they
+    cost about twice the CPU per round trip, so the floor flipped between ~17 k and ~30 k/s
+    from block to block and the ratios mixed regimes (session 9). Pinned, every block runs in
+    the same regime. Says what was done, for the report."""
+    if not hasattr(os, "sched_setaffinity"):
+        yield "threads not pinned (no sched_setaffinity here)"
+        return
+    before = os.sched_getaffinity(0)
+    os.sched_setaffinity(0, {min(before)})
+    try:
+        yield f"all its threads on CPU {min(before)}"
+    finally:
+        os.sched_setaffinity(0, before)
+
+
 def in_one_process(count: int, block: int = 250) -> Blocks:
     """Ours, python-canopen's pair and the floor alive at once on three virtual channels."""
+    with _one_cpu():
+        return _in_one_process(count, block)
+
+
+def _in_one_process(count: int, block: int) -> Blocks:
     description = _description()
     channels = [f"rt-{uuid.uuid4().hex}" for _ in range(3)]
     device_bus, host_bus = (can.Bus(interface="virtual", channel=channels[0]) for _ in range(2))
@@ -288,7 +313,8 @@ def main(smoke: bool = False) -> None:
     count = 300 if smoke else 6000
     print("SDO round trips: blinkcan (HostBus <-> twin in the Emulator) beside python-canopen "
           "(RemoteNode <-> LocalNode), same object dictionary, same run")
-    _report("in one process (virtual bus)", in_one_process(count))
+    _report("in one process (virtual bus, all its threads on one CPU: spread over two, the "
+            "floor flips between two regimes from block to block)", in_one_process(count))
     across = across_processes(count)  # 24 blocks, as in one process: its ranges are wide
     if across is None:
         print("  across processes: udp_multicast is not available here (skipped)")
