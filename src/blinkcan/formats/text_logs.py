@@ -9,7 +9,9 @@ knows the line each one read last; when a reader raises, that line is an
 header's state kept: ASC's start date and base, TRC's version and columns) reads on from the
 next line. The copy's iteration starts again with its header step, so it is handed one
 ``;`` line first, which each of them passes over (ASC: the line that ends its header; TRC: a
-comment; CSV: its column names). A line over MAX_LINE, or the last of a compressed file cut
+comment; CSV: its column names). python-can's ASC header step drops the line it ends on when
+that is no header line (a frame, in a log with no "internal events logged" line):
+:class:`_AscReader` hands it over again. A line over MAX_LINE, or the last of a compressed file cut
 short, is never handed to a reader: it is unreadable as such, as in a candump log. TRC's
 reader drops a line it cannot split into its columns with a logged warning;
 :class:`_TrcReader` lets that error through, so the line is named like any other. ASC's
@@ -21,6 +23,7 @@ A log none of whose lines is a frame is not a log of that format: ValueError onc
 from __future__ import annotations
 
 import copy
+import re
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
@@ -41,6 +44,11 @@ if TYPE_CHECKING:
 _LINE_ERRORS = (ValueError, IndexError, KeyError, TypeError, ArithmeticError)
 #: handed to a reader that starts again: the line its header step passes over
 _RESUME = ";"
+#: the lines python-can's ASC header step takes (can/io/asc.py ASCReader._extract_header):
+#: the start date, the number base, a comment, "(no) internal events logged"
+_ASC_HEADER_LINE = re.compile(
+    r"date\s+\w+\s+.|base\s+(?:hex|dec)|//|(?:no)?\s*internal\s+events\s+logged",
+    re.IGNORECASE)
 
 
 class _Feed:
@@ -51,8 +59,10 @@ class _Feed:
         self._blocks = bounded_line_blocks(stream, kind)
         self._lines: Iterator[str] = iter(())
         self._resume = False
+        self._again: str | None = None
         self.kind = kind
         self.last = ""
+        self.handed = ""  # what the reader was handed last: ``last``, or :data:`_RESUME`
         self.number = 0
         self.cut_off = False  # ``last`` is the file's last line, no newline after it
         self.passed: list[UnreadableLine] = []
@@ -64,11 +74,15 @@ class _Feed:
     def __next__(self) -> str:
         if self._resume:
             self._resume = False
+            self.handed = _RESUME
             return _RESUME
+        if self._again is not None:
+            self.handed, self._again = self._again, None
+            return self.handed
         while True:
             for line in self._lines:
                 self.number += 1
-                self.last = line
+                self.last = self.handed = line
                 return line
             block = self._next_block()
             self.cut_off = type(block) is UnterminatedLine
@@ -89,6 +103,10 @@ class _Feed:
             self.failed = error
             raise
         return block
+
+    def again(self) -> None:
+        """Hand the line read last once more (its number unchanged)."""
+        self._again = self.last
 
     def resume(self) -> None:
         """The next reader starts: hand it :data:`_RESUME` first."""
@@ -120,6 +138,24 @@ def _article(kind: str) -> str:
     return "an" if kind[:1] in "AEFHILMNORSX" else "a"
 
 
+def _asc_reader() -> type[can.io.generic.MessageReader]:
+    from can.io.asc import ASCReader  # noqa: PLC0415
+
+    class _AscReader(ASCReader):
+        """python-can's ASC reader whose header step keeps the line it ends on: python-can's
+        ends at the first line that is no header line and drops that line, so a log with no
+        "internal events logged" line before its frames lost its first frame with no word."""
+
+        def _extract_header(self) -> None:
+            feed = self.file
+            super()._extract_header()
+            if isinstance(feed, _Feed) and feed.handed is feed.last and \
+                    not _ASC_HEADER_LINE.match(feed.last.strip()):
+                feed.again()  # a frame, an event or a trigger block: the log's, read it
+
+    return _AscReader
+
+
 def _trc_reader() -> type[can.io.generic.MessageReader]:
     from can.io.trc import TRCReader  # noqa: PLC0415
 
@@ -143,7 +179,8 @@ def text_log_messages(stream: TextIO, suffix: str,
     from can.io.player import MESSAGE_READERS  # noqa: PLC0415
 
     feed = _Feed(stream, kind_of(suffix))
-    reader_type = _trc_reader() if suffix == ".trc" else MESSAGE_READERS[suffix]
+    reader_type = {".trc": _trc_reader, ".asc": _asc_reader}.get(
+        suffix, lambda: MESSAGE_READERS[suffix])()
     # an ASC file's times count from its start date: absolute, as every other format's
     options = {"relative_timestamp": False} if suffix == ".asc" else {}
     reader = reader_type(feed, **options)  # type: ignore[arg-type]  # iterates it only
