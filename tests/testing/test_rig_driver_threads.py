@@ -8,7 +8,6 @@ the thread as ``rig.bus.send`` does)."""
 from __future__ import annotations
 
 import asyncio
-import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -19,23 +18,7 @@ from blinkcan.host.aio import AsyncKeypad
 from blinkcan.host.bus import HostBus
 from blinkcan.testing import Rig, WrongThreadError
 from blinkcan.twin.registry import build_twin
-
-
-def _in_thread(call: Callable[[], Any]) -> Any:
-    """``call()``'s result or exception, from a thread named "worker"."""
-    outcome: list[Any] = []
-
-    def run() -> None:
-        try:
-            outcome.append(call())
-        except Exception as error:
-            outcome.append(error)
-
-    worker = threading.Thread(target=run, name="worker")
-    worker.start()
-    worker.join(30.0)
-    assert not worker.is_alive()
-    return outcome[0]
+from tests.testing.test_rig_threads import _in_thread
 
 
 def _refused(rig: Rig, call: Callable[[], Any]) -> WrongThreadError:
@@ -44,7 +27,7 @@ def _refused(rig: Rig, call: Callable[[], Any]) -> WrongThreadError:
     error = _in_thread(call)
     assert isinstance(error, WrongThreadError), error
     text = str(error)
-    assert "'worker'" in text, text
+    assert "'reader'" in text, text  # the thread _in_thread makes
     assert "'MainThread'" in text, text
     assert (rig.now, len(rig.frames)) == (start, sent)
     return error
