@@ -775,3 +775,98 @@ def test_stored_settings_survive_the_process(tmp_path: Path) -> None:
     # TOP 3, the counter started from min(startup 2, TOP 3), 500 ms, 100 ms
     assert values == {"2000h/07": 3, "2000h/05": 2, "2006h": 0x32, "1801h/05": 0x64}
     again.close()
+
+
+# -- examples the traces above left out (hman10's inventory, reports/hman10-inventory.md) ---------
+
+#: more of the manual's examples, replayed as printed on the booted, pre-operational device (SDO
+#: works there, M24); the state a read implies is written first through the same object
+MORE_EXAMPLES = {
+    "s19f_top_position_encoder_1": """
+        > 615 2F 00 20 06 08 00 00 00    # set TOP position to 8
+        < 595 60 00 20 06 00 00 00 00    # command accepted
+        > 615 40 00 20 06 00 00 00 00    # read the set value
+        < 595 4F 00 20 06 08 00 00 00    # TOP position set to 8
+    """,
+    "s19g_top_position_encoder_2": """
+        > 615 2F 00 20 07 02 00 00 00    # set TOP position to 2
+        < 595 60 00 20 07 00 00 00 00
+        > 615 40 00 20 07 00 00 00 00
+        < 595 4F 00 20 07 02 00 00 00    # TOP position set to 2
+    """,
+    "s20b_read_key_led_on": """
+        > 615 2B 01 20 01 10 00 00 00    # the state the reads show: red #5,
+        < 595 60 01 20 01 00 00 00 00
+        > 615 2B 01 20 02 00 02 00 00    # green #10,
+        < 595 60 01 20 02 00 00 00 00
+        > 615 2B 01 20 03 00 40 00 00    # blue #15
+        < 595 60 01 20 03 00 00 00 00
+        > 615 40 01 20 01 00 00 00 00    # read red LED
+        < 595 4B 01 20 01 10 00 00 00    # only red LED #5 ON
+        > 615 40 01 20 02 00 00 00 00    # read green LED
+        < 595 4B 01 20 02 00 02 00 00    # only green LED #10 ON
+        > 615 40 01 20 03 00 00 00 00    # read blue LED
+        < 595 4B 01 20 03 00 40 00 00    # only blue LED #15 ON
+    """,
+    "s20d_read_encoder_led_on": """
+        > 615 23 01 20 04 10 00 00 00
+        < 595 60 01 20 04 00 00 00 00
+        > 615 40 01 20 04 00 00 00 00
+        < 595 43 01 20 04 10 00 00 00    # only LED #5 ON
+        > 615 23 01 20 04 00 02 00 00
+        < 595 60 01 20 04 00 00 00 00
+        > 615 40 01 20 04 00 00 00 00
+        < 595 43 01 20 04 00 02 00 00    # only LED #10 ON
+        > 615 23 01 20 04 00 00 00 80
+        < 595 60 01 20 04 00 00 00 00
+        > 615 40 01 20 04 00 00 00 00
+        < 595 43 01 20 04 00 00 00 80    # only LED #32 ON (M26: ring LEDs 1-32)
+    """,
+    "s21b_read_key_led_blink": """
+        > 615 2B 02 20 02 02 00 00 00
+        < 595 60 02 20 02 00 00 00 00
+        > 615 2B 02 20 03 00 03 00 00
+        < 595 60 02 20 03 00 00 00 00
+        > 615 40 02 20 02 00 00 00 00    # read green LED blink
+        < 595 4B 02 20 02 02 00 00 00    # only green LED #2 blinks
+        > 615 40 02 20 03 00 00 00 00    # read blue LED blink
+        < 595 4B 02 20 03 00 03 00 00    # blue LED #9, 10 blink
+    """,
+    "s21c_d_encoder_led_blink": """
+        > 615 23 02 20 04 00 00 00 20    # "Set LED #30 ON": it blinks (M3)
+        < 595 60 02 20 04 00 00 00 00
+        > 615 40 02 20 04 00 00 00 00
+        < 595 43 02 20 04 00 00 00 20
+        > 615 23 02 20 04 10 00 00 00
+        < 595 60 02 20 04 00 00 00 00
+        > 615 40 02 20 04 00 00 00 00
+        < 595 43 02 20 04 10 00 00 00    # only LED #5 blinks
+        > 615 23 02 20 04 00 00 00 80
+        < 595 60 02 20 04 00 00 00 00
+        > 615 40 02 20 04 00 00 00 00
+        < 595 43 02 20 04 00 00 00 80    # only LED #32 blinks
+    """,
+}
+test_more_examples = replayed(MORE_EXAMPLES)
+
+
+def test_s11_key_state_bytes(started: Bench) -> None:
+    """§11's table, byte for byte (test_s11_key_state_examples checks the key set only)."""
+    started.replay("""
+        press 1
+        < 195 01 00 00 00 ??    # only key #1 pressed
+        release 1
+        < 195 00 00 00 00 ??    # any key released
+        press 5
+        < 195 10 00 00 00 ??    # only key #5 pressed
+        press 1
+        < 195 11 00 00 00 ??    # keys #1 and #5 pressed
+        release 1
+        < 195 10 00 00 00 ??
+        release 5
+        < 195 00 00 00 00 ??
+        press 9
+        < 195 00 01 00 00 ??    # only key #9 pressed
+        press 15
+        < 195 00 41 00 00 ??    # keys #9 and #15 pressed
+    """)
