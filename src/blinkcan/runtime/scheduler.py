@@ -275,6 +275,11 @@ class Scheduler(ABC):
         else:
             self.post(partial(callback, *args))
 
+    def deliverer(self, callback: Callable[..., object]) -> Callable[..., None]:
+        """:meth:`deliver` with ``callback`` bound: the one call a port makes per frame for a
+        receiver that runs on the loop (bound once, where the receiver starts listening)."""
+        return partial(self.deliver, callback)
+
     def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(self.clock() + check_time("delay", delay), None, callback))
 
@@ -396,23 +401,33 @@ class RealTimeScheduler(Scheduler):
         """Run ``callback(*args)`` on the loop: at once on this thread when it is the loop's
         or the loop is idle with nothing posted before (this thread holds the loop
         meanwhile: no thread hop), else posted. An exception reaches the caller."""
-        me = get_ident()
-        if self._owner == me:
-            callback(*args)
-            return
-        held = self._held
-        if self._thread is not None and not self._calls and held.acquire(False):
-            try:
-                if not self._calls:  # nothing posted before still waits: order kept
-                    self._owner = me
-                    try:
-                        callback(*args)
-                    finally:
-                        self._owner = None
-                    return
-            finally:
-                held.release()
-        self.post(partial(callback, *args))
+        self.deliverer(callback)(*args)
+
+    def deliverer(self, callback: Callable[..., object]) -> Callable[..., None]:
+        """:meth:`deliver` with ``callback`` bound, as one function of the frame's arguments:
+        a port calls it per frame (no partial, no method call, the loop's lock and queue
+        bound once: every SDO request an emulator answers comes this way)."""
+        calls, acquire, release = self._calls, self._held.acquire, self._held.release
+
+        def deliver(*args: object) -> None:
+            me = get_ident()
+            if self._owner == me:
+                callback(*args)
+                return
+            if self._thread is not None and not calls and acquire(False):
+                try:
+                    if not calls:  # nothing posted before still waits: order kept
+                        self._owner = me
+                        try:
+                            callback(*args)
+                        finally:
+                            self._owner = None
+                        return
+                finally:
+                    release()
+            self.post(partial(callback, *args))
+
+        return deliver
 
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         if self._thread is None or self.in_loop:
