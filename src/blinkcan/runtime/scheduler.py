@@ -553,6 +553,7 @@ class SimulatedScheduler(Scheduler):
         self._waits = 0
         self._background: collections.deque[tuple[Hashable | None, Callable[[], object]]] = (
             collections.deque())
+        self._in_background = False  # a piece of spawned work is running
         #: the one thread that may run the simulation (a Rig's), None: any
         self.owner: threading.Thread | None = None
 
@@ -647,15 +648,24 @@ class SimulatedScheduler(Scheduler):
         self.call_soon(self._run_background)
 
     def _run_background(self) -> None:
-        if self._waits:
-            return  # the wait's end schedules this again
+        """Run the next piece of work handed to :meth:`spawn`; never one inside another.
+
+        Work that waits (a driver's blocking call) runs the simulation, and a timer firing
+        meanwhile may spawn more (a periodic poll). Each piece has its own turn after the
+        events already due, so the caller's ``until`` is looked at between two pieces and
+        virtual time cannot run away in nested or queued waits."""
+        if self._waits or self._in_background or not self._background:
+            return  # the wait's end, or the running piece's end, schedules this again
+        _, action = self._background.popleft()
+        self._in_background = True
         base, self._base = self._base, self._depth
         try:
-            while self._background and not self._waits:
-                _, action = self._background.popleft()
-                self.guarded(action, what="work handed to spawn")
+            self.guarded(action, what="work handed to spawn")
         finally:
             self._base = base
+            self._in_background = False
+            if self._background and not self._waits:
+                self.call_soon(self._run_background)
 
     def next_due(self) -> float | None:
         due = self._heap.next_due()
