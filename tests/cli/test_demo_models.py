@@ -96,6 +96,11 @@ def test_protocol_j1939_with_no_model_runs_the_model_that_speaks_it() -> None:
     assert lines[-1].endswith(f"frames on the bus ({title})")
 
 
+def test_the_help_says_what_protocol_with_no_model_does() -> None:
+    result = CliRunner().invoke(cli, ["demo", "--help"])
+    assert "with no --model: the model that speaks it" in " ".join(result.output.split())
+
+
 def test_protocol_j1939_with_no_model_and_several_models_asks_which(
         monkeypatch: pytest.MonkeyPatch) -> None:
     """Were a second model to speak J1939, the demo could not pick: one line naming them."""

@@ -279,7 +279,8 @@ def _high(states: dict[int, str]) -> list[int]:
               help="A short scripted scenario of this one model instead: started, then "
                    "everything its face has done once (keys, knobs, inputs, fuses, power).")
 @click.option("--protocol", type=click.Choice(["canopen", "j1939"]), default="canopen",
-              show_default=True, help="The protocol the --model device speaks.")
+              show_default=True, help="The protocol the --model device speaks (with no "
+                   "--model: the model that speaks it).")
 def command(pause: float, web: str | None, spec: str | None, protocol: str) -> None:
     """A controller on a keypad and a Keybox twin: key N toggles output N, shown live."""
     if spec is None and protocol == "canopen":
