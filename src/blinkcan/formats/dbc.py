@@ -11,6 +11,7 @@ from collections import OrderedDict
 
 import cantools.database as cdb
 from cantools.database.can import Message, Signal
+from cantools.database.namedsignalvalue import NamedSignalValue
 
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.pdo import Direction, PdoSignal
@@ -23,7 +24,8 @@ _STATES = {NmtState.BOOT_UP: "boot_up", NmtState.STOPPED: "stopped",
 
 
 #: the sign bit of a sign-magnitude signal as cantools names its values
-_ROTATION = OrderedDict(((0, "clockwise"), (1, "counterclockwise")))
+_ROTATION: OrderedDict[int, str | NamedSignalValue] = OrderedDict(
+    ((0, "clockwise"), (1, "counterclockwise")))
 
 
 def _signals(signal: PdoSignal, receiver: list[str]) -> list[Signal]:
