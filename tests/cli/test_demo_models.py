@@ -67,7 +67,6 @@ def test_the_demo_of_each_model_runs_its_scenario(spec: str, protocol: str) -> N
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["--protocol", "j1939"], "--protocol is for the device of --model"),
     (["--model", "nosuch"], "unknown device 'nosuch'"),
     (["--model", "keybox", "--protocol", "j1939"], "--protocol j1939 applies to"),
 ])
@@ -76,6 +75,39 @@ def test_demo_model_mistakes_are_one_line(args: list[str], message: str) -> None
     assert result.exit_code == 2, result.output
     assert len(result.output.strip().splitlines()) == 1, result.output
     assert message in result.output
+
+
+#: the models that speak J1939, from the registry (one today: the PKP-2600-SI)
+J1939_MODELS = [m for m in models() if any("j1939" in m.description(g).features
+                                           for g in m.generations)]
+
+
+def test_protocol_j1939_with_no_model_runs_the_model_that_speaks_it() -> None:
+    """``demo --protocol j1939`` was refused ("--protocol is for the device of --model") though
+    one model only speaks J1939: the demo picks it and says so in its first line."""
+    assert len(J1939_MODELS) == 1  # with several, the demo asks which (next test)
+    title = J1939_MODELS[0].description().title
+    result = CliRunner().invoke(cli, ["demo", "--protocol", "j1939", "--pause", "0"])
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    assert lines[0] == f"== --protocol j1939 with no --model: the {title}, the one model " \
+        "that speaks J1939", result.output
+    assert f"== {title} at address {DEFAULT_ADDRESS:02X}h (J1939) is powered on" in lines
+    assert lines[-1].endswith(f"frames on the bus ({title})")
+
+
+def test_protocol_j1939_with_no_model_and_several_models_asks_which(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Were a second model to speak J1939, the demo could not pick: one line naming them."""
+    from blinkcan.cli import demo
+
+    keybox = next(m for m in models() if m.name == "keybox")
+    monkeypatch.setattr(demo, "models_speaking", lambda protocol: [*J1939_MODELS, keybox])
+    result = CliRunner().invoke(cli, ["demo", "--protocol", "j1939", "--pause", "0"])
+    assert result.exit_code == 2, result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
+    names = ", ".join(m.name for m in [*J1939_MODELS, keybox])
+    assert f"--protocol j1939 needs --model: {names} speak it" in result.output
 
 
 def _section(lines: list[str], title: str) -> list[str]:

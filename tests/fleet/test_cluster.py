@@ -75,3 +75,19 @@ def test_a_worker_killed_mid_file_leaves_nothing_and_the_file_is_decoded_again(
     assert dataset_files(out) == dataset_files(tmp_path / "alone")
     assert not dead.exists()
     assert manifest.exists()
+
+
+def test_a_hard_link_given_alone_later_is_the_same_file_on_a_cluster(tmp_path: Path,
+                                                                      client: Client) -> None:
+    """As in one process (tests/fleet/test_linked_sources.py): the workers write the file's
+    identity, the run finds the name it was decoded under; nothing is decoded twice."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    write_log(first, fleet_traffic(2))
+    out = f"file://{tmp_path}/spread"
+    assert [r.status for r in decode_files([first], out, client=client)] == ["decoded"]
+    os.link(first, second)
+    again = decode_files([second], out, client=client)
+    assert [(r.source, r.status, r.same_as) for r in again] == \
+        [(str(first), "skipped", None), (str(second), "same", str(first))]
+    decode_files([first], str(tmp_path / "alone"))
+    assert dataset_files(tmp_path / "spread") == dataset_files(tmp_path / "alone")

@@ -23,6 +23,7 @@ from blinkcan.decode.decoder import Decoder, Event
 from blinkcan.decode.nodes import ModelsByNode
 from blinkcan.devices.keypad_j1939 import COMMANDS, PRIORITY
 from blinkcan.devices.registry import describe_device, models
+from blinkcan.fleet import frames as fleet_frames
 from blinkcan.fleet.frames import FrameDecoder, Segment
 from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.task import make_decoder
@@ -87,6 +88,20 @@ def test_the_realistic_log_reads_the_same_fast(tmp_path: Path, limit: int) -> No
     write_candump(log, realistic_traffic(20_000))
     fewer, decoded = _assert_fast_as_generic(log, limit, 1 << 16, device_nodes())
     assert fewer < decoded * 0.85  # PDOs rowed from their bytes are not decoded
+
+
+def test_the_realistic_log_reads_the_same_with_small_caches(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """What the fleet keeps of frames (the rows of kept SDO and J1939 events, key states,
+    texts) starts over every few entries while the decoder's own kept entries stay: those
+    entries' rows are made again, from the entry (fleet/frames.py _decode_arrow), not
+    decoded."""
+    monkeypatch.setattr(fleet_frames, "_ROWS_KEPT", 3)
+    monkeypatch.setattr(fleet_frames, "_TEXTS_KEPT", 3)
+    log = tmp_path / "unit.log"
+    write_candump(log, realistic_traffic(20_000))
+    fewer, decoded = _assert_fast_as_generic(log, 1 << 16, 1 << 16, device_nodes())
+    assert fewer < decoded * 0.85
 
 
 def _pool(model: Any, node: int, chance: random.Random) -> list[list[Frame]]:

@@ -5,7 +5,9 @@ a pipe were skipped in silence)."""
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 from pathlib import Path
 
 import pytest
@@ -146,3 +148,98 @@ def test_names_of_one_file_given_in_another_order_later_are_not_decoded_again(
     again = decode_files([second, first], lake)
     assert [(r.status, r.same_as) for r in again] == [("same", str(first)), ("skipped", None)]
     assert _frames(tmp_path / "lake") == _frames_of_one(tmp_path)
+
+
+def _link(first: Path, second: Path, link: str) -> None:
+    if link == "hard":
+        os.link(first, second)
+    else:
+        second.symlink_to(first)
+
+
+@pytest.mark.parametrize("link", ["hard", "symbolic"])
+def test_another_name_of_a_decoded_file_named_alone_later_is_not_decoded_again(
+        tmp_path: Path, link: str) -> None:
+    """A later run that names only another name of a file the dataset has (a hard link made
+    since, a link to it) finds it by the file's identity (st_dev, st_ino) in the dataset:
+    the file is taken under the name it was decoded under (skipped), and the name given is
+    "same" as that one. Before, it was decoded again under the new name: every frame twice."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    first.write_text(LOG)
+    lake = str(tmp_path / "lake")
+    assert [r.status for r in decode_files([first], lake)] == ["decoded"]
+    _link(first, second, link)
+    again = decode_files([second], lake)
+    assert [(r.source, r.status, r.same_as) for r in again] == \
+        [(str(first), "skipped", None), (str(second), "same", str(first))]
+    assert _frames(tmp_path / "lake") == _frames_of_one(tmp_path)
+
+
+def test_the_command_line_says_the_name_given_is_the_same_file(tmp_path: Path) -> None:
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    first.write_text(LOG)
+    lake = str(tmp_path / "lake")
+    assert _decode(str(first), "--parquet", lake)[0] == 0
+    os.link(first, second)
+    code, output = _decode(str(second), "--parquet", lake)
+    assert code == 0, output
+    assert f"{second}: the same file as {first} (a link): decoded once, under that name" \
+        in output
+    assert "0 files decoded" in output, output
+    assert "1 already decoded" in output, output
+    assert _frames(tmp_path / "lake") == _frames_of_one(tmp_path)
+
+
+def test_a_file_grown_since_named_by_its_other_name_replaces_its_rows(tmp_path: Path) -> None:
+    """The file changed since it was decoded (a logger appended to it): decoded again under
+    the name it was decoded under, so its new rows replace the old ones (under the new name
+    the old rows would stay beside them)."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    first.write_text(LOG)
+    lake = str(tmp_path / "lake")
+    decode_files([first], lake)
+    os.link(first, second)
+    with second.open("a") as log:
+        log.write(OTHER)
+    again = decode_files([second], lake)
+    assert [(r.source, r.status) for r in again] == [(str(first), "decoded"),
+                                                     (str(second), "same")]
+    grown = tmp_path / "grown"
+    grown.mkdir()
+    (grown / "a.log").write_text(LOG + OTHER)
+    decode_files([grown], str(tmp_path / "lake2"))
+    assert _frames(tmp_path / "lake") == _frames(tmp_path / "lake2")
+
+
+def test_a_manifest_written_before_the_file_identity_was_kept_is_still_read(
+        tmp_path: Path) -> None:
+    """A dataset written by an older blinkcan: its manifests have no "file" (st_dev, st_ino)
+    and there is no index of files; a run over the same names skips every file (no decoding
+    again after an upgrade)."""
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    for name in ("a.log", "b.log"):
+        (logs / name).write_text(LOG)
+    lake = tmp_path / "lake"
+    decode_files([logs], str(lake))
+    for manifest in (lake / "_blinkcan").glob("*.json"):
+        document = json.loads(manifest.read_text())
+        assert isinstance(document.pop("file"), list)
+        manifest.write_text(json.dumps(document))
+    shutil.rmtree(lake / "_blinkcan" / "files")
+    assert [r.status for r in decode_files([logs], str(lake))] == ["skipped", "skipped"]
+
+
+def test_a_renamed_file_whose_old_name_now_names_another_file_is_decoded(
+        tmp_path: Path) -> None:
+    """The index of files is a hint: the name it points to must still name the same file.
+    a.log decoded, then moved to b.log and a new a.log written: b.log is decoded (its own
+    name), a.log (another file now) too."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    first.write_text(LOG)
+    lake = str(tmp_path / "lake")
+    decode_files([first], lake)
+    first.rename(second)
+    first.write_text(OTHER)
+    assert [(r.source, r.status) for r in decode_files([second, first], lake)] == \
+        [(str(second), "decoded"), (str(first), "decoded")]

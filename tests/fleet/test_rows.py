@@ -12,11 +12,20 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from blinkcan.decode import Decoder
+from blinkcan.devices.keypad_j1939 import (
+    COLOUR_CODES,
+    COMMANDS,
+    DEFAULT_ADDRESS,
+    DEFAULT_HOST_ADDRESS,
+    PRIORITY,
+    LedState,
+)
 from blinkcan.devices.registry import describe_device
 from blinkcan.fleet.rows import Detail, EventRows
 from blinkcan.fleet.writer import PartitionWriter
 from blinkcan.protocol import Frame
 from blinkcan.protocol.cob import HEARTBEAT
+from blinkcan.protocol.j1939 import PGN_PROPRIETARY_A, compose_id
 
 
 def _rows(frames: list[Frame]) -> list[list[Detail]]:
@@ -97,3 +106,16 @@ def test_times_of_one_day_take_arrows_way() -> None:
     micros, dates = writer.times_and_dates(seconds)
     assert dates == "2026-05-31"  # one date for them all: the vectorised way
     assert micros.cast(pa.int64()).to_pylist() == [round(s * 1_000_000) for s in seconds]
+
+
+@pytest.mark.parametrize(("state", "word"), [
+    (LedState.OFF, "off"), (LedState.ON, "on"), (LedState.BLINK, "blink"),
+    (LedState.ALTERNATE, "alternate")])
+def test_a_j1939_single_led_command_is_an_led_row(state: LedState, word: str) -> None:
+    """PKP-2600-SI J1939 §7a: the key, the state (byte 5) as a word, the colour's name."""
+    single_led = next(c for c in COMMANDS if c.name == "single_led")
+    command = Frame(compose_id(PGN_PROPRIETARY_A, DEFAULT_HOST_ADDRESS, DEFAULT_ADDRESS,
+                               PRIORITY), single_led.encode(5, 1, state, 2), extended=True)
+    decoder = Decoder()
+    assert EventRows(decoder).rows(decoder.decode(command, 1.0)).details == [
+        Detail("led", key=5, state=word, colour=COLOUR_CODES[1])]

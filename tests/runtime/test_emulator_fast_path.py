@@ -177,6 +177,63 @@ def test_equal_frames_sent_twice_arrive_twice_each_with_its_time(channel: str,
         reusing.shutdown()
 
 
+def test_a_bus_that_may_keep_a_message_gets_python_cans_own_data_type() -> None:
+    """Only a bus done with the Message when its send returns gets a kept Message whose data
+    are the frame's own bytes; any other gets a Message as python-can makes it (a bytearray:
+    a driver that queues it may read it as one)."""
+    bus = _KeepingBus()
+    try:
+        CanBusPort(bus).send(Frame(0x595, bytes.fromhex("4300100009000000")))
+        (kept,) = bus.kept
+        assert type(kept.data) is bytearray
+        assert kept.data == bytes.fromhex("4300100009000000")
+    finally:
+        bus.shutdown()
+
+
+def _arrivals_of_a_kept_message(sender: can.BusABC, receiver: can.BusABC) -> None:
+    """A reusing port sends one frame three times; each arrival is python-can's own Message
+    (its data a bytearray, the receiver's to change) equal to the frame, also after a
+    receiver changed an earlier arrival's data."""
+    assert reuses_messages(sender)
+    port = CanBusPort(sender)
+    frame = Frame(0x595, bytes.fromhex("4300100009000000"))
+    for _ in range(3):
+        port.send(frame)
+        arrived = receiver.recv(2)
+        assert arrived is not None
+        assert type(arrived.data) is bytearray
+        assert (arrived.arbitration_id, bytes(arrived.data), arrived.dlc) == (0x595, frame.data, 8)
+        assert to_frame(arrived) == frame
+        arrived.data[0] = 0xFF  # the receiver's own copy: the next sending is unchanged
+    assert frame.data == bytes.fromhex("4300100009000000")
+
+
+def test_a_kept_message_arrives_as_python_cans_own_on_a_virtual_bus(
+        channel: str, host: can.BusABC) -> None:
+    sender = can.Bus(interface="virtual", channel=channel)
+    try:
+        _arrivals_of_a_kept_message(sender, host)
+    finally:
+        sender.shutdown()
+
+
+@pytest.mark.multiprocess
+def test_a_kept_message_arrives_as_python_cans_own_on_udp_multicast() -> None:
+    group = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
+    port = random.randint(40000, 60000)
+    try:
+        sender, receiver = (can.Bus(interface="udp_multicast", channel=group, port=port,
+                                    hop_limit=0) for _ in range(2))
+    except (OSError, ImportError, can.CanError) as error:
+        pytest.skip(f"udp_multicast unavailable here ({error})")
+    try:
+        _arrivals_of_a_kept_message(sender, receiver)
+    finally:
+        sender.shutdown()
+        receiver.shutdown()
+
+
 def _echoing_bus() -> can.BusABC:
     channel = f"239.74.{random.randint(1, 254)}.{random.randint(1, 254)}"
     try:

@@ -34,7 +34,8 @@ from blinkcan.cli.render import keybox_panel, keypad_panel, output_console
 from blinkcan.cli.seconds import Seconds
 from blinkcan.decode import Decoder
 from blinkcan.decode.eventlog import EventLog, Row
-from blinkcan.devices.registry import model_names, parse_spec
+from blinkcan.devices.model import Model
+from blinkcan.devices.registry import model_names, models, parse_spec
 from blinkcan.host import HostBus, Keybox, Keypad, Toggle
 from blinkcan.host.keybox import FaultEvent
 from blinkcan.protocol.frame import Frame
@@ -281,12 +282,26 @@ def _high(states: dict[int, str]) -> list[int]:
               show_default=True, help="The protocol the --model device speaks.")
 def command(pause: float, web: str | None, spec: str | None, protocol: str) -> None:
     """A controller on a keypad and a Keybox twin: key N toggles output N, shown live."""
-    if spec is None:
-        if protocol != "canopen":
-            raise click.UsageError("--protocol is for the device of --model")
+    if spec is None and protocol == "canopen":
         raise SystemExit(run_demo(output_console(), pause, web))
+    console = output_console()
+    if spec is None:  # the model that speaks it, as a user means (one: the PKP-2600-SI)
+        found = models_speaking(protocol)
+        if len(found) != 1:
+            raise click.UsageError(f"--protocol {protocol} needs --model: "
+                                   f"{', '.join(m.name for m in found) or 'no model'} speak it")
+        spec = found[0].name
+        console.out(f"== --protocol {protocol} with no --model: the "
+                    f"{found[0].description().title}, the one model that speaks "
+                    f"{protocol.upper()}", highlight=False)
     try:
         parse_spec(spec)
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="--model") from None
-    raise SystemExit(run_model_demo(output_console(), spec, protocol, pause, web))
+    raise SystemExit(run_model_demo(console, spec, protocol, pause, web))
+
+
+def models_speaking(protocol: str) -> list[Model]:
+    """The registered models with ``protocol`` in a generation's features."""
+    return [m for m in models()
+            if any(protocol in m.description(g).features for g in m.generations)]

@@ -27,7 +27,7 @@ from blinkcan.decode.describers import (  # listing, mask_listing, numbers: kept
     listing,
     mask_listing,
     numbers,
-    pdo_describers,
+    pdo_renderings,
 )
 from blinkcan.decode.j1939 import J1939KeypadDecoder
 from blinkcan.decode.nodes import DevicesByNode, split_devices
@@ -381,14 +381,23 @@ class Decoder:
                 return None
             self._served = known
             return _new_tuple(Event, (time, frame, Kind.J1939, *known[0]))
-        if can_id & 0x780 not in _SDO_FUNCTIONS or not can_id & 0x7F:  # Decoder._route: SDO
-            return None
-        frame = _new_tuple(Frame, (can_id, data, False))
-        seen = self._sdo_seen(frame, time)
+        seen = self.kept_sdo(can_id, data, time)
         if seen is None:
             return None
-        kind, self._served = seen
-        return _new_tuple(Event, (time, frame, kind, *seen[1][0]))
+        return _new_tuple(Event, (time, _new_tuple(Frame, (can_id, data, False)), seen[0],
+                                  *seen[1][0]))
+
+    def kept_sdo(self, can_id: int, data: bytes, time: float) -> tuple[Kind, list[Any]] | None:
+        """:meth:`kept_event` of an 11-bit frame without the Event: where it makes a kept SDO
+        event again, its kind and the kept entry (the event's text, node, device and
+        ``fields`` are the entry's first item: the same objects each time), the decoder's
+        state moved as :meth:`decode` moves it; None otherwise, nothing moved."""
+        if can_id & 0x780 not in _SDO_FUNCTIONS or not can_id & 0x7F:  # Decoder._route: SDO
+            return None
+        seen = self._sdo_seen(_new_tuple(Frame, (can_id, data, False)), time)
+        if seen is not None:
+            self._served = seen[1]
+        return seen
 
     def key_signal(self, can_id: int) -> tuple[int, int, int] | None:
         """(node, shift, mask) of the keys in the frames of an 11-bit key-state PDO
@@ -717,7 +726,8 @@ class Decoder:
         the Event's ``to_json``, without the Event and the dicts in between), and its
         one-line text (:meth:`text`, ``str(event)``). No JSON writer (None) where a name of
         the layout would need JSON escapes (none does: the Event writes them)."""
-        describe, describe_json = pdo_describers(layout, description, node, self._keys)
+        describe, describe_json, describe_text = pdo_renderings(layout, description, node,
+                                                                self._keys)
         device, name, min_length = description.kind, layout.name, layout.min_length
         too_short = f"{layout.label}: too short"
 
@@ -734,7 +744,7 @@ class Decoder:
         def text_writer(data: bytes) -> str:
             if len(data) < min_length:
                 return short_text
-            return who + describe_json(data)[0]
+            return who + describe_text(data)
 
         names = [device, name, too_short, *(colour.label for colour in BacklightColour)]
         for signal in layout.signals:

@@ -10,7 +10,9 @@ are described from their layout alone (:func:`_generic`).
 ``decode --json`` wants only the JSON line: :func:`pdo_json_describer` gives the same text and
 the fields already written as JSON members (masks through per-byte tables, no list, no dict),
 from the same wording helpers (tests/decode/test_json_writers.py compares the two renderings
-over every registered model's layouts).
+over every registered model's layouts). ``decode``'s text and the fleet's rows want only the
+text: :func:`pdo_text_describer` gives it, the wording alone where a kind has one (LED
+pictures, outputs, faults, brightness: no list of item numbers), else the JSON one's text.
 """
 
 from __future__ import annotations
@@ -106,6 +108,22 @@ def _items(mask: int) -> tuple[int, ...]:
     return found
 
 
+def mask_items(width: int) -> Callable[[int], tuple[int, ...] | list[int]]:
+    """:func:`numbers` (as a tuple) for masks of a signal of ``width`` bits, through two
+    per-byte tables and no cache (a log's random LED pictures would only churn it); a wider
+    mask, or another, the general way."""
+    if width > 16:
+        return numbers
+    low, high = _byte_items(0), _byte_items(1)
+
+    def items16(mask: int) -> tuple[int, ...] | list[int]:
+        if mask >> 16 or mask < 0:
+            return numbers(mask)
+        return low[mask & 0xFF] + high[mask >> 8]
+
+    return items16
+
+
 def numbers(mask: int, offset: int = 1) -> list[int]:
     """[1, 4, 12] for the set bits of a mask (bit 0 = item ``offset``)."""
     if offset == 1 and mask >= 0:
@@ -132,8 +150,12 @@ def mask_listing(mask: int) -> str:
     return ", ".join(parts) if parts else "none"
 
 
-#: a kind's two describers: of a frame's signal values, its (text, fields) and (text, JSON)
-_Pair = tuple[Callable[..., Described], Callable[..., DescribedJson]]
+#: a kind's renderings of a frame's signal values: its (text, fields) and (text, JSON), and
+#: where the kind has one its text alone (the same wording: one function makes it for all
+#: three; a key state's moves the keys held as the others do); a kind without has two
+_Pair = tuple[Callable[..., Any], ...]
+#: a route's text describer: the frame's data bytes (at least the layout's shortest) -> its text
+DescribeText = Callable[[bytes], str]
 
 
 def _json_members(fields: dict[str, Any]) -> str:
@@ -188,7 +210,10 @@ def _key_state(description: DeviceDescription, held: dict[int, int], node: int,
         return text, (f'"pressed":{as_json(pressed)},"released":{as_json(released)},'
                       f'"held":{as_json(keys)},"tick":{"null" if tick is None else tick}')
 
-    return describe, describe_json
+    def text(keys: int, tick: int | None) -> str:
+        return change(keys & face_mask)[0]
+
+    return describe, describe_json, text
 
 
 def _leds(verb: str) -> Callable[[DeviceDescription, dict[int, int], int, tuple[int, ...]],
@@ -211,20 +236,23 @@ def _leds(verb: str) -> Callable[[DeviceDescription, dict[int, int], int, tuple[
             return (text(red, green, blue),
                     f'"red":{as_json(red)},"green":{as_json(green)},"blue":{as_json(blue)}')
 
-        return describe, describe_json
+        return describe, describe_json, text
 
     return make
 
 
 def _indicator(description: DeviceDescription, held: dict[int, int], node: int,
                widths: tuple[int, ...]) -> _Pair:
-    def describe(level: int) -> Described:  # PKP §13
-        return f"indicator brightness {level}/63", {"level": level}
+    def text(level: int) -> str:  # PKP §13
+        return f"indicator brightness {level}/63"
+
+    def describe(level: int) -> Described:
+        return text(level), {"level": level}
 
     def describe_json(level: int) -> DescribedJson:
-        return f"indicator brightness {level}/63", f'"level":{level}'
+        return text(level), f'"level":{level}'
 
-    return describe, describe_json
+    return describe, describe_json, text
 
 
 def _backlight(description: DeviceDescription, held: dict[int, int], node: int,
@@ -250,30 +278,37 @@ def _outputs(description: DeviceDescription, held: dict[int, int], node: int,
              widths: tuple[int, ...]) -> _Pair:
     listing, as_json = _mask_writers(max(widths))
 
+    def words(off: int, high: int) -> str:  # (the commanded masks)
+        return f"outputs OFF: {listing(off)}; HIGH: {listing(high)}"
+
+    def text(off: int, high: int) -> str:
+        return words(*commanded_outputs(off, high))
+
     def describe(off: int, high: int) -> Described:
         off, high = commanded_outputs(off, high)  # KBX §17: OFF wins (devices/keybox.py)
-        return (f"outputs OFF: {listing(off)}; HIGH: {listing(high)}",
-                {"off": numbers(off), "high": numbers(high)})
+        return words(off, high), {"off": numbers(off), "high": numbers(high)}
 
     def describe_json(off: int, high: int) -> DescribedJson:
         off, high = commanded_outputs(off, high)
-        return (f"outputs OFF: {listing(off)}; HIGH: {listing(high)}",
-                f'"off":{as_json(off)},"high":{as_json(high)}')
+        return words(off, high), f'"off":{as_json(off)},"high":{as_json(high)}'
 
-    return describe, describe_json
+    return describe, describe_json, text
 
 
 def _faults(description: DeviceDescription, held: dict[int, int], node: int,
             widths: tuple[int, ...]) -> _Pair:
     listing, as_json = _mask_writers(max(widths))
 
-    def describe(faults: int) -> Described:  # KBX §18
-        return f"outputs in FAULT: {listing(faults)}", {"faults": numbers(faults)}
+    def text(faults: int) -> str:  # KBX §18
+        return f"outputs in FAULT: {listing(faults)}"
+
+    def describe(faults: int) -> Described:
+        return text(faults), {"faults": numbers(faults)}
 
     def describe_json(faults: int) -> DescribedJson:
-        return f"outputs in FAULT: {listing(faults)}", f'"faults":{as_json(faults)}'
+        return text(faults), f'"faults":{as_json(faults)}'
 
-    return describe, describe_json
+    return describe, describe_json, text
 
 
 #: the PDOs with wording of their own, by layout name
@@ -383,29 +418,49 @@ def _reader(slots: list[tuple[int, int]], length: int, describe: Callable[..., _
     return full
 
 
-def pdo_describers(layout: PdoLayout, description: DeviceDescription, node: int,
-                   held: dict[int, int]) -> tuple[Describe, DescribeJson]:
-    """The describers of ``layout``'s frames from ``node``: data bytes -> (text, fields), and
-    data bytes -> (text, fields as JSON members). ``held`` is the decoder's memory of each
-    node's keys (read and written by key states). Frames shorter than the layout's
+def pdo_renderings(layout: PdoLayout, description: DeviceDescription, node: int,
+                   held: dict[int, int]) -> tuple[Describe, DescribeJson, DescribeText]:
+    """The describers of ``layout``'s frames from ``node``: data bytes -> (text, fields),
+    data bytes -> (text, fields as JSON members), and data bytes -> the text alone. ``held``
+    is the decoder's memory of each node's keys (read and written by key states: each of the
+    three moves them, so one of them is called per frame). Frames shorter than the layout's
     ``min_length`` are the caller's to refuse."""
     by_name = {s.name: s for s in layout.signals}
     kind = _KINDS.get(layout.name)
     read: list[PdoSignal | None]
     if kind is not None and kind.required <= by_name.keys():
         read = [by_name.get(name) for name in kind.signals]
-        describe, describe_json = kind.make(description, held, node, tuple(
+        renderings = kind.make(description, held, node, tuple(
             s.length for s in read if s is not None))
     else:
-        describe, describe_json = _generic(layout)
+        renderings = _generic(layout)
         read = list(layout.signals)
     # (shift, mask) per value; a signal the layout lacks reads as absent (None)
     slots = [(s.start, s.mask) if s is not None else (-1, 0) for s in read]
-    return (_reader(slots, layout.length, describe),
-            _reader(slots, layout.length, describe_json))
+    describe: Describe = _reader(slots, layout.length, renderings[0])
+    describe_json: DescribeJson = _reader(slots, layout.length, renderings[1])
+    if len(renderings) > 2:
+        text: DescribeText = _reader(slots, layout.length, renderings[2])
+    else:
+        def text(data: bytes) -> str:
+            return describe_json(data)[0]
+    return describe, describe_json, text
+
+
+def pdo_describers(layout: PdoLayout, description: DeviceDescription, node: int,
+                   held: dict[int, int]) -> tuple[Describe, DescribeJson]:
+    """The first two of :func:`pdo_renderings`: data bytes -> (text, fields), and data
+    bytes -> (text, fields as JSON members)."""
+    return pdo_renderings(layout, description, node, held)[:2]
 
 
 def pdo_describer(layout: PdoLayout, description: DeviceDescription, node: int,
                   held: dict[int, int]) -> Describe:
-    """The first of :func:`pdo_describers`: data bytes -> (text, fields)."""
-    return pdo_describers(layout, description, node, held)[0]
+    """The first of :func:`pdo_renderings`: data bytes -> (text, fields)."""
+    return pdo_renderings(layout, description, node, held)[0]
+
+
+def pdo_text_describer(layout: PdoLayout, description: DeviceDescription, node: int,
+                       held: dict[int, int]) -> DescribeText:
+    """The last of :func:`pdo_renderings`: data bytes -> the text alone."""
+    return pdo_renderings(layout, description, node, held)[2]

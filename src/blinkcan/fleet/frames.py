@@ -30,7 +30,7 @@ import numpy as np
 import pyarrow as pa
 
 from blinkcan.decode.decoder import Decoder, Event, Kind
-from blinkcan.decode.describers import Describe, keyed_signal, pdo_describer
+from blinkcan.decode.describers import Describe, DescribeText, keyed_signal, pdo_renderings
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.fleet.rows import SIMPLE_ROWS, Detail, EventRows, Follower, key_rows
 from blinkcan.formats.columns import ArrowColumns, FrameColumns
@@ -72,8 +72,10 @@ class PdoRoute(NamedTuple):
     #: frames shorter than this mean only that (the decoder's "too short", kept the first
     #: time: FrameDecoder._pure)
     shortest: int
-    #: the decoder's describer of the PDO (decode/describers.py pdo_describer)
+    #: the decoder's describers of the PDO (decode/describers.py pdo_renderings): its text
+    #: and fields, and its text alone (for the frames a follower rows)
     describe: Describe
+    text: DescribeText
     #: its rows from the bytes (EventRows.follower), or None: its one EventRows.pdo_detail
     follow: Follower | None
     pdo: str
@@ -267,9 +269,10 @@ class FrameDecoder:
         follow = rows.follower(node, layout)
         if follow is None and rows.follows(layout.name):
             return None  # its rows read the event's fields (a layout of other signals)
+        describe, _, text = pdo_renderings(layout, device, node, {})
         return PdoRoute(node, device.model, f"{event.device or 'node'} {node:02X}h: ",
-                        layout.length, layout.min_length,
-                        pdo_describer(layout, device, node, {}), follow, layout.name, {})
+                        layout.length, layout.min_length, describe, text, follow, layout.name,
+                        {})
 
     def _event_rows(self, event: Event, place: int, nodes: list[int | None],
                     models: list[str | None], texts: list[str | None]) -> list[Detail]:
@@ -398,7 +401,8 @@ class FrameDecoder:
         if len(j1939_rows) > _ROWS_KEPT:
             j1939_rows.clear()
         keys_held, hold_keys, frame_text = decoder.keys_held, decoder.hold_keys, decoder.text
-        kept_event, kept_made = decoder.kept_event, self._kept_made
+        kept_event, kept_sdo, kept_made = decoder.kept_event, decoder.kept_sdo, self._kept_made
+        kept_events = self._kept_events
         find_number, number = segment.numbers.get, segment.number
         event_texts = self._texts
         if len(event_texts) > _TEXTS_KEPT:
@@ -421,7 +425,7 @@ class FrameDecoder:
                     nodes[place], models[place] = route.node, route.model
                     follow = route.follow
                     if follow is not None:
-                        texts[place] = route.who + route.describe(payload)[0]
+                        texts[place] = route.who + route.text(payload)
                         details = follow(payload)
                     else:
                         rowed = route.rowed.get(payload)
@@ -453,17 +457,26 @@ class FrameDecoder:
                             node, None if device is None else device.model,
                             frame_text(new(frame_type, (can_id, payload, False))),
                             key_rows(keys & ~before, before & ~keys, keys.bit_count()))
-            else:  # an event the decoder keeps (SDO, J1939 keypad): what it made before
-                if flag:
-                    j1939_made = j1939_rows.get((can_id, payload))
-                    if j1939_made is not None and j1939_made[0] == len(addresses):
-                        made = j1939_made[1]
-                if made is None:
+            elif not flag:  # an SDO event the decoder keeps: what was made of its entry
+                seen = kept_sdo(can_id, payload, times[count])
+                if seen is not None:
+                    kind, entry = seen
+                    fields = entry[0][3]
+                    made_of = kept_events.get((kind, id(fields)))  # (as _kept_made)
+                    if made_of is not None and made_of[0] is fields:
+                        made = made_of[1]
+                    else:
+                        made = kept_made(new(Event, (times[count], new(frame_type, (
+                            can_id, payload, False)), kind, *entry[0])))
+            else:  # a J1939 keypad frame's event the decoder keeps: what it made before
+                j1939_made = j1939_rows.get((can_id, payload))
+                if j1939_made is not None and j1939_made[0] == len(addresses):
+                    made = j1939_made[1]
+                else:
                     event = kept_event(can_id, flag, payload, times[count])
                     if event is not None:
                         made = kept_made(event)
-                        if flag:
-                            j1939_rows[can_id, payload] = (len(addresses), made)
+                        j1939_rows[can_id, payload] = (len(addresses), made)
             decoded = False  # the decoder's devices change only where it decodes a frame
             if made is not None:
                 nodes[place], models[place], texts[place], details = made

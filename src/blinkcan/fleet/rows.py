@@ -21,6 +21,7 @@ from collections.abc import Callable
 from typing import Any, NamedTuple
 
 from blinkcan.decode.decoder import Decoder, Event, Kind, numbers
+from blinkcan.decode.describers import mask_items
 from blinkcan.decode.j1939 import colour_name
 from blinkcan.devices.colours import channel_name
 from blinkcan.devices.keybox import commanded_outputs
@@ -35,6 +36,8 @@ _DARK = (0, 0, 0)
 _LED_STATES = {"led_on": "on", "led_blink": "blink"}
 _COLOUR_NAMES = tuple(channel_name(channels) for channels in range(8))
 _NAMES = {kind: kind.value for kind in Kind}  # an Enum's value is a slow property
+#: a J1939 single-LED command's state byte as a row's state (§7a; an Enum call is slow)
+_J1939_LED_STATES = {state.value: state.name.lower() for state in LedState}
 
 
 class Detail(NamedTuple):
@@ -63,6 +66,10 @@ _OUTPUT_UNCHANGED = Detail("output", state="unchanged")
 _ITEMS = range(65)
 Follower = Callable[[bytes], "list[Detail]"]
 _new = tuple.__new__  # a Detail without the call to its __new__: many rows are made
+#: per byte value: its bits spread three apart (bit i at bit 3i), so that three masks spread
+#: and or-ed (red, green shifted by one, blue by two) hold each key's colour code (red, green
+#: and blue bits, devices/colours.py) at bit 3 * (key - 1)
+_SPREAD = tuple(sum((value >> bit & 1) << 3 * bit for bit in range(8)) for value in range(256))
 
 
 def _mask(items: list[int]) -> int:
@@ -256,21 +263,43 @@ class EventRows:
         table = [_new(Detail, ("led", key, None, state, _COLOUR_NAMES[code], None))
                  for key in _ITEMS[1:] for code in range(8)]  # (key - 1) * 8 + code
         unchanged = [_LED_UNCHANGED]  # shared: rows are never changed
+        width = max(red_mask, green_mask, blue_mask).bit_length()
+        if width > 16:
+            def follow(data: bytes) -> list[Detail]:
+                word = int.from_bytes(data, "little")
+                lit = (word >> red_at & red_mask, word >> green_at & green_mask,
+                       word >> blue_at & blue_mask)
+                before = leds.get(place, _DARK)
+                changed = (lit[0] ^ before[0]) | (lit[1] ^ before[1]) | (lit[2] ^ before[2])
+                if not changed:
+                    return unchanged
+                leds[place] = lit
+                r, g, b = lit
+                return [table[(key - 1) * 8 | (r >> (key - 1) & 1) | (g >> (key - 1) & 1) << 1
+                              | (b >> (key - 1) & 1) << 2] for key in numbers(changed)]
 
-        def follow(data: bytes) -> list[Detail]:
-            word = int.from_bytes(data, "little")
-            lit = (word >> red_at & red_mask, word >> green_at & green_mask,
-                   word >> blue_at & blue_mask)
+            return follow
+        # up to 16 keys (every registered keypad): each key's colour code read from the
+        # three masks spread (_SPREAD), its rows by key and code (a key past the picture's
+        # width, lit by another layout before, goes dark: code 0)
+        by_key = [table[(key - 1) * 8:key * 8] for key in _ITEMS]  # by_key[key][code]
+        items, spread, from_bytes = mask_items(16), _SPREAD, int.from_bytes
+
+        def follow16(data: bytes) -> list[Detail]:
+            word = from_bytes(data, "little")
+            r, g, b = (word >> red_at & red_mask, word >> green_at & green_mask,
+                       word >> blue_at & blue_mask)
             before = leds.get(place, _DARK)
-            changed = (lit[0] ^ before[0]) | (lit[1] ^ before[1]) | (lit[2] ^ before[2])
+            changed = (r ^ before[0]) | (g ^ before[1]) | (b ^ before[2])
             if not changed:
                 return unchanged
-            leds[place] = lit
-            r, g, b = lit
-            return [table[(key - 1) * 8 | (r >> (key - 1) & 1) | (g >> (key - 1) & 1) << 1
-                          | (b >> (key - 1) & 1) << 2] for key in numbers(changed)]
+            leds[place] = (r, g, b)
+            codes = (spread[r & 0xFF] | spread[r >> 8] << 24) | (
+                spread[g & 0xFF] | spread[g >> 8] << 24) << 1 | (
+                spread[b & 0xFF] | spread[b >> 8] << 24) << 2
+            return [by_key[key][codes >> 3 * key - 3 & 7] for key in items(changed)]
 
-        return follow
+        return follow16
 
     def _outputs_follower(self, node: int, off: tuple[int, int],
                           high: tuple[int, int]) -> Follower:
@@ -280,6 +309,7 @@ class EventRows:
         went_high = [_new(Detail, ("output", None, pin, "high", None, None)) for pin in _ITEMS]
         went_off = [_new(Detail, ("output", None, pin, "off", None, None)) for pin in _ITEMS]
         unchanged = [_OUTPUT_UNCHANGED]
+        items = mask_items(16)
 
         def follow(data: bytes) -> list[Detail]:
             word = int.from_bytes(data, "little")
@@ -289,7 +319,7 @@ class EventRows:
                 return unchanged
             outputs[node] = now
             return [(went_high if now >> (pin - 1) & 1 else went_off)[pin]
-                    for pin in numbers(changed)]
+                    for pin in items(changed)]
 
         return follow
 
@@ -302,6 +332,7 @@ class EventRows:
         went_out = [_new(Detail, ("fault", None, pin, "cleared", None, None)) for pin in _ITEMS]
         unchanged = [[_new(Detail, ("fault", None, None, "unchanged", None, count))]
                      for count in _ITEMS]  # by the count of pins in FAULT
+        items = mask_items(16)
 
         def follow(data: bytes) -> list[Detail]:
             now = int.from_bytes(data, "little") >> at & mask
@@ -309,8 +340,8 @@ class EventRows:
             faults[node] = now
             if now == before:
                 return unchanged[bin(now).count("1")]
-            return [went_in[pin] for pin in numbers(now & ~before)] + \
-                [went_out[pin] for pin in numbers(before & ~now)]
+            return [went_in[pin] for pin in items(now & ~before)] + \
+                [went_out[pin] for pin in items(before & ~now)]
 
         return follow
 
@@ -325,16 +356,18 @@ class EventRows:
         if message == "heartbeat":  # spec/pkp-2600-si-j1939.md §18: counter and keys held
             return _new(Detail, ("heartbeat", None, None, "j1939", None, fields["counter"]))
         if command == "single_led":  # §7a
-            state = LedState(fields["state"]).name.lower() if fields["state"] in \
-                LedState._value2member_map_ else f"state {fields['state']:02X}h"
-            return Detail("led", key=fields["key"], state=state,
-                          colour=colour_name(fields["colour"]))
-        return Detail("j1939", state=str(message or command or "address"),
-                      value=_int_value(fields.get("value")))
+            code = fields["state"]
+            state = _J1939_LED_STATES.get(code) or f"state {code:02X}h"
+            return _new(Detail, ("led", fields["key"], None, state, colour_name(fields["colour"]),
+                                 None))
+        return _new(Detail, ("j1939", None, None, str(message or command or "address"), None,
+                             _int_value(fields.get("value"))))
 
 
 _PRESSED = tuple(Detail("key", key, state="pressed") for key in _ITEMS)
 _RELEASED = tuple(Detail("key", key, state="released") for key in _ITEMS)
+#: the keys of a mask (a keypad has at most 16: per-byte tables, no cache)
+_key_items = mask_items(16)
 
 
 def key_rows(pressed: int, released: int, held: int) -> list[Detail]:
@@ -343,8 +376,8 @@ def key_rows(pressed: int, released: int, held: int) -> list[Detail]:
     where none was, the one ``held`` row with the count of keys held."""
     if not (pressed or released):
         return [_new(Detail, ("key", None, None, "held", None, held))]
-    return [_PRESSED[key] for key in numbers(pressed)] + \
-        [_RELEASED[key] for key in numbers(released)]
+    return [_PRESSED[key] for key in _key_items(pressed)] + \
+        [_RELEASED[key] for key in _key_items(released)]
 
 
 def _only_int(fields: dict[str, Any]) -> int | None:

@@ -4,6 +4,7 @@ dataset is the same whichever ran it."""
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from collections.abc import Callable, Iterable
@@ -13,9 +14,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from blinkcan.decode.nodes import ModelsByNode, split_devices
-from blinkcan.fleet.local_files import is_local, local_root
 from blinkcan.fleet.schema import ROWS_PER_GROUP
-from blinkcan.fleet.task import META, FileResult, decode_file, source_key
+from blinkcan.fleet.task import (
+    FILES,
+    META,
+    FileResult,
+    dataset_files,
+    decode_file,
+    file_entry,
+    source_key,
+)
 
 if TYPE_CHECKING:
     from concurrent.futures import Future
@@ -44,6 +52,10 @@ def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None
     links lead to it; a link to a folder being read is a loop, not read again), and a file
     reached by several names is decoded under one (``Sources.same`` names the others): the
     one the dataset ``out`` has it decoded under already, else the first.
+    A file the dataset has under a name not given (a hard link made since it was decoded) is
+    found by its identity (st_dev, st_ino, ``task.file_entry``): it is decoded (or skipped)
+    under that name, which joins ``names`` before its first name given, and the names given
+    are "same" as it.
     A name that is no readable file (a dangling link, a pipe) is kept: its task names it."""
     dataset = None if out is None or "://" in out else os.path.abspath(out)
     real_dataset = None if dataset is None else os.path.realpath(dataset)
@@ -65,30 +77,60 @@ def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None
         known.setdefault(identity, []).append(name)
     files: list[str] = []
     same: dict[str, str] = {}
-    for each in known.values():
-        chosen = each[0] if len(each) == 1 or out is None else _decoded_under(each, out)
+    before: dict[str, str] = {}  # a name given -> the name not given its file is taken under
+    decoded = None if out is None else _Decoded(out)
+    for identity, each in known.items():
+        chosen = each[0] if decoded is None else decoded.decoded_under(each, identity)
         files.append(chosen)
         same.update((name, chosen) for name in each if name != chosen)
-    return Sources(files, same, list(dict.fromkeys(names)))
+        if chosen not in each:
+            before[each[0]] = chosen
+    ordered = [name for given in dict.fromkeys(names)
+               for name in ((before[given], given) if given in before else (given,))]
+    return Sources(files, same, ordered)
 
 
-def _decoded_under(names: list[str], out: str) -> str:
-    """Of several names of one file, the one the dataset at ``out`` has a manifest for (an
-    earlier run decoded the file under it: its names may have come in another order), else
-    the first. A manifest is keyed by the name (``task.source_key``), so decoding under
-    another name would put every frame of the file in the dataset a second time."""
-    for name in names:
-        manifest = f"{META}/{source_key(name)}.json"
-        if is_local(out):
-            if os.path.exists(os.path.join(local_root(out), manifest)):
+class _Decoded:
+    """What the dataset at ``out`` has decoded: the names of its manifests and of its index
+    of files (``task.FILES``), each folder listed once (a URL's too: no request per file)."""
+
+    def __init__(self, out: str) -> None:
+        self.fs, self.root = dataset_files(out)
+        self.manifests = self._listed(f"{self.root}/{META}")
+        self.entries = self._listed(f"{self.root}/{FILES}")
+
+    def _listed(self, folder: str) -> set[str]:
+        try:
+            return {path.rstrip("/").rsplit("/", 1)[-1]
+                    for path in self.fs.ls(folder, detail=False)}
+        except OSError:  # none yet
+            return set()
+
+    def decoded_under(self, names: list[str], identity: object) -> str:
+        """Of the names of one file, the one the dataset has a manifest for (an earlier run
+        decoded the file under it: its names may have come in another order); else the name
+        the index of files gives for its ``identity`` (st_dev, st_ino) if that name still
+        names this file and has a manifest (a hard link given alone, the other name decoded
+        before); else the first. A manifest is keyed by the name (``task.source_key``), so
+        decoding under another name would put every frame of the file in the dataset a
+        second time."""
+        for name in names:
+            if f"{source_key(name)}.json" in self.manifests:
                 return name
-            continue
-        from fsspec.core import url_to_fs  # noqa: PLC0415 (a URL only: start-up)
-
-        filesystem, root = url_to_fs(out)
-        if filesystem.exists(f"{root.rstrip('/')}/{manifest}"):
-            return name
-    return names[0]
+        if not isinstance(identity, tuple) or file_entry(*identity) not in self.entries:
+            return names[0]
+        try:
+            with self.fs.open(f"{self.root}/{FILES}/{file_entry(*identity)}", "rb") as stream:
+                hint = json.loads(stream.read()).get("source")
+            found = os.stat(hint) if isinstance(hint, str) else None
+        except (OSError, ValueError, AttributeError):  # gone, corrupt: no hint
+            return names[0]
+        if found is None or not isinstance(hint, str):
+            return names[0]
+        if (found.st_dev, found.st_ino) == identity and \
+                f"{source_key(hint)}.json" in self.manifests:
+            return hint
+        return names[0]
 
 
 def _walk(folder: str, dataset: tuple[str | None, str | None],
@@ -222,11 +264,16 @@ def _pool_run(jobs: int, sources: list[str], task: Callable[..., FileResult],
         # starts any more, and the files in flight stop now, not when they end; their rows
         # were written aside and never appear (the next run removes them and decodes those
         # files again). The workers are the children that appeared since the pool was made.
-        for future in futures:
-            future.cancel()
-        for worker in multiprocessing.active_children():
-            if worker not in others:
-                worker.terminate()
+        # The pool's manager thread cancels the queued files itself (the shutdown reaches it
+        # before any worker's death): a future cancelled here, then failed by that thread
+        # as the workers die, raised InvalidStateError in it (a traceback on Ctrl-C). The
+        # workers are joined here: the shutdown below no longer waits for that thread.
+        pool.shutdown(wait=False, cancel_futures=True)
+        workers = [w for w in multiprocessing.active_children() if w not in others]
+        for worker in workers:
+            worker.terminate()
+        for worker in workers:
+            worker.join()
         raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)

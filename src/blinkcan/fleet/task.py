@@ -12,7 +12,12 @@ Whole or nothing, and never twice:
 - a file whose manifest matches its size, mtime, blinkcan version and decoding settings is
   skipped unless ``force``, and only while every output its manifest names is there: a
   partition file deleted from the dataset is decoded again (``FileResult.missing`` names
-  it), its rows never silently lost.
+  it), its rows never silently lost;
+- the manifest keeps the file's identity (``file``: st_dev, st_ino) and the index of files
+  ``_blinkcan/files/<st_dev>-<st_ino>.json`` names the source it was decoded under, so that
+  a later run given another name of it (a hard link made since) finds it (``run.py``). The
+  index is a hint, checked against the file system; manifests without ``file`` (an older
+  blinkcan's) are read as before.
 
 ``<key>`` is a hash of the source's absolute path, so one source always writes the same names.
 A file that cannot be read is a failed result with the reason, never an exception; a line
@@ -84,6 +89,27 @@ def source_key(source: str) -> str:
     return hashlib.sha256(source.encode()).hexdigest()[:20]
 
 
+#: the index of files, in the dataset: an entry per file (st_dev, st_ino) decoded
+FILES = f"{META}/files"
+
+
+def file_entry(device: int, inode: int) -> str:
+    """The name of the index entry of the file (st_dev, st_ino), in :data:`FILES`: it names
+    the source the file was last decoded under."""
+    return f"{device}-{inode}.json"
+
+
+def dataset_files(out: str) -> tuple[AbstractFileSystem | LocalFiles, str]:
+    """The filesystem of the dataset ``out`` (a plain path: the disk, directly) and its root
+    there, with no "/" at the end."""
+    if is_local(out):
+        return LocalFiles(), local_root(out).rstrip("/")
+    from fsspec.core import url_to_fs  # noqa: PLC0415 (a URL only)
+
+    filesystem, root = url_to_fs(out)
+    return filesystem, root.rstrip("/")
+
+
 def make_decoder(devices: ModelsByNode | None) -> Decoder:
     """The decoder of ``devices`` (node ids and "j1939:ADDR" to models), else the defaults."""
     if devices:
@@ -96,14 +122,7 @@ class _Store:
     """The dataset's folder on any fsspec filesystem (a plain path: on the disk, directly)."""
 
     def __init__(self, out: str, key: str) -> None:
-        self.fs: AbstractFileSystem | LocalFiles
-        if is_local(out):
-            self.fs, root = LocalFiles(), local_root(out)
-        else:
-            from fsspec.core import url_to_fs  # noqa: PLC0415 (a URL only)
-
-            self.fs, root = url_to_fs(out)
-        self.root = root.rstrip("/")
+        self.fs, self.root = dataset_files(out)
         self.meta = f"{self.root}/{META}"
         self.manifest = f"{self.meta}/{key}.json"
         self.journal = f"{self.meta}/{key}.pending.json"
@@ -157,7 +176,10 @@ class _Store:
                 if path.rstrip("/").rsplit("/", 1)[-1].startswith(f"{self.key}-"):
                     self.remove(path)
 
-    def commit(self, attempt: str, outputs: list[str], manifest: dict[str, object]) -> None:
+    def commit(self, attempt: str, outputs: list[str], manifest: dict[str, object],
+               entry: str) -> None:
+        """The outputs into their partitions, the index ``entry`` of the file, then the
+        manifest (the entry is a hint, taken only where the manifest it leads to is there)."""
         old = self.read_json(self.manifest) or {}
         stale = [p for p in old.get("outputs", []) if p not in outputs]
         self.write_json(self.journal, {"outputs": sorted({*outputs, *stale})})
@@ -168,6 +190,8 @@ class _Store:
             self.fs.mv(f"{attempt}/{relative}", target)
         for relative in stale:
             self.remove(f"{self.root}/{relative}")
+        self.fs.makedirs(f"{self.root}/{FILES}", exist_ok=True)
+        self.write_json(f"{self.root}/{FILES}/{entry}", {"source": manifest["source"]})
         self.write_json(self.manifest, manifest)
         self.remove(self.journal)
         self.remove(attempt)
@@ -218,9 +242,10 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
         raise
     cut_off = None if unreadable.cut_off is None else str(unreadable.cut_off)
     named = [str(line) for line in unreadable.named]
-    manifest = {**identity, "outputs": outputs, "frames": frames, "rows": writer.rows,
-                "unreadable": unreadable.count, "unreadable_lines": named, "cut_off": cut_off}
-    store.commit(attempt, outputs, manifest)
+    manifest = {**identity, "file": [stat.st_dev, stat.st_ino], "outputs": outputs,
+                "frames": frames, "rows": writer.rows, "unreadable": unreadable.count,
+                "unreadable_lines": named, "cut_off": cut_off}
+    store.commit(attempt, outputs, manifest, file_entry(stat.st_dev, stat.st_ino))
     return FileResult(path, "decoded", frames, writer.rows, tuple(outputs), cut_off=cut_off,
                       unreadable=unreadable.count, unreadable_lines=tuple(named),
                       missing=missing)

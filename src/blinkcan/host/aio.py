@@ -33,7 +33,7 @@ import threading
 from collections.abc import AsyncIterator, Callable
 from typing import Any, Generic, TypeVar
 
-from blinkcan.host.device import Device
+from blinkcan.host.device import Device, runs_in_simulated_time
 from blinkcan.host.events import EventSource, check_event_timeout
 from blinkcan.host.keybox import FaultEvent, Keybox
 from blinkcan.host.keypad import KeyEvent, Keypad
@@ -44,13 +44,6 @@ D = TypeVar("D", bound=Device)
 T = TypeVar("T")
 
 log = logging.getLogger(__name__)
-
-
-def runs_in_simulated_time(bus: object) -> bool:
-    """Whether ``bus`` (a python-can bus, a ``HostBus`` or a port) runs in simulated time: its
-    scheduler says so (a simulated bus's, a rig's, is the simulation's; a python-can bus of
-    an adapter has none)."""
-    return bool(getattr(getattr(bus, "scheduler", None), "simulated", False))
 
 
 def _in_running_loop() -> bool:

@@ -38,6 +38,7 @@ thread; applications do not call them): :meth:`Device.nmt_command_seen`,
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
@@ -53,12 +54,13 @@ from blinkcan.devices.registry import identify
 from blinkcan.host.bus import Handler, HostBus, Timer
 from blinkcan.host.events import EventSource
 from blinkcan.host.identity_errors import IdentityError, SharedNodeIdError, several_answer
-from blinkcan.host.sdo import SdoClient
+from blinkcan.host.sdo import SdoClient, check_retries
 from blinkcan.host.waits import check_wait
 from blinkcan.protocol.cob import HEARTBEAT, NMT, check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState, nmt_frame, parse_nmt
 from blinkcan.protocol.sdo_client import SdoAbortError, SdoProtocolError, SdoTimeoutError
+from blinkcan.runtime.port import Port
 
 BOOT_UP, STATE, LOST, BACK, WATCHDOG = "boot-up", "state", "lost", "back", "watchdog"
 #: the state an NMT command asks for (CiA 301 NMT state machine); resets answer with a boot-up
@@ -131,6 +133,20 @@ class NoDeviceError(IdentityError):
     """Nothing answered the identity reads at the node id."""
 
 
+def runs_in_simulated_time(bus: object) -> bool:
+    """Whether ``bus`` (a python-can bus, a ``HostBus`` or a port) runs in simulated time: its
+    scheduler says so (a simulated bus's, a rig's, is the simulation's; a python-can bus of
+    an adapter has none)."""
+    return bool(getattr(getattr(bus, "scheduler", None), "simulated", False))
+
+
+@dataclass(frozen=True)
+class _BusTime:
+    """What :func:`check_wait` asks of a bus not attached yet: whether it is simulated."""
+
+    simulated: bool
+
+
 def confirm_or_close(device: Device, verify: bool) -> None:
     """A driver's constructor: :meth:`Device.confirm` the device (when ``verify``; without, the
     application vouches for it); on failure the driver lets go of the bus and the error
@@ -169,18 +185,43 @@ class HealthEvent:
 class Device:
     """A Blink CANopen device seen from the controller."""
 
+    def __init_subclass__(cls, **options: Any) -> None:
+        """A driver class's constructor lets go of the bus when it fails once
+        :meth:`Device.__init__` attached it (a check, a confirmation, a J1939 link): a
+        failed driver leaves no reader nor subscription behind, whatever raised."""
+        super().__init_subclass__(**options)
+        init = cls.__dict__.get("__init__")
+        if init is None:
+            return
+
+        @functools.wraps(init)
+        def closing_on_failure(self: Device, *args: Any, **kwargs: Any) -> None:
+            try:
+                init(self, *args, **kwargs)
+            except BaseException:
+                if "_unsubscribe" in vars(self):  # Device.__init__ attached the bus
+                    self.close()
+                raise
+
+        cls.__init__ = closing_on_failure  # type: ignore[method-assign]
+
     def __init__(self, bus: HostBus | can.BusABC, node_id: int, description: DeviceDescription,
                  *, sdo_timeout: float = 0.5, sdo_retries: int = 1) -> None:
-        """Set up; a subclass calls :meth:`confirm` (unless told not to) before any command."""
+        """Set up; a subclass calls :meth:`confirm` (unless told not to) before any command.
+        Every argument is checked before the bus is attached (TypeError/ValueError naming
+        the valid values): a bad one leaves nothing behind and sends nothing."""
         self.node_id = check_node_id(node_id)
-        check_wait("sdo_timeout", sdo_timeout)  # before anything is sent
+        if not isinstance(description, DeviceDescription):
+            raise TypeError("description must be a DeviceDescription (blinkcan.devices), not "
+                            f"{type(description).__name__}")
+        if not isinstance(bus, (HostBus, can.BusABC, Port)):
+            raise TypeError("bus must be a python-can bus, a HostBus or a Port, not "
+                            f"{type(bus).__name__}")
+        # a simulated bus's bound too (the rig's virtual seconds)
+        check_wait("sdo_timeout", sdo_timeout, _BusTime(runs_in_simulated_time(bus)))
+        check_retries(sdo_retries)
         self.description = description
         self.host = HostBus.attach(bus)  # shared by every driver on this bus
-        try:
-            check_wait("sdo_timeout", sdo_timeout, self.host)  # a simulated bus's bound too
-        except ValueError:
-            self.host.release()
-            raise
         self.sdo = self.host.sdo(node_id, sdo_timeout, sdo_retries)
         self.health = EventSource[HealthEvent](self.host.scheduler)
         #: True once the device at ``node_id`` was confirmed to be this driver's model (or the

@@ -98,15 +98,16 @@ class Keybox(Device):
                  sdo_timeout: float = 0.5, verify: bool = True) -> None:
         if watchdog is not None:  # checked before anything is sent (the identity reads)
             check_watchdog(watchdog)
-        if fault_poll is not None:
-            check_time("fault poll period", fault_poll)
+        if fault_poll is not None and check_time("fault poll period", fault_poll) <= 0:
+            raise ValueError(f"fault poll period must be > 0 seconds, not {fault_poll!r}")
+        check_node_id(host_node_id)  # before the bus is attached
         super().__init__(bus, node_id, describe_keybox("cia301", node_id),
                          sdo_timeout=sdo_timeout)
         self.faults = EventSource[FaultEvent](self.host.scheduler)
         self.fault_pins: frozenset[int] = frozenset()
         self.auto_start = start
         self.restore_outputs = restore_outputs
-        self.host_node_id = check_node_id(host_node_id)
+        self.host_node_id = host_node_id
         self._commanded: frozenset[int] = frozenset()
         #: held while an output command is sent and the driver's picture updated, and while a
         #: restore computes what to send and sends it: the two never interleave

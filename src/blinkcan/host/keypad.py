@@ -64,7 +64,7 @@ from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.protocol.items import item_numbers
-from blinkcan.protocol.j1939 import j1939_frame
+from blinkcan.protocol.j1939 import ADDRESS_MAX, j1939_frame
 from blinkcan.protocol.nmt import NmtCommand, NmtState
 from blinkcan.protocol.sdo_client import SdoAbortError, SdoTimeoutError
 
@@ -97,6 +97,16 @@ def _masks(channels_by_key: Mapping[int, int]) -> dict[str, int]:
             if channels & channel:
                 masks[name] |= bit
     return masks
+
+
+def _check_link(protocol: str, address: int, host_node_id: int) -> None:
+    """The protocol, the J1939 address (in J1939 mode) and the host's node id of a keypad
+    driver: TypeError/ValueError naming the valid values."""
+    if protocol not in ("canopen", "j1939"):
+        raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
+    if protocol == "j1939":
+        check_range("J1939 keypad address", address, 1, ADDRESS_MAX, hexadecimal=True)
+    check_node_id(host_node_id)
 
 
 class Keypad(Device):
@@ -162,8 +172,7 @@ class Keypad(Device):
                  watchdog: float | None = None, host_node_id: int = 0x7F,
                  sdo_timeout: float = 0.5, verify: bool = True, model: str | None = None,
                  protocol: str = "canopen", address: int = DEFAULT_ADDRESS) -> None:
-        if protocol not in ("canopen", "j1939"):
-            raise ValueError(f"protocol must be canopen or j1939, not {protocol!r}")
+        _check_link(protocol, address, host_node_id)  # before the bus is attached
         #: True from an NMT stop or pre-operational (or such a state reported) to the next
         #: start: the LED PDOs sent meanwhile were ignored, the picture goes again after it
         #: (set before the bus handlers that change it are subscribed)
@@ -178,7 +187,7 @@ class Keypad(Device):
         super().__init__(bus, node_id, self._describe(generation, node_id),
                          sdo_timeout=sdo_timeout)
         self._generation = generation
-        self.host_node_id = check_node_id(host_node_id)
+        self.host_node_id = host_node_id
         self.keys = EventSource[KeyEvent](self.host.scheduler)
         self.long_press = long_press
         self.auto_start = start

@@ -167,6 +167,12 @@ class CanBusPort:
             if len(messages) >= _MESSAGES_KEPT:
                 messages.clear()
             message = messages[frame] = self._message(frame, now)
+            # the frame's own bytes, not a bytearray: a kept Message is never changed and
+            # these buses only read it (udp_multicast packs it; virtual deep-copies it, and a
+            # bytearray goes through copy's reduce protocol, two thirds of that copy, where
+            # bytes are taken as they are: half of a virtual send and receive). Every receiver
+            # still gets python-can's own Message, its data a bytearray (its __init__ does it)
+            message.data = frame.data  # type: ignore[assignment]
         else:
             message.timestamp = now
         self.bus.send(message)
