@@ -78,24 +78,25 @@ def _state(emulator: Emulator, twin: KeyboxTwin, pin: int) -> str:
     return str(emulator.snapshot(twin)["pins"][pin - 1]["state"])
 
 
-def test_an_output_switched_onto_a_blown_fuse_is_a_fault_not_high(keybox: Bench) -> None:
-    bus, emulator, twin = keybox
-    emulator.run(lambda now: twin.blow_fuse(6, now))
-    result = invoke("keybox", "on", "6", *bus)
-    assert _state(emulator, twin, 6) == "fault"
+def _onto_a_blown_fuse(bench: Bench, pin: int, *command: str) -> Result:
+    """``blinkcan keybox COMMAND...`` once ``pin``'s fuse is blown."""
+    bus, emulator, twin = bench
+    emulator.run(lambda now: twin.blow_fuse(pin, now))
+    return invoke("keybox", *command, *bus)
+
+
+@pytest.mark.parametrize(("pin", "command"), [(6, ["on", "6"]), (12, ["pwm", "12", "30%"])])
+def test_an_output_switched_onto_a_blown_fuse_is_a_fault_not_high(
+        keybox: Bench, pin: int, command: list[str]) -> None:
+    result = _onto_a_blown_fuse(keybox, pin, *command)
+    _, emulator, twin = keybox
+    assert _state(emulator, twin, pin) == "fault"
     assert result.exit_code == 1, result.output
-    assert "output 6 HIGH" not in result.output
-    assert result.output.startswith("Error: keybox 0Ch: output 6 went FAULT"), result.output
-    assert "keybox reset 6" in result.output
+    assert "HIGH" not in result.output.replace("switched HIGH", "")
+    assert result.output.startswith(f"Error: keybox 0Ch: output {pin} went FAULT"), \
+        result.output
+    assert f"keybox reset {pin}" in result.output
     assert len(result.output.splitlines()) == 1
-
-
-def test_pwm_onto_a_blown_fuse_is_a_fault(keybox: Bench) -> None:
-    bus, emulator, twin = keybox
-    emulator.run(lambda now: twin.blow_fuse(12, now))
-    result = invoke("keybox", "pwm", "12", "30%", *bus)
-    assert result.exit_code == 1, result.output
-    assert result.output.startswith("Error: keybox 0Ch: output 12 went FAULT"), result.output
 
 
 def test_commands_that_did_what_they_said_still_say_it(keybox: Bench) -> None:
@@ -113,10 +114,8 @@ def test_commands_that_did_what_they_said_still_say_it(keybox: Bench) -> None:
 def test_a_reset_of_an_output_still_in_fault_says_so(keybox: Bench) -> None:
     """RESET of a pin whose fuse is still blown and that is driven again goes FAULT again
     only when switched HIGH: a RESET itself leaves it OFF (KBX §7)."""
-    bus, emulator, twin = keybox
-    emulator.run(lambda now: twin.blow_fuse(6, now))
-    invoke("keybox", "on", "6", *bus)
-    result = invoke("keybox", "reset", "6", *bus)
+    _onto_a_blown_fuse(keybox, 6, "on", "6")
+    result = invoke("keybox", "reset", "6", *keybox[0])
     assert result.exit_code == 0, result.output
     assert result.output == "keybox 0Ch: output 6 RESET (now OFF)\n"
 
@@ -149,9 +148,8 @@ def test_a_lost_command_is_an_error_naming_what_the_keybox_shows(lost_command: B
 
 def test_off_leaves_a_fault_latched_and_says_so(keybox: Bench) -> None:
     """errata K12: only RESET clears FAULT; ``keybox off 6`` said "output 6 OFF"."""
+    _onto_a_blown_fuse(keybox, 6, "on", "6")
     bus, emulator, twin = keybox
-    emulator.run(lambda now: twin.blow_fuse(6, now))
-    invoke("keybox", "on", "6", *bus)
     result = invoke("keybox", "off", "6", *bus)
     assert _state(emulator, twin, 6) == "fault"
     assert result.exit_code == 1, result.output
