@@ -19,6 +19,10 @@ Whole or nothing, and never twice:
   index is a hint, checked against the file system; manifests without ``file`` (an older
   blinkcan's) are read as before.
 
+One task at a time per source: on this machine's disk a lock file per source
+(``_blinkcan/locks/<key>.lock``) keeps two runs at once on one dataset apart (the second
+finds the file decoded), so every attempt folder of the source a task finds is a dead one's.
+
 ``<key>`` is a hash of the source's absolute path, so one source always writes the same names.
 A file that cannot be read is a failed result with the reason, never an exception; a line
 that is no frame is an ``unreadable`` row, counted and named in the result (and the manifest).
@@ -26,12 +30,13 @@ that is no frame is an ``unreadable`` row, counted and named in the result (and 
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
 import os
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -46,6 +51,11 @@ from blinkcan.fleet.sources import read_columns
 from blinkcan.fleet.writer import PartitionWriter
 from blinkcan.formats.logs import LogError
 from blinkcan.formats.unreadable import UnreadableCount, UnreadableLine
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: runs at once on one dataset are not kept apart
+    fcntl = None  # type: ignore[assignment]
 
 if TYPE_CHECKING:  # fsspec loads for a URL only (start-up: fleet/local_files.py)
     from fsspec import AbstractFileSystem
@@ -163,6 +173,22 @@ class _Store:
         if self.fs.exists(path):
             self.fs.rm(path, recursive=True)
 
+    @contextlib.contextmanager
+    def alone(self) -> Iterator[None]:
+        """Held while a task handles its source: a task of another run at once (two runs on
+        one dataset) waits, then finds the file decoded; without it, it took the first's
+        attempt for a dead predecessor's and removed it under it. A lock file per source
+        (``_blinkcan/locks/<key>.lock``, ``flock``) on a dataset on this machine's disk; on
+        an object store two runs at once are not kept apart."""
+        if fcntl is None or "file" not in _protocols(self.fs):
+            yield
+            return
+        folder = f"{self.meta}/locks"
+        os.makedirs(folder, exist_ok=True)
+        with open(f"{folder}/{self.key}.lock", "ab") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
+            yield
+
     def recover(self) -> None:
         """Undo what a dead predecessor left: a journal's files, its temporary folders."""
         journal = self.read_json(self.journal)
@@ -214,6 +240,15 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
                                   key=lambda pair: (isinstance(pair[0], str), pair[0]))}
     identity = {"source": path, "size": stat.st_size, "mtime_ns": stat.st_mtime_ns,
                 "blinkcan": __version__, "settings": settings}
+    with store.alone():
+        return _decode_alone(store, path, stat, identity, force, devices, rows_per_group,
+                             progress)
+
+
+def _decode_alone(store: _Store, path: str, stat: os.stat_result, identity: dict[str, Any],
+                  force: bool, devices: ModelsByNode | None, rows_per_group: int,
+                  progress: Callable[[int], None] | None) -> FileResult:
+    """:func:`decode_file` once no other task handles the source (:meth:`_Store.alone`)."""
     store.recover()
     old = store.read_json(store.manifest)
     decoded_before = not force and old is not None and \
@@ -282,6 +317,12 @@ def _decode_into(writer: PartitionWriter, path: str, devices: ModelsByNode | Non
     if progress is not None and count > reported:
         progress(count - reported)
     return count, unreadable
+
+
+def _protocols(filesystem: AbstractFileSystem | LocalFiles) -> tuple[str, ...]:
+    """fsspec's names of ``filesystem``'s protocol ("file" for this machine's disk)."""
+    found = filesystem.protocol
+    return (found,) if isinstance(found, str) else tuple(found)
 
 
 def _reason(error: BaseException) -> str:

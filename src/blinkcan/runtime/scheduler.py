@@ -179,6 +179,18 @@ def guarded(callback: Callable[..., object], *args: object) -> None:
         log.exception("a blinkcan handler raised; the loop goes on")
 
 
+class WrongThreadError(BlinkcanError, RuntimeError):
+    """A call that runs a simulation, or sends on it, came from another thread than the one
+    that owns it (a Rig's: the thread that made it)."""
+
+    @classmethod
+    def of(cls, doing: str, owner: threading.Thread) -> WrongThreadError:
+        return cls(f"{doing} from thread {threading.current_thread().name!r}: the simulation "
+                   f"runs in the thread that made the Rig ({owner.name!r}), and would run "
+                   "(and move its clock) under it. Call the drivers from that thread, and "
+                   "run asyncio code in an event loop of that thread (asyncio.run in the test)")
+
+
 class StuckDeadlineError(BlinkcanError, RuntimeError):
     """A simulation would spin: a twin names a deadline that ``advance()`` at that time does
     not consume, so virtual time could never move past it."""
@@ -526,6 +538,8 @@ class SimulatedScheduler(Scheduler):
         self._waits = 0
         self._background: collections.deque[tuple[Hashable | None, Callable[[], object]]] = (
             collections.deque())
+        #: the one thread that may run the simulation (a Rig's), None: any
+        self.owner: threading.Thread | None = None
 
     def clock(self) -> float:
         return self.now
@@ -709,7 +723,10 @@ class SimulatedScheduler(Scheduler):
 
     def run_until(self, predicate: Callable[[], object] | None, until: float) -> bool:
         """Run events in order until ``predicate()`` is true (True) or the clock reaches
-        ``until`` (False; the clock then stands at ``until``; +inf: no end)."""
+        ``until`` (False; the clock then stands at ``until``; +inf: no end).
+        :class:`WrongThreadError` from another thread than :attr:`owner`'s."""
+        if self.owner is not None and get_ident() != self.owner.ident:
+            raise WrongThreadError.of("a wait on the simulated bus", self.owner)
         check_time("until", until, infinite=True)
         ready, next_instant, mark = self._ready, self._next_instant, _TIMER
         popleft = ready.popleft

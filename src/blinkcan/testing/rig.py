@@ -22,6 +22,9 @@ thread (a reader thread, as on a real bus) is refused with :class:`WrongThreadEr
 would run the simulation and move the clock under that thread; ``rig.bus.send()`` too, since it
 would write the wire log and the simulation's queue from there. Put a ``can.Notifier`` on
 ``rig.bus`` instead: the rig hands its listeners every frame, in order, in the rig's thread.
+So are a driver's calls from another thread (its sends and waits), and an asyncio driver's
+in an event loop of another thread: run the loop in the rig's thread (``asyncio.run`` in the
+test); nothing is sent and the clock does not move.
 
 An exception raised in your handlers (a driver's ``on_key``/``subscribe`` callbacks) or in work
 handed to ``host.spawn`` is raised again, with its traceback, from the rig or driver call that
@@ -37,22 +40,19 @@ from typing import Any, TypeVar
 
 import can
 
-from blinkcan.errors import BlinkcanError
 from blinkcan.host.events import LONGEST_EVENT_WAIT
 from blinkcan.protocol.cob import HEARTBEAT, check_node_id, check_time
 from blinkcan.protocol.frame import Frame
 from blinkcan.runtime.emulator import Emulator
-from blinkcan.runtime.scheduler import SimulatedScheduler
+from blinkcan.runtime.scheduler import SimulatedScheduler, WrongThreadError
 from blinkcan.runtime.simbus import SimulatedBus, SimulatedNetwork
 from blinkcan.runtime.wire_log import TimedFrame, WireLog
 from blinkcan.twin.base import CanopenTwin
 
+__all__ = ["Rig", "RigBus", "WrongThreadError", "frames_of"]  # the error's home is runtime
+
 T = TypeVar("T")
 W = TypeVar("W", bound=CanopenTwin)
-
-
-class WrongThreadError(BlinkcanError, RuntimeError):
-    """A call that runs a rig's simulation came from another thread than the rig's."""
 
 
 class RigBus(SimulatedBus):
@@ -110,6 +110,9 @@ class Rig:
         self.emulator.start()
         #: the controller's bus: any python-can code and blinkcan driver takes it
         self.bus: SimulatedBus = RigBus(self.network, "controller", threading.current_thread())
+        # from now on the simulation runs, and the drivers' ports send, in this thread only
+        # (the twins' port, made above, sends inside the simulation: no check per frame)
+        self.scheduler.owner = threading.current_thread()
         self._closed = False
 
     # -- time -------------------------------------------------------------------------------
