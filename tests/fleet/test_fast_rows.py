@@ -104,6 +104,22 @@ def test_the_realistic_log_reads_the_same_with_small_caches(
     assert fewer < decoded * 0.85
 
 
+def test_an_sdo_read_kept_from_a_block_read_line_by_line(tmp_path: Path) -> None:
+    """An SDO read and its value first met in a block read line by line (a remote frame in
+    it), then again in blocks read whole: the decoder's kept entries, with nothing made of
+    them yet, are rowed from the entry (CiA 301 §7.2.4.3.6; 1017h, the heartbeat producer
+    time: no identity object, whose values are not kept)."""
+    read = Frame(SDO_RX + 0x15, bytes((0x40, 0x17, 0x10, 0x00, 0, 0, 0, 0)))
+    value = Frame(SDO_TX + 0x15, bytes((0x4B, 0x17, 0x10, 0x00, 0xE8, 0x03, 0, 0)))
+    lines = [f"({EPOCH:.6f}) can0 715#R\n"]
+    for n in range(40):
+        lines += candump_lines([(EPOCH + n, read), (EPOCH + n + 0.001, value)])
+    log = tmp_path / "sdo.log"
+    log.write_text("".join(lines))
+    fewer, decoded = _assert_fast_as_generic(log, 1 << 16, 200, {0x15: "keypad"})
+    assert fewer < decoded
+
+
 def _pool(model: Any, node: int, chance: random.Random) -> list[list[Frame]]:
     """Steps of a mix: each a frame or two of the model's traffic, from few values (so that
     frames repeat, from the same state and from another)."""

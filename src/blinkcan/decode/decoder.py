@@ -282,12 +282,14 @@ class Decoder:
         self._foreign_json: dict[int, tuple[str, str]] = {}
         #: SDO events that the same frame makes again (an upload request; an expedited upload
         #: response in the same transfer): [the event's text, node, device, fields; its JSON
-        #: body after the time, once written; the transfer a request opens]
+        #: body after the time, once written; the transfer a request opens; what a batch
+        #: reader made of it (its own: :meth:`kept_entry`)]
         self._kept: dict[object, list[Any]] = {}
         #: the kept entry the last decoded SDO frame used (json_line writes its JSON once)
         self._served: list[Any] | None = None
         #: J1939 keypad frames' events as kept SDO ones are, valid while the count of keypad
-        #: addresses they were decoded with (the entry's third item) holds
+        #: addresses they were decoded with (the entry's third item) holds; the fourth, a
+        #: batch reader's
         self._j1939_known: dict[Frame, list[Any]] = {}
 
     def device(self, node_id: int) -> DeviceDescription | None:
@@ -366,8 +368,15 @@ class Decoder:
         read or value seen before, a J1939 keypad frame's): every event made from the same
         kept entry has the same ``fields`` object, and is the same but for time and frame.
         A batch reader may keep what it made of such an event by its fields."""
+        return self.kept_entry(event) is not None
+
+    def kept_entry(self, event: Event) -> list[Any] | None:
+        """The entry the decoder keeps that the event, just decoded (or made again by
+        :meth:`kept_event` or :meth:`kept_sdo`), was made from; None for any other event.
+        Its last item is the batch reader's (None until it sets it): what it made of the
+        entry, kept as long as the decoder keeps the entry, and gone with it."""
         served = self._served
-        return served is not None and served[0][3] is event.fields
+        return served if served is not None and served[0][3] is event.fields else None
 
     def kept_event(self, can_id: int, extended: bool, data: bytes, time: float) -> Event | None:
         """For a batch reader that keeps what it made of kept events (:meth:`is_kept`): where
@@ -706,7 +715,7 @@ class Decoder:
         # same. Full, the frames kept stay (those seen first repeat: commands, key messages;
         # a heartbeat's counter never does), and are only replaced by themselves
         if len(addresses) == before and (len(known_frames) < _J1939_KEPT or known is not None):
-            known_frames[frame] = self._served = [parts, None, before]
+            known_frames[frame] = self._served = [parts, None, before, None]
         return _new_tuple(Event, (time, frame, Kind.J1939, *parts))
 
     def _unknown(self, frame: Frame, time: float) -> Event:
@@ -953,7 +962,7 @@ class Decoder:
         kept = self._kept
         if len(kept) >= _SDO_KEPT:
             kept.clear()
-        kept[key] = self._served = [event[3:], None, transfer]
+        kept[key] = self._served = [event[3:], None, transfer, None]
 
     def _live_transfer(self, node: int, time: float) -> _Transfer | None:
         """The node's transfer in progress, unless it went silent (TRANSFER_IDLE_S)."""

@@ -45,7 +45,8 @@ if TYPE_CHECKING:
 _new_tuple = tuple.__new__  # Frame.trusted without the call: the readers checked the frames
 #: texts of undecoded frames kept (then they start over): a log has a few hundred identifiers
 _TEXTS_KEPT = 4096
-#: rows of events the decoder keeps (then they start over): as many as it keeps of SDO events
+#: entries of the fleet's own caches of rows (key states, J1939 frames by bytes, frames too short
+#: for their PDO, a stateless PDO's by bytes) kept (then they start over)
 _ROWS_KEPT = 4096
 #: the event kinds whose rows read or change what EventRows follows (never kept)
 _FOLLOWING = frozenset({Kind.PDO, Kind.BOOT_UP})
@@ -220,12 +221,6 @@ class FrameDecoder:
         self._rows = EventRows(decoder)
         #: an undecoded frame's text (str of its event) by the decoder's: (node, device, text)
         self._texts: dict[str, tuple[int | None, str | None, str]] = {}
-        #: what was made of an event the decoder keeps (Decoder.is_kept: an SDO read or
-        #: value seen before, a J1939 keypad frame's), by its kind and fields (the fields
-        #: object kept with it: its id is not reused while kept). Such rows read no state
-        #: (EventRows follows PDOs and boot-ups only). Valid for the devices' models they
-        #: were made with (``_models``)
-        self._kept_events: dict[tuple[Kind, int], tuple[object, KeptRows]] = {}
         #: per 11-bit PDO identifier decoded, its route (None: its frames go to the decoder),
         #: for the devices' models it was made with
         self._pdo_routes: dict[int, PdoRoute | None] = {}
@@ -296,8 +291,11 @@ class FrameDecoder:
                 self._pure[frame.can_id] = (node, models[place], str(texts[place]), details)
             return details
         if self.fast:
-            if self._decoder.is_kept(event) and kind not in _FOLLOWING:
-                return self._kept_rows(event, place, nodes, models, texts)
+            entry = self._decoder.kept_entry(event)
+            if entry is not None and kind not in _FOLLOWING:
+                nodes[place], models[place], texts[place], details = self._kept_made(
+                    entry, event)
+                return details
             frame = event.frame
             if kind is Kind.PDO and not frame.extended and frame.can_id not in self._pdo_routes:
                 self._pdo_routes[frame.can_id] = self._pdo_route(event)  # the next: bytes
@@ -318,25 +316,19 @@ class FrameDecoder:
         self._pure[key] = (node, model, text, details)
         return details
 
-    def _kept_rows(self, event: Event, place: int, nodes: list[int | None],
-                   models: list[str | None], texts: list[str | None]) -> list[Detail]:
-        """:meth:`_event_rows` of an event made from an entry the decoder keeps."""
-        nodes[place], models[place], texts[place], details = self._kept_made(event)
-        return details
-
-    def _kept_made(self, event: Event) -> KeptRows:
-        """What an event made from an entry the decoder keeps makes: what was made of that
-        entry before."""
-        fields = event[6]
-        tag = (event[2], id(fields))
-        made_of = self._kept_events.get(tag)
-        if made_of is not None and made_of[0] is fields:
-            return made_of[1]
+    def _kept_made(self, entry: list[Any], event: Event) -> KeptRows:
+        """What an event made from an entry the decoder keeps (Decoder.kept_entry: an SDO
+        read or value seen before, a J1939 keypad frame's) makes: what was made of that entry
+        before, kept in the entry's last item (as long as the decoder keeps it) with the
+        devices' models it was made with (``_models``). Such rows read no state (EventRows
+        follows PDOs and boot-ups only)."""
+        memo = entry[-1]
+        if memo is not None and memo[0] is self._models:
+            made: KeptRows = memo[1]
+            return made
         node, model, details = self._rows.rows(event)
         made = (node, model, str(event), details)
-        if len(self._kept_events) >= _ROWS_KEPT:
-            self._kept_events.clear()
-        self._kept_events[tag] = (fields, made)
+        entry[-1] = (self._models, made)
         return made
 
     def decode(self, block: FrameColumns, start: int, segment: Segment, limit: int) -> int:
@@ -383,7 +375,6 @@ class FrameDecoder:
         payloads = block.arrow_data.take(pa.array(at + start, pa.int64())).to_pylist()
         snapshot = dict(devices)
         if self._models != snapshot:  # a model learned: what was made names the old ones
-            self._kept_events.clear()
             self._pdo_routes.clear()
             self._pure.clear()
             self._keyed.clear()
@@ -402,7 +393,7 @@ class FrameDecoder:
             j1939_rows.clear()
         keys_held, hold_keys, frame_text = decoder.keys_held, decoder.hold_keys, decoder.text
         kept_event, kept_sdo, kept_made = decoder.kept_event, decoder.kept_sdo, self._kept_made
-        kept_events = self._kept_events
+        kept_entry, models_now = decoder.kept_entry, self._models
         find_number, number = segment.numbers.get, segment.number
         event_texts = self._texts
         if len(event_texts) > _TEXTS_KEPT:
@@ -461,12 +452,11 @@ class FrameDecoder:
                 seen = kept_sdo(can_id, payload, times[count])
                 if seen is not None:
                     kind, entry = seen
-                    fields = entry[0][3]
-                    made_of = kept_events.get((kind, id(fields)))  # (as _kept_made)
-                    if made_of is not None and made_of[0] is fields:
-                        made = made_of[1]
+                    memo = entry[3]  # (as _kept_made)
+                    if memo is not None and memo[0] is models_now:
+                        made = memo[1]
                     else:
-                        made = kept_made(new(Event, (times[count], new(frame_type, (
+                        made = kept_made(entry, new(Event, (times[count], new(frame_type, (
                             can_id, payload, False)), kind, *entry[0])))
             else:  # a J1939 keypad frame's event the decoder keeps: what it made before
                 j1939_made = j1939_rows.get((can_id, payload))
@@ -474,8 +464,9 @@ class FrameDecoder:
                     made = j1939_made[1]
                 else:
                     event = kept_event(can_id, flag, payload, times[count])
-                    if event is not None:
-                        made = kept_made(event)
+                    kept = None if event is None else kept_entry(event)
+                    if event is not None and kept is not None:
+                        made = kept_made(kept, event)
                         j1939_rows[can_id, payload] = (len(addresses), made)
             decoded = False  # the decoder's devices change only where it decodes a frame
             if made is not None:
