@@ -243,3 +243,19 @@ def test_a_renamed_file_whose_old_name_now_names_another_file_is_decoded(
     first.write_text(OTHER)
     assert [(r.source, r.status) for r in decode_files([second, first], lake)] == \
         [(str(second), "decoded"), (str(first), "decoded")]
+
+
+@pytest.mark.parametrize("entry", [b"not json", b"[1]", b'{"source": 3}',
+                                   b'{"source": "/nowhere"}'])
+def test_a_corrupt_or_stale_index_entry_is_no_hint(tmp_path: Path, entry: bytes) -> None:
+    """The index of files is a hint: an entry that is no JSON object, names no path, or a
+    path without a manifest is passed over; the name given is decoded under its own name."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    first.write_text(LOG)
+    lake = tmp_path / "lake"
+    decode_files([first], str(lake))
+    [index] = (lake / "_blinkcan" / "files").iterdir()
+    index.write_bytes(entry)
+    os.link(first, second)
+    assert [(r.source, r.status) for r in decode_files([second], str(lake))] == \
+        [(str(second), "decoded")]

@@ -38,6 +38,32 @@ def test_a_frame_delivered_after_a_posted_call_runs_after_it() -> None:
         scheduler.stop()
 
 
+def test_a_deliverer_bound_before_the_loop_starts_delivers_as_deliver_does() -> None:
+    """What a port calls per frame (bound once, when a receiver starts listening): posted
+    while the loop is not running, at once as the loop's work when it is idle, after a
+    posted call while one waits."""
+    scheduler = RealTimeScheduler("test")
+    seen: list[tuple[str, bool]] = []
+    deliver = scheduler.deliverer(lambda name: seen.append((name, scheduler.in_loop)))
+    deliver("before start")
+    assert seen == []  # no loop yet: posted
+    scheduler.start()
+    try:
+        scheduler.run(lambda: None)
+        assert seen == [("before start", True)]
+        deliver("idle")
+        assert seen[-1] == ("idle", True)  # ran before it returned
+        release = threading.Event()
+        scheduler.post(lambda: release.wait(2))  # the loop is busy
+        scheduler.post(lambda: seen.append(("posted", scheduler.in_loop)))
+        deliver("busy")
+        release.set()
+        scheduler.run(lambda: None)
+        assert seen[-2:] == [("posted", True), ("busy", True)]
+    finally:
+        scheduler.stop()
+
+
 def test_loop_work_never_overlaps_between_readers_and_timers() -> None:
     scheduler = RealTimeScheduler("test")
     scheduler.start()

@@ -129,6 +129,25 @@ def test_keybox_abort_codes(request_: str, reply: str) -> None:
     boot().replay(f"> 60C {request_}\n< 58C {reply}")
 
 
+def test_output_mask_writes_change_only_the_pins_whose_bit_is_set(started: Bench) -> None:
+    """Errata K20: a 2008h/01 write switches OFF exactly the pins whose bit is 1 and a 2008h/02
+    write drives HIGH exactly those; every other pin keeps its state (as the RPDO)."""
+    started.replay("""
+        > 60C 2B 08 20 02 07 00 00 00    # pins 1, 2, 3 HIGH
+        < 58C 60 08 20 02 00 00 00 00
+        > 60C 2B 08 20 01 02 00 00 00    # pin 2 OFF
+        < 58C 60 08 20 01 00 00 00 00
+        > 60C 40 08 20 02 00 00 00 00
+        < 58C 4B 08 20 02 05 00 00 00    # pins 1 and 3 still HIGH
+        > 60C 2B 08 20 02 08 00 00 00    # pin 4 HIGH
+        < 58C 60 08 20 02 00 00 00 00
+        > 60C 40 08 20 02 00 00 00 00
+        < 58C 4B 08 20 02 0D 00 00 00    # pins 1, 3, 4
+        > 60C 40 08 20 01 00 00 00 00
+        < 58C 4B 08 20 01 F2 1F 00 00    # the other nine OFF
+    """)
+
+
 def test_sdo_output_writes_act_in_pre_operational_rpdo_does_not() -> None:
     bench = boot()
     bench.replay("> 20C 00 00 01 00 00 00 00 00")

@@ -95,6 +95,23 @@ def test_s18_heartbeat_with_keys_and_counter(bench: Bench) -> None:
     """)
 
 
+def test_s18_heartbeat_example_key_12_held(bench: Bench) -> None:
+    """The spec's second printed heartbeat, byte for byte: counter 03h, key 12 held."""
+    bench.replay("""
+        > 18EF2100 04 1B 75 01 32 FF FF FF    # on, 500 ms
+        press 12
+        < 18EFFF21 04 1B 01 0C 01 21 FF FF
+        wait 0.5
+        < 18EFFF21 04 1B F9 00 00 08 FF 21
+        wait 0.5
+        < 18EFFF21 04 1B F9 01 00 08 FF 21
+        wait 0.5
+        < 18EFFF21 04 1B F9 02 00 08 FF 21
+        wait 0.5
+        < 18EFFF21 04 1B F9 03 00 08 FF 21    # as printed: key 12 held
+    """)
+
+
 def test_j6_heartbeat_counter_wraps(bench: Bench) -> None:
     bench.replay("> 18EF2100 04 1B 75 01 05 FF FF FF")  # every 50 ms
     counters = []

@@ -39,7 +39,9 @@ def started(bench: Bench) -> Bench:
 UNCHANGED = ["s10_key_state_examples", "s12_alternate_blink_follows_the_bit_table",
              "s26_device_type", "s28_device_name_segmented", "s31_model_id_segmented",
              "s32_identity", "s42_tpdo_mapping", "s43_serial_number_segmented",
-             "s44_switch_to_j1939_and_back", "s25_producer_heartbeat"]
+             "s44_switch_to_j1939_and_back", "s25_producer_heartbeat",
+             "s41a_tpdo_parameter",  # rev 1.5 §44a prints rev 1.1's 1800h reads, 4Bh as P3
+             "s27_error_register_not_implemented"]  # rev 1.5 §29: "not yet implemented"
 
 
 def rev11_example(name: str) -> Callable[[Bench], None]:
@@ -322,6 +324,12 @@ def test_s37_synchronous_led_blink(started: Bench) -> None:
                                               ("00 18", "F5")])
 def test_undocumented_transmission_types_abort(bench: Bench, index: str, value: str) -> None:
     bench.replay(f"> 615 2F {index} 02 {value} 00 00 00\n< 595 80 {index} 02 30 00 09 06")
+
+
+@pytest.mark.parametrize(("index", "cob"), [("00 14", "15 02"), ("01 14", "15 03")])
+def test_s36_s37_rpdo_parameters(bench: Bench, index: str, cob: str) -> None:
+    """§36/§37's reads of 1400h/1401h, before their SYNC examples (test_s36/test_s37)."""
+    rev11.test_s33_to_s36_rpdo_parameters(bench, index.split(maxsplit=1)[0], cob)
 
 
 @pytest.mark.parametrize(("index", "cob"), [("02 14", "15 04"), ("03 14", "15 05")])

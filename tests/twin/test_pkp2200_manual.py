@@ -78,12 +78,13 @@ def test_s12_led_on_pdo(bench: Bench, data: str, on: tuple[int, int, int]) -> No
     assert bench.masks("led_on") == on
 
 
-@pytest.mark.parametrize(("index", "cob", "prefix", "data", "lit"), [
-    ("00", "15 02", "led_on", "215 01 00 00", (1, 0, 0)),  # §35: red LED 1
-    ("01", "15 03", "led_blink", "315 00 01 00", (0, 1, 0)),  # §36: green LED 1 blinks
+@pytest.mark.parametrize(("index", "cob", "sync_type", "prefix", "data", "lit"), [
+    ("00", "15 02", "01", "led_on", "215 01 00 00", (1, 0, 0)),  # §35: red LED 1
+    # §36 sets type 00h ("00h-F0h synchronous", p. 26), not §35's 01h: as printed
+    ("01", "15 03", "00", "led_blink", "315 00 01 00", (0, 1, 0)),  # green LED 1 blinks
 ])
-def test_s35_s36_synchronous_led_pdos(bench: Bench, index: str, cob: str, prefix: str,
-                                      data: str, lit: tuple[int, int, int]) -> None:
+def test_s35_s36_synchronous_led_pdos(bench: Bench, index: str, cob: str, sync_type: str,
+                                      prefix: str, data: str, lit: tuple[int, int, int]) -> None:
     bench.replay(f"""
         > 000 01 15
         > 615 40 {index} 14 00 00 00 00 00
@@ -92,7 +93,7 @@ def test_s35_s36_synchronous_led_pdos(bench: Bench, index: str, cob: str, prefix
         < 595 43 {index} 14 01 {cob} 00 00
         > 615 40 {index} 14 02 00 00 00 00
         < 595 4F {index} 14 02 FE 00 00 00
-        > 615 2F {index} 14 02 01 00 00 00
+        > 615 2F {index} 14 02 {sync_type} 00 00 00
         < 595 60 {index} 14 02 00 00 00 00
         > 080
         > {data} 00 00 00 00 00         # buffered

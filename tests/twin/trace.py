@@ -16,6 +16,7 @@ import pytest
 
 from blinkcan.protocol import Frame
 from blinkcan.twin.base import CanopenTwin
+from blinkcan.twin.registry import build_twin, default_node_id
 from tests.conftest import frame
 
 
@@ -98,3 +99,12 @@ def replayed(examples: Mapping[str, str], on: str = "bench") -> Callable[..., No
         bench.replay(examples[example])
 
     return test_example
+
+
+def factory_bench(spec: str) -> tuple[Bench, int]:
+    """A twin of ``spec`` ("keybox", "pkp-2600-si@1.5") at its factory settings and default
+    node id, powered for 10 s (any startup show over), pre-operational; and that node id."""
+    node = default_node_id(spec)
+    bench = Bench(build_twin(spec))
+    bench.replay(f"on\n< {0x700 + node:X} 00\nwait 10")
+    return bench, node

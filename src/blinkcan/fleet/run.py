@@ -122,15 +122,12 @@ class _Decoded:
         try:
             with self.fs.open(f"{self.root}/{FILES}/{file_entry(*identity)}", "rb") as stream:
                 hint = json.loads(stream.read()).get("source")
-            found = os.stat(hint) if isinstance(hint, str) else None
+            if not isinstance(hint, str) or f"{source_key(hint)}.json" not in self.manifests:
+                return names[0]
+            found = os.stat(hint)
         except (OSError, ValueError, AttributeError):  # gone, corrupt: no hint
             return names[0]
-        if found is None or not isinstance(hint, str):
-            return names[0]
-        if (found.st_dev, found.st_ino) == identity and \
-                f"{source_key(hint)}.json" in self.manifests:
-            return hint
-        return names[0]
+        return hint if (found.st_dev, found.st_ino) == identity else names[0]
 
 
 def _walk(folder: str, dataset: tuple[str | None, str | None],

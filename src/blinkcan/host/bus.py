@@ -77,6 +77,8 @@ class HostBus:
         self.send = self.port.send
         self.scheduler: Scheduler = self.port.scheduler
         self.simulated = self.scheduler.simulated
+        #: the loop's handlers of a frame, as the port's reader hands them one (bound once)
+        self._deliver_dispatch = self.scheduler.deliverer(self._dispatch)
         self._handlers: dict[int, list[Handler]] = {}
         self._fast: dict[int, Handler] = {}
         self._extended: list[Handler] = []
@@ -243,7 +245,7 @@ class HostBus:
             if fast is not None:
                 fast(frame, now)
         if extended or frame.can_id in self._handlers:
-            self.scheduler.deliver(self._dispatch, frame, now)
+            self._deliver_dispatch(frame, now)
 
     def _dispatch(self, frame: Frame, now: float) -> None:
         handlers = self._extended if frame.extended else self._handlers.get(frame.can_id, ())

@@ -103,12 +103,11 @@ class _PortListener(can.Listener):
                         return
                 except IndexError:  # emptied meanwhile: this one is no echo
                     pass
-        port = self.port
         try:
-            for handler in port.handlers:
+            for handler in self.port.handlers:
                 handler(frame, now)
         except Exception as error:  # a handler's defect is not a failing bus
-            port.scheduler.failed(error, "a frame handler")
+            self.port.scheduler.failed(error, "a frame handler")
 
 
 class CanBusPort:

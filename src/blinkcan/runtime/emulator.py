@@ -214,7 +214,7 @@ class Emulator:
         self.scheduler.start()
         if self._owns_port and not self.scheduler.simulated:  # its own loop thread only
             self.scheduler.run(lambda: set_timer_slack(LOOP_TIMER_SLACK_NS))
-        self._detach = self.port.listen(partial(self.scheduler.deliver, self._received))
+        self._detach = self.port.listen(self.scheduler.deliverer(self._received))
         self.run(self._power_on_all)
         return self
 

@@ -275,6 +275,11 @@ class Scheduler(ABC):
         else:
             self.post(partial(callback, *args))
 
+    def deliverer(self, callback: Callable[..., object]) -> Callable[..., None]:
+        """:meth:`deliver` with ``callback`` bound: the one call a port makes per frame for a
+        receiver that runs on the loop (bound once, where the receiver starts listening)."""
+        return partial(self.deliver, callback)
+
     def call_later(self, delay: float, callback: Callable[[], object]) -> Timer:
         return self._push(Timer(self.clock() + check_time("delay", delay), None, callback))
 
@@ -396,23 +401,33 @@ class RealTimeScheduler(Scheduler):
         """Run ``callback(*args)`` on the loop: at once on this thread when it is the loop's
         or the loop is idle with nothing posted before (this thread holds the loop
         meanwhile: no thread hop), else posted. An exception reaches the caller."""
-        me = get_ident()
-        if self._owner == me:
-            callback(*args)
-            return
-        held = self._held
-        if self._thread is not None and not self._calls and held.acquire(False):
-            try:
-                if not self._calls:  # nothing posted before still waits: order kept
-                    self._owner = me
-                    try:
-                        callback(*args)
-                    finally:
-                        self._owner = None
-                    return
-            finally:
-                held.release()
-        self.post(partial(callback, *args))
+        self.deliverer(callback)(*args)
+
+    def deliverer(self, callback: Callable[..., object]) -> Callable[..., None]:
+        """:meth:`deliver` with ``callback`` bound, as one function of the frame's arguments:
+        a port calls it per frame (no partial, no method call, the loop's lock and queue
+        bound once: every SDO request an emulator answers comes this way)."""
+        calls, acquire, release = self._calls, self._held.acquire, self._held.release
+
+        def deliver(*args: object) -> None:
+            me = get_ident()
+            if self._owner == me:
+                callback(*args)
+                return
+            if self._thread is not None and not calls and acquire(False):
+                try:
+                    if not calls:  # nothing posted before still waits: order kept
+                        self._owner = me
+                        try:
+                            callback(*args)
+                        finally:
+                            self._owner = None
+                        return
+                finally:
+                    release()
+            self.post(partial(callback, *args))
+
+        return deliver
 
     def run(self, action: Callable[[], T], timeout: float = 5.0) -> T:
         if self._thread is None or self.in_loop:
@@ -538,6 +553,7 @@ class SimulatedScheduler(Scheduler):
         self._waits = 0
         self._background: collections.deque[tuple[Hashable | None, Callable[[], object]]] = (
             collections.deque())
+        self._in_background = False  # a piece of spawned work is running
         #: the one thread that may run the simulation (a Rig's), None: any
         self.owner: threading.Thread | None = None
 
@@ -632,15 +648,24 @@ class SimulatedScheduler(Scheduler):
         self.call_soon(self._run_background)
 
     def _run_background(self) -> None:
-        if self._waits:
-            return  # the wait's end schedules this again
+        """Run the next piece of work handed to :meth:`spawn`; never one inside another.
+
+        Work that waits (a driver's blocking call) runs the simulation, and a timer firing
+        meanwhile may spawn more (a periodic poll). Each piece has its own turn after the
+        events already due, so the caller's ``until`` is looked at between two pieces and
+        virtual time cannot run away in nested or queued waits."""
+        if self._waits or self._in_background or not self._background:
+            return  # the wait's end, or the running piece's end, schedules this again
+        _, action = self._background.popleft()
+        self._in_background = True
         base, self._base = self._base, self._depth
         try:
-            while self._background and not self._waits:
-                _, action = self._background.popleft()
-                self.guarded(action, what="work handed to spawn")
+            self.guarded(action, what="work handed to spawn")
         finally:
             self._base = base
+            self._in_background = False
+            if self._background and not self._waits:
+                self.call_soon(self._run_background)
 
     def next_due(self) -> float | None:
         due = self._heap.next_due()

@@ -26,6 +26,7 @@ it last stored, and every stored write aborts 0606 0000h until a reset finds the
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable, Mapping
 from enum import Enum
 from fractions import Fraction
@@ -206,10 +207,11 @@ class CanopenTwin:
         describes."""
         return self._now
 
-    @property
-    def listening(self) -> Mapping[int, object]:
-        """The standard COB-IDs this twin acts on; a new mapping after every boot."""
-        return self._routes
+    #: The standard COB-IDs this twin acts on (a Mapping[int, object]); a new mapping after
+    #: every boot. A C-level getter: the emulator asks after every frame a twin hears
+    listening = property(operator.attrgetter("_routes"),
+                         doc="The standard COB-IDs this twin acts on; a new mapping after "
+                             "every boot.")
 
     @property
     def objects(self) -> ObjectStore:
