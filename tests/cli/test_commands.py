@@ -161,7 +161,10 @@ def test_keybox_actions_say_what_they_did(bench: Bench) -> None:
     assert run("keybox", "on", "5", *bus).strip() == "keybox 0Ch: output 5 HIGH"
     assert run("keybox", "off", "5", *bus).strip() == "keybox 0Ch: output 5 OFF"
     assert run("keybox", "reset", "5", *bus).strip() == "keybox 0Ch: output 5 RESET (now OFF)"
-    run("keybox", "on", "6", *bus)
+    switched = invoke("keybox", "on", "6", *bus)  # onto the blown fuse: FAULT, read back
+    assert switched.exit_code == 1
+    assert switched.output.startswith("Error: keybox 0Ch: output 6 went FAULT when switched "
+                                      "HIGH")
     assert run("keybox", "faults", *bus).strip() == "6"
     assert run("keybox", "set-baud", "250000", "--yes", *bus).strip() == (
         "keybox 0Ch: bit rate 250000 bit/s stored, in use after the next reset")

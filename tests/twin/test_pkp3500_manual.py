@@ -946,13 +946,22 @@ def test_m78_keys_2_and_3_step_the_led_level_not_the_backlight(demo: Bench) -> N
     assert demo.twin.snapshot()["backlight"] == {"colour": "off", "level": 0}
 
 
-@pytest.mark.xfail(strict=True, reason="M78: the twin steps once per press; the repeat every "
-                   "100 ms while held is not modelled (reported by hman10)")
 def test_m78_a_held_key_repeats_every_100_ms(demo: Bench) -> None:
     demo.replay("press 3")
     once = demo.twin.snapshot()["indicator_brightness"]
-    demo.replay("wait 0.35")
-    assert demo.twin.snapshot()["indicator_brightness"] < once
+    step = 0x3F - once
+    demo.replay("wait 0.35")  # three more steps: at 100, 200 and 300 ms
+    assert demo.twin.snapshot()["indicator_brightness"] == once - 3 * step
+    demo.replay("release 3\nwait 0.5")  # let go: no more steps
+    assert demo.twin.snapshot()["indicator_brightness"] == once - 3 * step
+    demo.replay("wait 0.1\npress 3")
+    assert demo.twin.next_deadline() is not None  # held: its next repeat is named
+    demo.replay("wait 1e9")  # held for ever: clamped at 00h, and at once
+    assert demo.twin.snapshot()["indicator_brightness"] == 0
+    assert demo.twin.next_deadline() is None  # nothing left to repeat
+    demo.replay("release 3\npress 2\nwait 0.1\nrelease 2")  # one step up, one repeat
+    assert demo.twin.snapshot()["indicator_brightness"] == 2 * step
+    assert demo.twin.snapshot()["backlight"] == {"colour": "off", "level": 0}
 
 
 @pytest.mark.xfail(strict=True, reason="M79: key 4's five DEMO steps are not modelled "

@@ -290,14 +290,18 @@ def _explained(error: Exception, bus: can.BusABC, node_id: int) -> str:
     return str(error)
 
 
-def _done(target: Target, what: str) -> None:
-    """One line saying what an action did, e.g. ``keybox 0Ch: output 4 HIGH``."""
+def _subject(target: Target) -> str:
+    """The device as the command line names it: ``keybox 0Ch``, ``keypad 21h (J1939)``."""
     kind, node_id = target
     address = _j1939_address()
     if address is not None:
-        click.echo(f"{kind} {address:02X}h (J1939): {what}")
-        return
-    click.echo(f"{kind} {node_id:02X}h: {what}")
+        return f"{kind} {address:02X}h (J1939)"
+    return f"{kind} {node_id:02X}h"
+
+
+def _done(target: Target, what: str) -> None:
+    """One line saying what an action did, e.g. ``keybox 0Ch: output 4 HIGH``."""
+    click.echo(f"{_subject(target)}: {what}")
 
 
 def _info(device: Any) -> None:
@@ -671,7 +675,51 @@ def brightness(target: Target, level: int) -> None:
     _done(target, f"indicator brightness {level}")
 
 
-def _pin_command(name: str, action: str, doc: str, done: str) -> None:
+def _read_back(target: Target, device: Keybox, command: Callable[[], None],
+               pins: Sequence[int], wanted: str, asked: str) -> str | None:
+    """Run an output ``command``, then read ``pins`` back (2001h per pin, KBX §19) and
+    compare them with the state ``wanted`` ("high", "off"): what the Keybox shows is what the
+    command line says. An output switched HIGH onto a blown fuse or a short goes FAULT (KBX
+    §7), and OFF leaves a FAULT latched (errata K12): an error naming it, not "HIGH"/"OFF".
+    An acknowledge lost on the bus (``SdoTimeoutError.uncertain``) leaves the command applied
+    or not: the read says which. Returns a note to print when the acknowledge was lost and
+    the read shows the command applied; raises ClickException otherwise."""
+    lost: SdoTimeoutError | None = None
+    try:
+        command()
+    except SdoTimeoutError as error:
+        if not error.uncertain:
+            raise
+        lost = error
+    try:
+        shown = {pin: device.state(pin) for pin in pins}
+    except SdoError:
+        if lost is not None:
+            raise lost from None  # neither the acknowledge nor the read: as it was
+        raise
+    wrong = {pin: state for pin, state in shown.items() if state != wanted}
+    if not wrong:
+        return None if lost is None else (
+            "the Keybox's acknowledge was lost on the bus; the outputs were read back: "
+            "the command is applied")
+    read = ", ".join(f"output {pin} is {state.upper()}" for pin, state in sorted(wrong.items()))
+    if lost is not None:
+        raise click.ClickException(f"{lost}; read back: {read}")
+    faulted = sorted(pin for pin, state in wrong.items() if state == "fault")
+    if faulted:
+        pins_text = ",".join(str(pin) for pin in faulted)
+        outputs = " and ".join(str(pin) for pin in faulted)
+        how = ("went FAULT when switched " + asked if wanted == "high" else
+               f"stays FAULT: {asked} does not clear a fault (KBX §7)")
+        raise click.ClickException(
+            f"{_subject(target)}: output {outputs} {how}; a blown fuse or a short on it: "
+            f"`blinkcan keybox reset {pins_text}` once it is mended")
+    raise click.ClickException(f"{_subject(target)}: {asked} acknowledged, but read back: "
+                               f"{read}")
+
+
+def _pin_command(name: str, action: str, doc: str, done: str, wanted: str, asked: str
+                 ) -> None:
     @keybox.command(name, help=doc)
     @click.argument("pin", type=ModelNumber("pin", _pins))
     @bus_options
@@ -682,14 +730,18 @@ def _pin_command(name: str, action: str, doc: str, done: str) -> None:
             within("pin", pin, _pins(descriptions))
 
         with _device(target, check=check) as device:
-            getattr(device, action)(pin)
+            note = _read_back(target, device, lambda: getattr(device, action)(pin), [pin],
+                              wanted, asked)
         _done(target, done.format(pin=pin))
+        if note is not None:
+            click.echo(note, err=True)
 
 
 _pin_command("on", "on", f"Output PIN HIGH; pins {_per_model('keybox', lambda f: f.pin_numbers)}.",
-             "output {pin} HIGH")
-_pin_command("off", "off", "Output PIN OFF.", "output {pin} OFF")
-_pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} RESET (now OFF)")
+             "output {pin} HIGH", "high", "HIGH")
+_pin_command("off", "off", "Output PIN OFF.", "output {pin} OFF", "off", "OFF")
+_pin_command("reset", "reset", "RESET output PIN out of FAULT.", "output {pin} RESET (now OFF)",
+             "off", "RESET")
 
 
 @keybox.command("pwm", epilog=f"PWM pins: {_per_model('keybox', lambda f: f.pwm_pins)}.")
@@ -731,9 +783,13 @@ def pwm(target: Target, pins: str, duty: str) -> None:
 
     with _device(target, check=check) as device:
         assert isinstance(device, Keybox)
-        device.set_pwm(chosen, tenths)
+        # errata K16: a pin in PWM reads HIGH, at duty 0 OFF
+        note = _read_back(target, device, lambda: device.set_pwm(chosen, tenths), chosen,
+                          "high" if tenths else "off", "PWM")
     names = " and ".join(str(pin) for pin in chosen)
     _done(target, f"output {names} PWM at {tenths * step} %")
+    if note is not None:
+        click.echo(note, err=True)
 
 
 @keybox.command("states")

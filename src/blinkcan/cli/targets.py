@@ -30,10 +30,13 @@ def check_target(path: str, force: bool) -> Path:
 @contextmanager
 def writing(path: str, kept: str | None = None) -> Iterator[None]:
     """Turn a failure to write ``path`` into one line naming it (not the temporary file), and
-    saying what of it is ``kept`` (a recording keeps what it flushed)."""
+    saying what of it is ``kept`` (a recording keeps what it flushed), or that nothing was
+    recorded when the file could not even be made (it is not there to hold anything)."""
     try:
         yield
     except OSError as error:
+        if kept is not None and not os.path.lexists(path):
+            kept = "nothing was recorded"
         detail = "" if kept is None else f"; {kept}"
         raise click.ClickException(f"cannot write {path}: {error.strerror or error}{detail}"
                                    ) from None

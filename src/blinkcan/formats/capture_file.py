@@ -20,8 +20,9 @@ def create_exclusively(path: Path, replace: bool) -> int:
 
     ``O_EXCL`` refuses anything already there, a symlink included (it is never followed, even
     dangling); with ``replace`` what is there is removed first (a symlink itself, not what it
-    points to). Raises FileExistsError when ``path`` exists and ``replace`` is not set."""
-    if replace and (path.is_symlink() or path.is_file()):
+    points to; a FIFO or socket left at the name too, as a conversion's rename replaces it; a
+    directory never). Raises FileExistsError when ``path`` exists and ``replace`` is not set."""
+    if replace and (path.is_symlink() or (path.exists() and not path.is_dir())):
         path.unlink()
     return os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW | _CLOEXEC, 0o644)
 

@@ -11,6 +11,7 @@ from collections import OrderedDict
 
 import cantools.database as cdb
 from cantools.database.can import Message, Signal
+from cantools.database.namedsignalvalue import NamedSignalValue
 
 from blinkcan.devices.model import DeviceDescription
 from blinkcan.devices.pdo import Direction, PdoSignal
@@ -22,7 +23,25 @@ _STATES = {NmtState.BOOT_UP: "boot_up", NmtState.STOPPED: "stopped",
            NmtState.OPERATIONAL: "operational", NmtState.PRE_OPERATIONAL: "pre_operational"}
 
 
+#: the sign bit of a sign-magnitude signal as cantools names its values
+_ROTATION: OrderedDict[int, str | NamedSignalValue] = OrderedDict(
+    ((0, "clockwise"), (1, "counterclockwise")))
+
+
 def _signals(signal: PdoSignal, receiver: list[str]) -> list[Signal]:
+    if signal.sign_magnitude:
+        # a DBC signal is two's complement or unsigned: the magnitude and the sign bit as two
+        # signals, so cantools reads "81h" as 1 tick counterclockwise, not 129 (MT §12/§13:
+        # X = 1 counterclockwise, YYYYYYY = number of ticks)
+        sign = signal.start + signal.length - 1
+        return [Signal(signal.name, signal.start, signal.length - 1,
+                       byte_order="little_endian", is_signed=False,
+                       comment=f"{signal.label} (magnitude)", receivers=receiver),
+                Signal(f"{signal.name}_counterclockwise", sign, 1, byte_order="little_endian",
+                       is_signed=False,
+                       conversion=cdb.conversion.NamedSignalConversion(1, 0, _ROTATION,
+                                                                       is_float=False),
+                       comment=f"{signal.label}: the sign", receivers=receiver)]
     if signal.item is None:  # a value, scaled to its unit where the layout gives one
         conversion = cdb.conversion.BaseConversion.factory(
             scale=signal.scale, offset=0, is_float=False)

@@ -62,6 +62,12 @@ class FaultEvent:
 _OUTPUTS_OFF_AFTER = (NmtCommand.STOP, NmtCommand.RESET_NODE, NmtCommand.RESET_COMMUNICATION)
 
 
+#: what best-effort work in the background meets when the Keybox is away or the bus is gone: an
+#: SDO failure, a closed driver or bus (python-can's CanOperationError from a send on a bus
+#: that was shut down), a wait that timed out
+_AWAY = (SdoError, RuntimeError, TimeoutError, can.CanError)
+
+
 def _mask(pins: Iterable[int]) -> int:
     return item_mask(pins, "pin", FACE.pins)
 
@@ -109,6 +115,8 @@ class Keybox(Device):
         self._actual = dict.fromkeys(FACE.pin_numbers, "off")
         self._in_pwm: frozenset[int] = frozenset()
         self._poller: Timer | None = None
+        #: a fault poll was handed to the pool and has not ended: the timer hands no other
+        self._polling = threading.Event()
         #: the Keybox was told to watch this host's heartbeat (1016h, :meth:`watch_host`)
         self._watches_host = False
         #: a restore waits for the next host heartbeat (the Keybox's watchdog re-arms on it)
@@ -123,10 +131,8 @@ class Keybox(Device):
         if start:
             self.start()
         if fault_poll is not None:
-            # one poll at a time per Keybox: polls of an absent device never pile up
-            self._poller = self.host.call_every(
-                fault_poll, lambda: self.host.spawn(self._poll_faults, ("fault poll", node_id)),
-                first=fault_poll)
+            self._poller = self.host.call_every(fault_poll, self._schedule_poll,
+                                                first=fault_poll)
 
     # -- the driver's picture ---------------------------------------------------------------------
 
@@ -201,7 +207,7 @@ class Keybox(Device):
         """Best effort: a read that fails (device away, bus closing) is logged and skipped."""
         try:
             self.states()
-        except (SdoError, RuntimeError, TimeoutError) as error:
+        except _AWAY as error:
             log.debug("reading back the outputs of node %02Xh skipped: %s", self.node_id, error)
 
     def _forget(self, pins: AbstractSet[int]) -> None:
@@ -321,13 +327,25 @@ class Keybox(Device):
         self._actual[pin] = "off"  # KBX §7: RESET (or a reboot) leaves FAULT to OFF
         self.faults.emit(FaultEvent(pin, False, now))
 
+    def _schedule_poll(self) -> None:
+        """The poll timer: one poll at a time per Keybox, so polls of an absent device (each
+        waits out its SDO timeout, longer than the period) never pile up. A poll still
+        running is not followed by another: in simulated time the timer fires during the
+        poll's own wait, and a poll handed over then would run next, and so on for ever."""
+        if self._polling.is_set():
+            return
+        self._polling.set()
+        self.host.spawn(self._poll_faults, ("fault poll", self.node_id))
+
     def _poll_faults(self) -> None:
         """Best effort: a poll that fails (device away, bus closing) is logged and skipped."""
         try:
             mask = int(self.read("output_fault_mask"))
             self.host.run(lambda: self._update_faults(mask, self.host.clock()))
-        except (SdoError, RuntimeError, TimeoutError) as error:
+        except _AWAY as error:
             log.debug("fault poll of node %02Xh skipped: %s", self.node_id, error)
+        finally:
+            self._polling.clear()
 
     # -- configuration ----------------------------------------------------------------------------
 
@@ -390,7 +408,7 @@ class Keybox(Device):
         try:
             with self._command_lock:
                 self._write_masks(_mask(self._commanded), 0)
-        except (SdoError, RuntimeError, TimeoutError) as error:
+        except _AWAY as error:
             log.warning("restoring the outputs of node %02Xh failed: %s", self.node_id, error)
 
     def close(self) -> None:

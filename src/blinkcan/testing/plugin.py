@@ -145,9 +145,24 @@ def _failing_after(seconds: float, bench: Rig) -> Iterator[None]:
         yield
         return
 
+    #: the virtual time at half the limit: whether the simulation still moves tells a loop
+    #: that runs it for ever from a wait in real time that nothing runs it for
+    halfway: list[float] = []
+
     def expired(signum: int, frame: FrameType | None) -> None:
+        if not halfway:
+            halfway.append(bench.now)
+            signal.setitimer(signal.ITIMER_REAL, seconds / 2)
+            return
         # pytest.fail raises an OutcomeException (a BaseException): no `except Exception` in
         # the test, a handler or the simulation takes it for an error of theirs
+        if bench.now > halfway[0]:
+            pytest.fail(f"blinkcan: the test still ran after {seconds:g} s of wall time, and "
+                        f"the simulation ran on (virtual t={halfway[0]:.3f} s halfway, "
+                        f"{bench.now:.3f} s now): a loop that never meets its end, such as a "
+                        "`while` around rig.advance whose condition never comes true, or "
+                        "work that keeps making more work; --blinkcan-wall-limit changes the "
+                        "limit", pytrace=True)
         pytest.fail(f"blinkcan: the test still ran after {seconds:g} s of wall time, at virtual "
                     f"t={bench.now:.3f} s: something waits in real time for what only the "
                     "simulation brings (an asyncio.Event or a queue fed by a handler, a thread "
@@ -156,7 +171,7 @@ def _failing_after(seconds: float, bench: Rig) -> Iterator[None]:
                     "--blinkcan-wall-limit changes the limit", pytrace=True)
 
     previous = signal.signal(signal.SIGALRM, expired)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    signal.setitimer(signal.ITIMER_REAL, seconds / 2)
     try:
         yield
     finally:

@@ -235,8 +235,11 @@ class KeypadTwin(CanopenTwin):
         self.objects.set("keys_pressed", keys)
         if self._j1939:
             return self._j1939_keypad.key_changed(key, down, keys, now)
-        if down and self._demo is not None:
-            self._demo.press(key, now)
+        if self._demo is not None:
+            if down:
+                self._demo.press(key, now)
+            else:
+                self._demo.release(key, now)
         # PKP §10: sent on every change while operational (event-driven FEh); in SYNC mode
         # only at the SYNCs (rev 1.5 §44a, errata G3)
         if self.nmt_state is not NmtState.OPERATIONAL or self._tpdo_synchronous():
@@ -481,6 +484,8 @@ class KeypadTwin(CanopenTwin):
             return self._j1939_keypad.advance(now)
         if self._show is not None and self._show.finished(now):
             self._show = None
+        if self._demo is not None:
+            self._demo.advance(now)
         return []
 
     def _deadlines(self, now: float) -> Iterable[float | None]:

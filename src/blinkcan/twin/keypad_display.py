@@ -215,6 +215,12 @@ class DemoMode:
             self._player = self._make_player(now)
         # PKP appendix (rev 1.5): other keys have no effect in DEMO mode
 
+    def release(self, key: int, now: float) -> None:
+        """A key let go (PKP §24: nothing happens on release; a model may hold a repeat)."""
+
+    def advance(self, now: float) -> None:
+        """What DEMO mode does by itself by ``now`` beyond its show (PKP §24: nothing)."""
+
     def _make_player(self, now: float) -> ShowPlayer | None:
         if self.step == 0:
             return ShowPlayer(STARTUP_SHOWS[SHOW_COMPLETE], now, loop=True)

@@ -43,9 +43,12 @@ from blinkcan.protocol.sdo import parse_sdo
 from blinkcan.twin.keypad import KeypadTwin
 from blinkcan.twin.keypad_display import DEMO_COLOURS, DEMO_LEVEL_STEP, DemoMode, fill
 from blinkcan.twin.nvm import NvmArgument
-from blinkcan.twin.schedule import Periodic
+from blinkcan.twin.schedule import Periodic, at, ticks
 
 _TICK_RANGE = 0x10000  # MT §12: a 16-bit tick counter
+#: M78: a held brightness key (DEMO keys 2 and 3) steps again every 100 ms (the rate is ours:
+#: the manual says "holding down", the decision names 100 ms)
+_REPEAT_TICKS = ticks(0.1)
 #: M15 (Q): the firmware aborts an unknown command specifier with the code the manual lists,
 #: 0100 0405h, where CiA 301 says 0504 0001h
 _FIRMWARE_UNKNOWN_COMMAND = int(AbortCode.COMMAND_BYTE_INVALID_BLINK).to_bytes(4, "little")
@@ -70,14 +73,18 @@ class _Encoder:
 
 class EncoderDemo(DemoMode):
     """DEMO mode of the PKP-3500-MT (appendix p.61, M75-M81): the key-LEDs in one colour (red
-    at first, key 1 steps through the ten colours), keys 2 and 3 the LED brightness, the
-    backlight off. The rings (bar graphs of the knobs) are the twin's; key 4's steps are not
-    modelled (other keys have no effect, M80)."""
+    at first, key 1 steps through the ten colours), keys 2 and 3 the LED brightness, one step
+    per press and one more every 100 ms while held (M78), the backlight off. The rings (bar
+    graphs of the knobs) are the twin's; key 4's steps are not modelled (other keys have no
+    effect, M80)."""
 
     def __init__(self, now: float, led_mask: int, width: int) -> None:
         super().__init__(now)
         self._led_mask = led_mask
         self._width = width
+        #: M78: the brightness key held (2 up, 3 down), when it went down, repeats made
+        self._held: tuple[int, float] | None = None
+        self._repeats = 0
 
     @property
     def backlight_colour(self) -> BacklightColour | None:
@@ -90,10 +97,35 @@ class EncoderDemo(DemoMode):
     def press(self, key: int, now: float) -> None:
         if key == 1:  # M77: key 1 (encoder 1's push) steps the key-LED colour
             self.colour_index = (self.colour_index + 1) % len(DEMO_COLOURS)
-        elif key == 2:  # M78: LED brightness up / down
-            self.level = min(LEVEL_MAX, self.level + DEMO_LEVEL_STEP)
-        elif key == 3:
-            self.level = max(0, self.level - DEMO_LEVEL_STEP)
+        elif key in (2, 3):  # M78: LED brightness up / down, repeated while held
+            self._held, self._repeats = (key, now), 0
+            self._step_level(key)
+
+    def _step_level(self, key: int) -> None:
+        """One level step; at the end of the range the held key has nothing left to repeat
+        (so a key held for any time costs at most LEVEL_MAX / DEMO_LEVEL_STEP steps)."""
+        change = DEMO_LEVEL_STEP if key == 2 else -DEMO_LEVEL_STEP
+        self.level = min(LEVEL_MAX, max(0, self.level + change))
+        if self.level in (0, LEVEL_MAX):
+            self._held = None
+
+    def _next_repeat(self) -> float | None:
+        if self._held is None:
+            return None
+        return at(self._held[1], (self._repeats + 1) * _REPEAT_TICKS)
+
+    def advance(self, now: float) -> None:
+        """M78: one more level step for every 100 ms the brightness key has been held."""
+        due = self._next_repeat()
+        while self._held is not None and due is not None and due <= now:
+            self._repeats += 1
+            self._step_level(self._held[0])
+            due = self._next_repeat()
+
+    def release(self, key: int, now: float) -> None:
+        if self._held is not None and self._held[0] == key:
+            self.advance(now)
+            self._held = None
 
     def leds(self, now: float) -> tuple[int, int]:
         colour = self.key_colour
@@ -101,7 +133,7 @@ class EncoderDemo(DemoMode):
         return fill(self._led_mask, channels, self._width), 0
 
     def next_change(self, now: float) -> float | None:
-        return None
+        return self._next_repeat()
 
     def describe(self) -> dict[str, object]:
         colour = self.key_colour
