@@ -357,15 +357,16 @@ class FrameDecoder:
         index = block.index[start:]
         at = np.flatnonzero(~foreign[index])
         # every frame's row as a foreign frame's (by its identifier), then the others' set
-        places = index.tolist()
         by_node = [None if k is None else k[1] for k in known]
-        nodes = list(map(by_node.__getitem__, places))
         by_model = [None if device is None else device.model
                     for device in map(devices.get, by_node)]  # type: ignore[arg-type]  # None: no device
-        models = list(map(by_model.__getitem__, places))
         by_text = [None if k is None else k[0] for k in known]
-        texts = list(map(by_text.__getitem__, places))
-        codes = [segment.simple[Kind.FRAME]] * len(places)
+        nodes: list[int | None]
+        models: list[str | None]
+        texts: list[str | None]
+        nodes, models, texts = (np.array(column, object)[index].tolist()  # (numpy: no call
+                                for column in (by_node, by_model, by_text))  # per frame)
+        codes = [segment.simple[Kind.FRAME]] * len(index)
         several: list[int] = []  # frames of more than one row: where, how many, their codes
         several_counts: list[int] = []
         several_codes: list[int] = []
@@ -401,7 +402,7 @@ class FrameDecoder:
         new, frame_type = _new_tuple, Frame
         base = segment.rows
         rows_of_devices = 0  # the rows of the frames decoded
-        end = len(places)  # frames from start
+        end = len(index)  # frames from start
         for count, place in enumerate(at.tolist()):
             total = base + (place - count) + rows_of_devices  # rows before this frame
             if total >= limit:  # reached in the foreign frames before this one
