@@ -91,3 +91,22 @@ def test_a_hard_link_given_alone_later_is_the_same_file_on_a_cluster(tmp_path: P
         [(str(first), "skipped", None), (str(second), "same", str(first))]
     decode_files([first], str(tmp_path / "alone"))
     assert dataset_files(tmp_path / "spread") == dataset_files(tmp_path / "alone")
+
+
+def test_a_renamed_file_is_not_decoded_twice_on_a_cluster(tmp_path: Path,
+                                                          client: Client) -> None:
+    """As in one process (tests/fleet/test_renamed_sources.py): unchanged, the renamed file
+    is skipped; grown, its rows replace the old name's."""
+    first, second = tmp_path / "a.log", tmp_path / "b.log"
+    write_log(first, fleet_traffic(2))
+    out = f"file://{tmp_path}/spread"
+    decode_files([first], out, client=client)
+    first.rename(second)
+    again = decode_files([second], out, client=client)
+    assert [(r.source, r.status, r.same_as) for r in again] == \
+        [(str(second), "skipped", str(first))]
+    write_log(second, fleet_traffic(3))
+    grown = decode_files([second], out, client=client)
+    assert [(r.source, r.status) for r in grown] == [(str(second), "decoded")]
+    decode_files([second], str(tmp_path / "alone"))
+    assert dataset_files(tmp_path / "spread") == dataset_files(tmp_path / "alone")

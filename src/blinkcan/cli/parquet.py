@@ -72,6 +72,17 @@ def decode_to_parquet(files: tuple[str, ...], out: str, jobs: int, force: bool,
         _decode(files, out, jobs, force, devices)
 
 
+def _other_name_text(result: FileResult, linked_to: set[str]) -> str:
+    """The line of a result with ``same_as``: "same" (a link, counted in ``linked_to``), or
+    "skipped" (the file decoded before under a name it no longer has: renamed)."""
+    if result.status == "same":
+        linked_to.add(str(result.same_as))
+        return (f"{result.source}: the same file as {result.same_as} (a link): decoded once, "
+                "under that name")
+    return f"{result.source}: the file decoded before as {result.same_as} (renamed): not " \
+        "decoded again"
+
+
 def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
             devices: dict[NodeKey, str]) -> None:
     from blinkcan.fleet.run import decode_files, find_sources  # noqa: PLC0415 (the extra)
@@ -112,10 +123,8 @@ def _decode(files: tuple[str, ...], out: str, jobs: int, force: bool,
                 f"gone from the dataset: {', '.join(result.missing)}")
         if result.status == "failed":
             say(f"cannot decode {result.source}: {result.error}")
-        elif result.status == "same":
-            linked_to.add(str(result.same_as))
-            say(f"{result.source}: the same file as {result.same_as} (a link): decoded once, "
-                "under that name")
+        elif result.same_as is not None:  # a link, or a file renamed since it was decoded
+            say(_other_name_text(result, linked_to))
         elif result.status == "decoded" and jobs > 1:  # frames seen when a file is done
             frames += result.frames
         if result.unreadable:

@@ -8,7 +8,7 @@ import json
 import os
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -42,6 +42,9 @@ class Sources:
     same: dict[str, str]
     #: every name, each once, in order
     names: list[str]
+    #: a file decoded before under a name that no longer exists (renamed since) -> that name:
+    #: its task skips it if unchanged, else replaces the old name's rows (``task.py``)
+    renamed: dict[str, str] = field(default_factory=dict)
 
 
 def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None) -> Sources:
@@ -55,7 +58,8 @@ def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None
     A file the dataset has under a name not given (a hard link made since it was decoded) is
     found by its identity (st_dev, st_ino, ``task.file_entry``): it is decoded (or skipped)
     under that name, which joins ``names`` before its first name given, and the names given
-    are "same" as it.
+    are "same" as it. Found so under a name that no longer exists (the file was renamed
+    since), it is decoded (or skipped) under its name given, the old name in ``renamed``.
     A name that is no readable file (a dangling link, a pipe) is kept: its task names it."""
     dataset = None if out is None or "://" in out else os.path.abspath(out)
     real_dataset = None if dataset is None else os.path.realpath(dataset)
@@ -78,16 +82,20 @@ def find_sources(paths: Iterable[str | os.PathLike[str]], out: str | None = None
     files: list[str] = []
     same: dict[str, str] = {}
     before: dict[str, str] = {}  # a name given -> the name not given its file is taken under
+    renamed: dict[str, str] = {}
     decoded = None if out is None else _Decoded(out)
     for identity, each in known.items():
         chosen = each[0] if decoded is None else decoded.decoded_under(each, identity)
+        if chosen not in each and not os.path.lexists(chosen):  # renamed since: the file is
+            renamed[each[0]] = chosen  # its new name's, the old name's rows replaced by it
+            chosen = each[0]
         files.append(chosen)
         same.update((name, chosen) for name in each if name != chosen)
         if chosen not in each:
             before[each[0]] = chosen
     ordered = [name for given in dict.fromkeys(names)
                for name in ((before[given], given) if given in before else (given,))]
-    return Sources(files, same, ordered)
+    return Sources(files, same, ordered, renamed)
 
 
 class _Decoded:
@@ -111,9 +119,10 @@ class _Decoded:
         decoded the file under it: its names may have come in another order); else the name
         the index of files gives for its ``identity`` (st_dev, st_ino) if that name still
         names this file and has a manifest (a hard link given alone, the other name decoded
-        before); else the first. A manifest is keyed by the name (``task.source_key``), so
-        decoding under another name would put every frame of the file in the dataset a
-        second time."""
+        before), or no longer exists (the file renamed since: the caller decodes it under its
+        new name, ``Sources.renamed``); else the first. A manifest is keyed by the name
+        (``task.source_key``), so decoding under another name would put every frame of the
+        file in the dataset a second time."""
         for name in names:
             if f"{source_key(name)}.json" in self.manifests:
                 return name
@@ -124,6 +133,8 @@ class _Decoded:
                 hint = json.loads(stream.read()).get("source")
             if not isinstance(hint, str) or f"{source_key(hint)}.json" not in self.manifests:
                 return names[0]
+            if not os.path.lexists(hint):
+                return hint  # renamed since (the task checks the manifest's file identity)
             found = os.stat(hint)
         except (OSError, ValueError, AttributeError):  # gone, corrupt: no hint
             return names[0]
@@ -191,7 +202,7 @@ def decode_files(paths: Iterable[str | os.PathLike[str]], out: str, client: Any 
         for result in same.values():
             on_result(result)
     task = partial(decode_file, out=out, force=force, devices=dict(devices or {}),
-                   rows_per_group=rows_per_group)
+                   rows_per_group=rows_per_group, renamed=found.renamed)
     if client is not None:
         results = _on_dask(client, sources, task, on_result)
     elif jobs is None or jobs == 1 or len(sources) < 2:

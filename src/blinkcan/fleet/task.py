@@ -17,7 +17,12 @@ Whole or nothing, and never twice:
   ``_blinkcan/files/<st_dev>-<st_ino>.json`` names the source it was decoded under, so that
   a later run given another name of it (a hard link made since) finds it (``run.py``). The
   index is a hint, checked against the file system; manifests without ``file`` (an older
-  blinkcan's) are read as before.
+  blinkcan's) are read as before;
+- a file decoded before under a name that no longer exists (renamed since: ``run.py`` finds
+  it by the index) is that file only where the old manifest's ``file`` is its (st_dev,
+  st_ino): unchanged, it is skipped (``FileResult.same_as`` names the old name), else decoded
+  under its new name, the old name's outputs and manifest replaced (the journal names them),
+  so that its rows are never in the dataset twice.
 
 One task at a time per source: on this machine's disk a lock file per source
 (``_blinkcan/locks/<key>.lock``) keeps two runs at once on one dataset apart (the second
@@ -36,7 +41,7 @@ import json
 import logging
 import os
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -91,7 +96,8 @@ class FileResult:
     #: outputs of an earlier decoding that were gone from the dataset (deleted since): the
     #: file was decoded again for them
     missing: tuple[str, ...] = ()
-    #: for "same": the name the file is decoded under
+    #: for "same": the name the file is decoded under; for "skipped": the name the file was
+    #: decoded under before it was renamed (that name no longer exists), if not its own
     same_as: str | None = None
 
 
@@ -203,13 +209,17 @@ class _Store:
                     self.remove(path)
 
     def commit(self, attempt: str, outputs: list[str], manifest: dict[str, object],
-               entry: str) -> None:
+               entry: str, replaced: Renamed | None = None) -> None:
         """The outputs into their partitions, the index ``entry`` of the file, then the
-        manifest (the entry is a hint, taken only where the manifest it leads to is there)."""
+        manifest (the entry is a hint, taken only where the manifest it leads to is there).
+        ``replaced``: the file's decoding under its old name (renamed since), removed."""
         old = self.read_json(self.manifest) or {}
-        stale = [p for p in old.get("outputs", []) if p not in outputs]
+        gone = [] if replaced is None else replaced.outputs
+        stale = [p for p in (*old.get("outputs", []), *gone) if p not in outputs]
         self.write_json(self.journal, {"outputs": sorted({*outputs, *stale})})
         self.remove(self.manifest)
+        if replaced is not None:
+            self.remove(replaced.manifest_path)
         for relative in outputs:
             target = f"{self.root}/{relative}"
             self.fs.makedirs(target.rsplit("/", 1)[0], exist_ok=True)
@@ -223,12 +233,44 @@ class _Store:
         self.remove(attempt)
 
 
+@dataclass(frozen=True)
+class Renamed:
+    """A file's decoding under the name it had before it was renamed."""
+
+    name: str
+    manifest_path: str
+    manifest: dict[str, Any]
+
+    @property
+    def outputs(self) -> list[str]:
+        return [str(o) for o in self.manifest.get("outputs", [])]
+
+
+def _renamed_from(store: _Store, path: str, stat: os.stat_result,
+                  renamed: Mapping[str, str] | None) -> Renamed | None:
+    """The decoding of this file under its old name, where ``run.find_sources`` found one
+    (``renamed``: new name -> old name) and its manifest is this very file's (st_dev, st_ino);
+    a manifest without ``file`` (an older blinkcan's) or another file's: None."""
+    name = (renamed or {}).get(path)
+    if name is None or os.path.lexists(name):
+        return None
+    manifest_path = f"{store.meta}/{source_key(name)}.json"
+    manifest = store.read_json(manifest_path)
+    if manifest is None or manifest.get("file") != [stat.st_dev, stat.st_ino]:
+        return None
+    return Renamed(name, manifest_path, manifest)
+
+
 def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False,
                 devices: ModelsByNode | None = None,
                 rows_per_group: int = ROWS_PER_GROUP,
-                progress: Callable[[int], None] | None = None) -> FileResult:
+                progress: Callable[[int], None] | None = None,
+                renamed: Mapping[str, str] | None = None) -> FileResult:
     """Decode one log file into the dataset at ``out`` (a folder or an fsspec URL).
-    ``progress`` (local runs) hears the count of frames decoded every PROGRESS_EVERY."""
+    ``progress`` (local runs) hears the count of frames decoded every PROGRESS_EVERY.
+    ``renamed`` (``run.Sources.renamed``): a new name -> the name the file was decoded under
+    before it was renamed; that decoding is the file's (skipped if unchanged, else
+    replaced)."""
     path = os.path.abspath(os.fspath(source))
     try:
         stat = os.stat(path)
@@ -242,15 +284,19 @@ def decode_file(source: str | os.PathLike[str], out: str, *, force: bool = False
                 "blinkcan": __version__, "settings": settings}
     with store.alone():
         return _decode_alone(store, path, stat, identity, force, devices, rows_per_group,
-                             progress)
+                             progress, renamed)
 
 
 def _decode_alone(store: _Store, path: str, stat: os.stat_result, identity: dict[str, Any],
                   force: bool, devices: ModelsByNode | None, rows_per_group: int,
-                  progress: Callable[[int], None] | None) -> FileResult:
+                  progress: Callable[[int], None] | None,
+                  renamed: Mapping[str, str] | None) -> FileResult:
     """:func:`decode_file` once no other task handles the source (:meth:`_Store.alone`)."""
     store.recover()
     old = store.read_json(store.manifest)
+    before = _renamed_from(store, path, stat, renamed) if old is None else None
+    if before is not None:  # judged as the old name's decoding, its name aside
+        old = {**before.manifest, "source": path}
     decoded_before = not force and old is not None and \
         all(old.get(k) == v for k, v in identity.items())
     outputs = old.get("outputs", []) if old is not None else []
@@ -260,7 +306,8 @@ def _decode_alone(store: _Store, path: str, stat: os.stat_result, identity: dict
         return FileResult(path, "skipped", int(old.get("frames", 0)), int(old.get("rows", 0)),
                           tuple(outputs), cut_off=old.get("cut_off"),
                           unreadable=int(old.get("unreadable", 0)),
-                          unreadable_lines=tuple(old.get("unreadable_lines", ())))
+                          unreadable_lines=tuple(old.get("unreadable_lines", ())),
+                          same_as=None if before is None else before.name)
     attempt = f"{store.temporary}/{store.key}-{uuid.uuid4().hex}"
     writer = PartitionWriter(store.fs, attempt, f"{store.key}.parquet", path, rows_per_group)
     try:
@@ -280,7 +327,7 @@ def _decode_alone(store: _Store, path: str, stat: os.stat_result, identity: dict
     manifest = {**identity, "file": [stat.st_dev, stat.st_ino], "outputs": outputs,
                 "frames": frames, "rows": writer.rows, "unreadable": unreadable.count,
                 "unreadable_lines": named, "cut_off": cut_off}
-    store.commit(attempt, outputs, manifest, file_entry(stat.st_dev, stat.st_ino))
+    store.commit(attempt, outputs, manifest, file_entry(stat.st_dev, stat.st_ino), before)
     return FileResult(path, "decoded", frames, writer.rows, tuple(outputs), cut_off=cut_off,
                       unreadable=unreadable.count, unreadable_lines=tuple(named),
                       missing=missing)

@@ -77,6 +77,10 @@ def look_of(on: int, blink: int) -> LedLook:
 HEARD = "heartbeat"
 ADDRESS_LOST = "address lost"  # another node with a lower NAME claimed the keypad's address
 MOVED = "moved"  # the keypad claimed another address (J-5): the driver follows it there
+#: the first heartbeat heard (§18): its counter starts at 00h both when the heartbeat is turned
+#: on and when the keypad powers on with it stored on, so a power-on before it cannot be told:
+#: what the keypad shows is unknown (no health event: it may be no power-on)
+UNKNOWN = "state unknown"
 
 
 def _period_byte(command_name: str, what: str, ms: int) -> int:
@@ -127,7 +131,8 @@ class J1939KeypadLink:
     The keypad is followed by its NAME (§20, J-5): a lower NAME claiming its address makes it
     move, and its own claim says where; until then (or after "cannot claim") nothing is sent.
     It powered on when it claims its address unasked, or its heartbeat counter starts at 00h
-    again (§18: +1 per message, J-6 wraps FFh to 00h)."""
+    again (§18: +1 per message, J-6 wraps FFh to 00h); the first heartbeat heard is
+    ``UNKNOWN`` (it may follow a power-on the counter cannot show)."""
 
     def __init__(self, host: HostBus, address: int, on_key: Callable[[int, bool, float], None],
                  source: int = DEFAULT_HOST_ADDRESS,
@@ -310,7 +315,9 @@ class J1939KeypadLink:
             self.heartbeat = (data[3], data[4] | (data[5] & 0x0F) << 8)
             self._heartbeat_signal.set()
             self._on_health(HEARD, self.address, now)
-            if data[3] == 0 and before is not None and before[0] != 0xFF:  # J-6: no wrap
+            if before is None:
+                self._on_health(UNKNOWN, self.address, now)
+            elif data[3] == 0 and before[0] != 0xFF:  # J-6: 00h after FFh is a wrap
                 self._on_health(BOOT_UP, self.address, now)
 
     def _on_claim(self, source: int, name: bytes, now: float) -> None:

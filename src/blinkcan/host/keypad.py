@@ -59,7 +59,7 @@ from blinkcan.host.device import (
     confirm_or_close,
 )
 from blinkcan.host.events import EventSource
-from blinkcan.host.j1939_keypad import HEARD, J1939KeypadLink, look_of
+from blinkcan.host.j1939_keypad import HEARD, UNKNOWN, J1939KeypadLink, look_of
 from blinkcan.host.registry import driver_class
 from blinkcan.protocol.cob import check_node_id, check_range, check_time
 from blinkcan.protocol.frame import Frame
@@ -607,6 +607,10 @@ class Keypad(Device):
         restored), "address lost" and "moved" (§20, J-5)."""
         if kind == HEARD:
             self.heard(now)  # "back" names the address (health_id)
+            return
+        if kind == UNKNOWN:  # §18: it may have powered on unseen; sending again is harmless
+            if self.restore and self.confirmed:
+                self.host.spawn(self._restore_j1939)
             return
         self.health.emit(HealthEvent(address, kind, now))
         if kind == BOOT_UP:

@@ -42,6 +42,23 @@ class EncoderEvent:
         return "clockwise" if self.ticks > 0 else "counterclockwise" if self.ticks < 0 else "none"
 
 
+def _integer(what: str, value: int) -> int:
+    """``value`` if it is an int (not a bool); else TypeError naming the type expected (a
+    wrong type is not a value out of range: the project's argument rule)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"{what} must be an int, not {type(value).__name__}")
+    return value
+
+
+def _led_numbers(leds: Iterable[int]) -> list[int]:
+    """``leds`` as a list of ints; TypeError for a text ("123" is no list of LEDs), a lone
+    number, None, or an item that is no int (a bool, a float, a digit as text)."""
+    if isinstance(leds, (str, bytes)) or not isinstance(leds, Iterable):
+        raise TypeError("leds must be an iterable of LED numbers (ints), not "
+                        f"{type(leds).__name__}")
+    return [_integer("ring LED", led) for led in leds]
+
+
 class Pkp3500Keypad(Keypad):
     """Drive a PKP-3500-MT at ``node_id`` on ``bus``. Options as :class:`Keypad`."""
 
@@ -106,11 +123,12 @@ class Pkp3500Keypad(Keypad):
     def set_top(self, encoder: int, top: int) -> None:
         """The counter of ``encoder`` stops at ``top`` (2..16) clockwise and at 0; 0: it counts
         0..65535 and wraps (MT §19f/g, M34, M39). Stored."""
-        self.write(f"encoder_{self._check_encoder(encoder)}_top", top)
+        self.write(f"encoder_{self._check_encoder(encoder)}_top", _integer("top", top))
 
     def set_startup_counter(self, encoder: int, value: int) -> None:
         """The counter ``encoder`` starts from at power-on (at most TOP, M40). Stored."""
-        self.write(f"encoder_{self._check_encoder(encoder)}_ticks", value)
+        self.write(f"encoder_{self._check_encoder(encoder)}_ticks",
+                   _integer("startup counter", value))
 
     def read_counter(self, encoder: int) -> int:
         """The live tick counter (SDO 2000h/03 or /05, M40)."""
@@ -128,7 +146,7 @@ class Pkp3500Keypad(Keypad):
         """Light exactly ``leds`` of ``encoder``'s ring (numbered as the face, LED 1 / 17 at six
         o'clock, clockwise, M26); the other ring keeps its LEDs. Sent as the 415h PDO."""
         ring = self.description.face.encoders[self._check_encoder(encoder) - 1].ring_leds
-        chosen = set(leds)
+        chosen = set(_led_numbers(leds))
         if not chosen <= set(ring):
             raise ValueError(f"ring {encoder} has LEDs {ring[0]}..{ring[-1]}, not "
                              f"{sorted(chosen - set(ring))}")
@@ -153,7 +171,7 @@ class Pkp3500Keypad(Keypad):
 
     def set_ring_blink(self, leds: Iterable[int]) -> None:
         """Ring LEDs that blink (1..32; only by SDO 2002h/04, M29)."""
-        self.write("led_blink_rings", item_mask(leds, "ring LED", 32))
+        self.write("led_blink_rings", item_mask(_led_numbers(leds), "ring LED", 32))
 
     def _send_rings(self, word: int) -> None:
         with self._rings_lock:
